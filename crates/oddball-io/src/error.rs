@@ -1,0 +1,123 @@
+//! The one error type of `oddball-io`: every variant names the file and carries the facts
+//! (field, byte offset or line/column, what was expected and what was found).
+
+use std::path::PathBuf;
+
+use oddball_signal::SignalError;
+
+/// What went wrong while reading or writing a recording.
+///
+/// Binary formats (BCI2000, EDF/BDF) report byte offsets counted from the start of the file;
+/// CSV reports 1-based line and column numbers. No reader returns a partial recording: any
+/// inconsistency between a header and the file's length is an error.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IoError {
+    /// The operating system refused to open, read, create or write the file.
+    #[error("{path}: cannot {action}: {source}")]
+    Io {
+        path: PathBuf,
+        /// "read", "write" or "create".
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// The file is shorter than its header says: `field`, which starts at byte `offset`, needs
+    /// the file to reach byte `needed`, but the file has only `file_len` bytes.
+    #[error("{path}: truncated: {field} starting at byte offset {offset} needs {needed} bytes of file, but the file ends at byte {file_len}")]
+    Truncated {
+        path: PathBuf,
+        field: String,
+        offset: u64,
+        needed: u64,
+        file_len: u64,
+    },
+
+    /// A header field or data value at byte `offset` does not hold what the format requires.
+    #[error("{path}: byte offset {offset}: {field}: expected {expected}, found {found:?}")]
+    InvalidField {
+        path: PathBuf,
+        field: String,
+        offset: u64,
+        expected: String,
+        found: String,
+    },
+
+    /// A CSV cell or line (1-based `line` and `column`) is malformed.
+    #[error(
+        "{path}: line {line}, column {column} ({field}): expected {expected}, found {found:?}"
+    )]
+    Csv {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        field: String,
+        expected: String,
+        found: String,
+    },
+
+    /// The configuration asks for something the file does not have (a column, a parameter).
+    #[error("{path}: {what} {name:?} not found (available: {available:?})")]
+    Missing {
+        path: PathBuf,
+        /// What kind of thing was looked for, e.g. "CSV column" or "parameter".
+        what: &'static str,
+        name: String,
+        available: Vec<String>,
+    },
+
+    /// A valid file uses a feature this crate does not read or write (e.g. EDF+D with gaps).
+    #[error("{path}: unsupported: {what}")]
+    Unsupported { path: PathBuf, what: String },
+
+    /// The file extension does not name a format [`crate::read`] knows.
+    #[error("{path}: unknown file type (extension {extension:?}); known: .dat (BCI2000), .csv, .edf, .bdf")]
+    UnknownFormat {
+        path: PathBuf,
+        extension: Option<String>,
+    },
+
+    /// The decoded data could not form a valid [`oddball_signal::Raw`].
+    #[error("{path}: {source}")]
+    Signal {
+        path: PathBuf,
+        #[source]
+        source: SignalError,
+    },
+}
+
+impl IoError {
+    /// The file the error is about.
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            IoError::Io { path, .. }
+            | IoError::Truncated { path, .. }
+            | IoError::InvalidField { path, .. }
+            | IoError::Csv { path, .. }
+            | IoError::Missing { path, .. }
+            | IoError::Unsupported { path, .. }
+            | IoError::UnknownFormat { path, .. }
+            | IoError::Signal { path, .. } => path,
+        }
+    }
+
+    /// The byte offset the error points at, for the binary formats.
+    pub fn offset(&self) -> Option<u64> {
+        match self {
+            IoError::Truncated { offset, .. } | IoError::InvalidField { offset, .. } => {
+                Some(*offset)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Reads a whole file, mapping the OS error to [`IoError::Io`].
+pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, IoError> {
+    std::fs::read(path).map_err(|source| IoError::Io {
+        path: path.to_path_buf(),
+        action: "read",
+        source,
+    })
+}

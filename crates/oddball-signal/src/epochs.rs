@@ -1,0 +1,481 @@
+//! Cutting epochs around events, baseline correction, amplitude-threshold rejection and the
+//! averaging of repeated stimuli.
+//!
+//! Sample convention (MNE's): an epoch covers the samples `onset + round(tmin·sfreq)` through
+//! `onset + round(tmax·sfreq)`, both included, so `[0, 0.6]` s at 500 Hz is 301 samples.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use ndarray::{s, Array2, Array3, Axis};
+use serde::{Deserialize, Serialize};
+
+use crate::{Epochs, Event, Raw, SignalError};
+
+/// When an epoch is dropped for its amplitude.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Reject {
+    /// Any channel whose max − min exceeds this many µV (MNE's `reject=dict(eeg=...)`).
+    PeakToPeak(f64),
+    /// Any sample whose absolute value exceeds this many µV (the paper's amplitude threshold).
+    Absolute(f64),
+}
+
+impl Reject {
+    fn threshold(&self) -> f64 {
+        match *self {
+            Reject::PeakToPeak(v) | Reject::Absolute(v) => v,
+        }
+    }
+}
+
+/// Settings for cutting epochs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpochsParams {
+    /// Start of the window relative to the onset, seconds.
+    pub tmin: f64,
+    /// End of the window relative to the onset, seconds (included).
+    pub tmax: f64,
+    /// Window whose per-channel mean is subtracted, seconds; `None` for no baseline correction.
+    pub baseline: Option<(f64, f64)>,
+    /// Amplitude rejection, applied after baseline correction.
+    pub reject: Option<Reject>,
+}
+
+impl EpochsParams {
+    /// A window with no baseline and no rejection.
+    pub fn new(tmin: f64, tmax: f64) -> Self {
+        Self {
+            tmin,
+            tmax,
+            baseline: None,
+            reject: None,
+        }
+    }
+
+    /// The paper's epochs: 600 ms from the onset.
+    pub fn paper() -> Self {
+        Self::new(0.0, 0.6)
+    }
+
+    pub fn with_baseline(mut self, bmin: f64, bmax: f64) -> Self {
+        self.baseline = Some((bmin, bmax));
+        self
+    }
+
+    pub fn with_reject(mut self, reject: Reject) -> Self {
+        self.reject = Some(reject);
+        self
+    }
+
+    /// First and last sample offsets relative to the onset.
+    pub fn offsets(&self, sfreq: f64) -> Result<(i64, i64), SignalError> {
+        if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax) {
+            return Err(SignalError::InvalidWindow {
+                tmin: self.tmin,
+                tmax: self.tmax,
+            });
+        }
+        Ok((
+            (self.tmin * sfreq).round() as i64,
+            (self.tmax * sfreq).round() as i64,
+        ))
+    }
+
+    /// Cuts an epoch for every event of `raw`.
+    pub fn cut(&self, raw: &Raw) -> Result<(Epochs, DropLog), SignalError> {
+        self.cut_events(raw, raw.events().as_slice())
+    }
+
+    /// Cuts an epoch for each of `events` (onsets on `raw`'s sample clock). Epochs reaching past
+    /// either end of the recording, holding a non-finite sample, or over the rejection threshold
+    /// are left out and listed in the [`DropLog`].
+    pub fn cut_events(
+        &self,
+        raw: &Raw,
+        events: &[Event],
+    ) -> Result<(Epochs, DropLog), SignalError> {
+        let sfreq = raw.sfreq();
+        let (first, last) = self.offsets(sfreq)?;
+        let n_times = (last - first + 1) as usize;
+        if let Some(r) = self.reject {
+            let t = r.threshold();
+            if !(t.is_finite() && t > 0.0) {
+                return Err(SignalError::InvalidThreshold { threshold: t });
+            }
+        }
+        let baseline = match self.baseline {
+            None => None,
+            Some((bmin, bmax)) => {
+                let lo = ((bmin * sfreq).round() as i64 - first).max(0);
+                let hi = (bmax * sfreq).round() as i64 - first;
+                if !(bmin.is_finite() && bmax.is_finite() && bmin <= bmax)
+                    || hi < 0
+                    || lo >= n_times as i64
+                {
+                    return Err(SignalError::InvalidBaseline {
+                        bmin,
+                        bmax,
+                        tmin: self.tmin,
+                        tmax: self.tmax,
+                    });
+                }
+                Some((lo as usize, (hi as usize).min(n_times - 1)))
+            }
+        };
+        let data = raw.data();
+        let n_channels = raw.n_channels();
+        let total = raw.n_times() as i64;
+        let mut kept = Vec::with_capacity(events.len());
+        let mut out: Vec<f64> = Vec::with_capacity(events.len() * n_channels * n_times);
+        let mut log = DropLog::default();
+        let mut epoch = Array2::<f64>::zeros((n_channels, n_times));
+        for (index, ev) in events.iter().enumerate() {
+            let start = ev.onset as i64 + first;
+            let end = ev.onset as i64 + last;
+            if start < 0 || end >= total {
+                log.dropped.push(Dropped {
+                    index,
+                    event: ev.clone(),
+                    reason: DropReason::OutOfBounds {
+                        first_sample: start,
+                        last_sample: end,
+                        n_times: raw.n_times(),
+                    },
+                });
+                continue;
+            }
+            epoch.assign(&data.slice(s![.., start as usize..=end as usize]));
+            if let Some((lo, hi)) = baseline {
+                for mut row in epoch.rows_mut() {
+                    let m = row.slice(s![lo..=hi]).mean().unwrap_or(0.0);
+                    row.mapv_inplace(|v| v - m);
+                }
+            }
+            if let Some(reason) = self.check(&epoch, raw.ch_names()) {
+                log.dropped.push(Dropped {
+                    index,
+                    event: ev.clone(),
+                    reason,
+                });
+                continue;
+            }
+            out.extend(epoch.iter().copied());
+            kept.push(ev.clone());
+        }
+        let data = Array3::from_shape_vec((kept.len(), n_channels, n_times), out)
+            .expect("buffer holds exactly the kept epochs");
+        let tmin = first as f64 / sfreq;
+        Ok((
+            Epochs::new(data, sfreq, tmin, raw.ch_names().to_vec(), kept)?,
+            log,
+        ))
+    }
+
+    fn check(&self, epoch: &Array2<f64>, ch_names: &[String]) -> Option<DropReason> {
+        for (c, row) in epoch.rows().into_iter().enumerate() {
+            if let Some(t) = row.iter().position(|v| !v.is_finite()) {
+                return Some(DropReason::NonFinite {
+                    channel: ch_names[c].clone(),
+                    sample: t,
+                });
+            }
+            match self.reject {
+                None => {}
+                Some(Reject::Absolute(threshold)) => {
+                    let peak = row.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                    if peak > threshold {
+                        return Some(DropReason::Absolute {
+                            channel: ch_names[c].clone(),
+                            value: peak,
+                            threshold,
+                        });
+                    }
+                }
+                Some(Reject::PeakToPeak(threshold)) => {
+                    let (lo, hi) = row
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                            (lo.min(v), hi.max(v))
+                        });
+                    if hi - lo > threshold {
+                        return Some(DropReason::PeakToPeak {
+                            channel: ch_names[c].clone(),
+                            value: hi - lo,
+                            threshold,
+                        });
+                    }
+                }
+            }
+        }
+        None
+    }
+}
+
+/// Why an epoch was dropped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum DropReason {
+    /// The window reaches outside the recording (sample indices of the window's ends).
+    OutOfBounds {
+        first_sample: i64,
+        last_sample: i64,
+        n_times: usize,
+    },
+    /// A channel held NaN or ±∞ at `sample` (index within the epoch).
+    NonFinite { channel: String, sample: usize },
+    /// A channel's largest |amplitude| passed the threshold (µV).
+    Absolute {
+        channel: String,
+        value: f64,
+        threshold: f64,
+    },
+    /// A channel's peak-to-peak amplitude passed the threshold (µV).
+    PeakToPeak {
+        channel: String,
+        value: f64,
+        threshold: f64,
+    },
+}
+
+impl fmt::Display for DropReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DropReason::OutOfBounds {
+                first_sample,
+                last_sample,
+                n_times,
+            } => write!(
+                f,
+                "window samples {first_sample}..={last_sample} outside the recording (0..{n_times})"
+            ),
+            DropReason::NonFinite { channel, sample } => {
+                write!(f, "{channel}: non-finite value at epoch sample {sample}")
+            }
+            DropReason::Absolute {
+                channel,
+                value,
+                threshold,
+            } => write!(f, "{channel}: |amplitude| {value:.1} µV > {threshold} µV"),
+            DropReason::PeakToPeak {
+                channel,
+                value,
+                threshold,
+            } => write!(f, "{channel}: peak-to-peak {value:.1} µV > {threshold} µV"),
+        }
+    }
+}
+
+/// One dropped epoch: its position in the events given, the event, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Dropped {
+    pub index: usize,
+    pub event: Event,
+    pub reason: DropReason,
+}
+
+/// Every epoch left out by [`EpochsParams::cut_events`], in event order.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DropLog {
+    pub dropped: Vec<Dropped>,
+}
+
+impl DropLog {
+    pub fn len(&self) -> usize {
+        self.dropped.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.dropped.is_empty()
+    }
+
+    /// Counts per kind of reason: `out of bounds`, `non-finite`, `absolute`, `peak-to-peak`.
+    pub fn counts(&self) -> BTreeMap<&'static str, usize> {
+        let mut m = BTreeMap::new();
+        for d in &self.dropped {
+            let k = match d.reason {
+                DropReason::OutOfBounds { .. } => "out of bounds",
+                DropReason::NonFinite { .. } => "non-finite",
+                DropReason::Absolute { .. } => "absolute",
+                DropReason::PeakToPeak { .. } => "peak-to-peak",
+            };
+            *m.entry(k).or_insert(0) += 1;
+        }
+        m
+    }
+}
+
+/// The average of the epochs of one stimulus code.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Evoked {
+    pub code: u32,
+    /// `Some` when every averaged epoch agreed on the target flag.
+    pub target: Option<bool>,
+    /// How many epochs were averaged.
+    pub nave: usize,
+    /// Mean in µV, `(n_channels, n_times)`.
+    pub data: Array2<f64>,
+}
+
+fn common_target(events: &[&Event]) -> Option<bool> {
+    let first = events.first()?.target;
+    events.iter().all(|e| e.target == first).then_some(first)?
+}
+
+/// The mean of all epochs of each stimulus code, in code order.
+pub fn average_by_code(epochs: &Epochs) -> Vec<Evoked> {
+    let mut by_code: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for (i, e) in epochs.events().iter().enumerate() {
+        by_code.entry(e.code).or_default().push(i);
+    }
+    by_code
+        .into_iter()
+        .map(|(code, idx)| {
+            let evs: Vec<&Event> = idx.iter().map(|&i| &epochs.events()[i]).collect();
+            Evoked {
+                code,
+                target: common_target(&evs),
+                nave: idx.len(),
+                data: epochs
+                    .data()
+                    .select(Axis(0), &idx)
+                    .mean_axis(Axis(0))
+                    .expect("at least one epoch per code"),
+            }
+        })
+        .collect()
+}
+
+/// Averages the repetitions of each stimulus code in consecutive groups of `n_reps`, as the paper
+/// averages the 5 flashes of each bulb in a decision. Within each code, epochs are taken in their
+/// order; a final group with fewer than `n_reps` epochs is left out. The averaged epoch carries
+/// the event of its group's first epoch, with the target flag kept only if the group agrees.
+pub fn average_repetitions(epochs: &Epochs, n_reps: usize) -> Result<Epochs, SignalError> {
+    if n_reps == 0 {
+        return Err(SignalError::NoEpochs);
+    }
+    let mut by_code: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
+    for (i, e) in epochs.events().iter().enumerate() {
+        by_code.entry(e.code).or_default().push(i);
+    }
+    // Groups ordered by the position of their first epoch, so the output keeps time order.
+    let mut groups: Vec<Vec<usize>> = by_code
+        .into_values()
+        .flat_map(|idx| {
+            idx.chunks_exact(n_reps)
+                .map(|c| c.to_vec())
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    groups.sort_by_key(|g| g[0]);
+    let (_, n_channels, n_times) = epochs.data().dim();
+    let mut data = Array3::zeros((groups.len(), n_channels, n_times));
+    let mut events = Vec::with_capacity(groups.len());
+    for (g, idx) in groups.iter().enumerate() {
+        let mean = epochs
+            .data()
+            .select(Axis(0), idx)
+            .mean_axis(Axis(0))
+            .expect("non-empty group");
+        data.index_axis_mut(Axis(0), g).assign(&mean);
+        let evs: Vec<&Event> = idx.iter().map(|&i| &epochs.events()[i]).collect();
+        let mut ev = evs[0].clone();
+        ev.target = common_target(&evs);
+        events.push(ev);
+    }
+    Epochs::new(
+        data,
+        epochs.sfreq(),
+        epochs.tmin(),
+        epochs.ch_names().to_vec(),
+        events,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Events;
+
+    fn ramp_raw() -> Raw {
+        let data = Array2::from_shape_fn((2, 1000), |(c, t)| (c * 1000 + t) as f64);
+        let events = Events::new(vec![
+            Event::new(5, 1).with_target(true),
+            Event::new(100, 2).with_target(false),
+            Event::new(995, 1).with_target(true),
+        ]);
+        Raw::new(data, 100.0, vec!["Cz".into(), "Pz".into()], events).unwrap()
+    }
+
+    #[test]
+    fn windows_are_inclusive_and_out_of_bounds_epochs_are_logged() {
+        let raw = ramp_raw();
+        let (ep, log) = EpochsParams::new(-0.05, 0.1).cut(&raw).unwrap();
+        assert_eq!(ep.n_epochs(), 2);
+        assert_eq!(ep.n_times(), 16);
+        assert!((ep.tmin() + 0.05).abs() < 1e-12);
+        assert_eq!(ep.data()[[0, 0, 0]], 0.0);
+        assert_eq!(ep.data()[[1, 1, 15]], (1000 + 110) as f64);
+        assert_eq!(log.len(), 1);
+        assert_eq!(log.dropped[0].index, 2);
+        assert!(matches!(
+            log.dropped[0].reason,
+            DropReason::OutOfBounds { .. }
+        ));
+    }
+
+    #[test]
+    fn baseline_and_threshold() {
+        let raw = ramp_raw();
+        let (ep, _) = EpochsParams::new(0.0, 0.1)
+            .with_baseline(0.0, 0.0)
+            .cut(&raw)
+            .unwrap();
+        assert_eq!(ep.data()[[1, 0, 10]], 10.0);
+        let (ep, log) = EpochsParams::new(0.0, 0.1)
+            .with_reject(Reject::Absolute(500.0))
+            .cut(&raw)
+            .unwrap();
+        // Every epoch has channel Pz above 1000 µV.
+        assert_eq!(ep.n_epochs(), 0);
+        assert!(log
+            .dropped
+            .iter()
+            .any(|d| matches!(&d.reason, DropReason::Absolute { channel, .. } if channel == "Pz")));
+        let (ep, _) = EpochsParams::new(0.0, 0.1)
+            .with_reject(Reject::PeakToPeak(10.5))
+            .cut(&raw)
+            .unwrap();
+        assert_eq!(
+            ep.n_epochs(),
+            2,
+            "a 10 µV ramp passes a 10.5 µV peak-to-peak limit"
+        );
+        let (ep, _) = EpochsParams::new(0.0, 0.1)
+            .with_reject(Reject::PeakToPeak(9.5))
+            .cut(&raw)
+            .unwrap();
+        assert_eq!(ep.n_epochs(), 0);
+    }
+
+    #[test]
+    fn repetitions_average_per_code_in_groups() {
+        let n = 7;
+        let data = Array3::from_shape_fn((n, 1, 3), |(e, _, t)| (e * 10 + t) as f64);
+        let events = (0..n)
+            .map(|i| Event::new(i * 10, (i % 2) as u32 + 1).with_target(i % 2 == 0))
+            .collect();
+        let ep = Epochs::new(data, 100.0, 0.0, vec!["Pz".into()], events).unwrap();
+        // code 1: epochs 0,2,4,6 -> groups [0,2],[4,6]; code 2: epochs 1,3,5 -> [1,3]
+        let avg = average_repetitions(&ep, 2).unwrap();
+        assert_eq!(avg.n_epochs(), 3);
+        let codes: Vec<u32> = avg.events().iter().map(|e| e.code).collect();
+        assert_eq!(codes, vec![1, 2, 1]);
+        assert_eq!(avg.data()[[0, 0, 0]], 10.0);
+        assert_eq!(avg.data()[[1, 0, 1]], 21.0);
+        assert_eq!(avg.events()[2].target, Some(true));
+        let by_code = average_by_code(&ep);
+        assert_eq!(by_code.len(), 2);
+        assert_eq!(by_code[0].nave, 4);
+        assert_eq!(by_code[1].data[[0, 0]], 30.0);
+    }
+}

@@ -1,0 +1,49 @@
+//! The one error type of `oddball-signal`: each variant carries the values at fault.
+
+/// What went wrong in a signal-processing step.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SignalError {
+    #[error("sampling rate {sfreq} Hz is not a positive finite number")]
+    InvalidSfreq { sfreq: f64 },
+    #[error("{names} channel names for {n_channels} channels of data")]
+    ChannelCountMismatch { names: usize, n_channels: usize },
+    #[error("{events} events for {n_epochs} epochs")]
+    EventCountMismatch { events: usize, n_epochs: usize },
+    #[error("event onset at sample {onset} is past the end of the recording ({n_times} samples)")]
+    EventOutOfRange { onset: usize, n_times: usize },
+    #[error("no channel named {name:?} (channels: {available:?})")]
+    UnknownChannel {
+        name: String,
+        available: Vec<String>,
+    },
+    #[error("time window [{tmin}, {tmax}] s is empty, reversed or not finite")]
+    InvalidWindow { tmin: f64, tmax: f64 },
+    #[error("band {l_freq:?}–{h_freq:?} Hz does not fit between 0 and the Nyquist frequency {nyquist} Hz")]
+    InvalidBand {
+        l_freq: Option<f64>,
+        h_freq: Option<f64>,
+        nyquist: f64,
+    },
+    #[error("filter order {order} must be between 1 and {max}")]
+    InvalidOrder { order: usize, max: usize },
+    #[error("signal of {n_times} samples is too short: zero-phase filtering pads {padlen} samples at each end and needs more than that")]
+    SignalTooShort { n_times: usize, padlen: usize },
+    #[error("decimation factor {q} must be at least 1")]
+    InvalidDecimation { q: usize },
+    #[error("chunk has {got} channels but the filter was set up for {expected}")]
+    ChunkChannels { got: usize, expected: usize },
+    #[error("there are no epochs")]
+    NoEpochs,
+    #[error("layouts differ: {what}")]
+    LayoutMismatch { what: String },
+    #[error("baseline window [{bmin}, {bmax}] s lies outside the epoch [{tmin}, {tmax}] s")]
+    InvalidBaseline {
+        bmin: f64,
+        bmax: f64,
+        tmin: f64,
+        tmax: f64,
+    },
+    #[error("rejection threshold {threshold} µV must be positive and finite")]
+    InvalidThreshold { threshold: f64 },
+}
