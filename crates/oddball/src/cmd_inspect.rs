@@ -1,0 +1,242 @@
+//! `oddball inspect FILE…`: what a recording holds, and optionally its target vs non-target ERPs.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use ndarray::Array2;
+use oddball_io::Recording;
+use oddball_signal::detrend::{detrend, DetrendKind};
+use oddball_signal::epochs::EpochsParams;
+use oddball_signal::filter::{Band, SosFilter};
+use oddball_signal::Epochs;
+
+#[derive(Debug, clap::Args)]
+pub struct InspectArgs {
+    /// Recordings: BCI2000 .dat, CSV (e.g. Muse), EDF/EDF+/BDF.
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Draw target vs non-target averages per channel to this .png or .svg (all files pooled;
+    /// they must share channels and sampling rate).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// High-pass edge of the band-pass applied before averaging, Hz.
+    #[arg(long, default_value_t = 1.0)]
+    pub l_freq: f64,
+    /// Low-pass edge of the band-pass applied before averaging, Hz.
+    #[arg(long, default_value_t = 15.0)]
+    pub h_freq: f64,
+    /// Start of the plotted epoch relative to the onset, s (the baseline is tmin..0).
+    #[arg(long, default_value_t = -0.1, allow_hyphen_values = true)]
+    pub tmin: f64,
+    /// End of the plotted epoch relative to the onset, s.
+    #[arg(long, default_value_t = 0.8)]
+    pub tmax: f64,
+}
+
+pub fn run(args: &InspectArgs) -> Result<()> {
+    let mut recordings = Vec::with_capacity(args.files.len());
+    for path in &args.files {
+        let rec = oddball_io::read(path).with_context(|| format!("reading {}", path.display()))?;
+        print!("{}", summary(&rec));
+        recordings.push(rec);
+    }
+    if let Some(plot) = &args.plot {
+        let (target, nontarget) = erp_epochs(&recordings, args)?;
+        draw_erp(plot, &target, &nontarget, args)?;
+        println!("wrote {}", plot.display());
+    }
+    Ok(())
+}
+
+/// The human-readable summary of one recording.
+pub fn summary(rec: &Recording) -> String {
+    let raw = &rec.raw;
+    let mut s = String::new();
+    let name = rec
+        .path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| rec.path.display().to_string());
+    let _ = writeln!(s, "{name}  ({:?})", rec.format);
+    let _ = writeln!(
+        s,
+        "  channels   {}: {}",
+        raw.n_channels(),
+        raw.ch_names().join(" ")
+    );
+    let _ = writeln!(s, "  sfreq      {} Hz", raw.sfreq());
+    let _ = writeln!(
+        s,
+        "  duration   {:.1} s ({} samples)",
+        raw.duration(),
+        raw.n_times()
+    );
+    let events = raw.events();
+    let codes: Vec<String> = events
+        .counts_by_code()
+        .iter()
+        .map(|(code, n)| format!("{code}×{n}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "  events     {} (per code: {})",
+        events.len(),
+        if codes.is_empty() {
+            "none".to_string()
+        } else {
+            codes.join(" ")
+        }
+    );
+    let unknown = events.len() - events.n_targets() - events.n_nontargets();
+    let _ = write!(
+        s,
+        "  targets    {} target, {} non-target",
+        events.n_targets(),
+        events.n_nontargets()
+    );
+    if unknown > 0 {
+        let _ = write!(s, ", {unknown} unlabelled");
+    }
+    let _ = writeln!(s);
+    if let Some(speller) = &rec.speller {
+        let decoded = speller.decode(events);
+        match &speller.text_to_spell {
+            Some(text) => {
+                let _ = writeln!(
+                    s,
+                    "  text       {text} (TextToSpell; decoded from the target flashes: {decoded})"
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    s,
+                    "  text       {decoded} (decoded from the target flashes)"
+                );
+            }
+        }
+        let _ = writeln!(
+            s,
+            "  speller    {}×{} matrix: {}",
+            speller.n_rows(),
+            speller.n_cols(),
+            speller
+                .matrix()
+                .iter()
+                .map(|r| r.concat())
+                .collect::<Vec<_>>()
+                .join(" / ")
+        );
+    }
+    s
+}
+
+/// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets.
+fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, Epochs)> {
+    let first = &recordings[0].raw;
+    let params = EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0);
+    let mut target = Vec::new();
+    let mut nontarget = Vec::new();
+    for rec in recordings {
+        let raw = &rec.raw;
+        if raw.ch_names() != first.ch_names() || raw.sfreq() != first.sfreq() {
+            bail!(
+                "{} has other channels or another sampling rate than {}: plot them one at a time",
+                rec.path.display(),
+                recordings[0].path.display()
+            );
+        }
+        let mut raw = raw.clone();
+        detrend(raw.data_mut(), DetrendKind::Linear);
+        SosFilter::butter(
+            4,
+            Band::Bandpass {
+                l_freq: args.l_freq,
+                h_freq: args.h_freq,
+            },
+            raw.sfreq(),
+        )?
+        .apply_raw(&mut raw)?;
+        let (epochs, _) = params.cut(&raw)?;
+        let idx = |want: bool| -> Vec<usize> {
+            (0..epochs.n_epochs())
+                .filter(|&i| epochs.events()[i].target == Some(want))
+                .collect()
+        };
+        target.push(epochs.select(&idx(true)));
+        nontarget.push(epochs.select(&idx(false)));
+    }
+    let target = Epochs::concatenate(&target)?;
+    let nontarget = Epochs::concatenate(&nontarget)?;
+    if target.is_empty() || nontarget.is_empty() {
+        bail!(
+            "no ERP to plot: {} target and {} non-target epochs (the files must flag targets)",
+            target.n_epochs(),
+            nontarget.n_epochs()
+        );
+    }
+    Ok((target, nontarget))
+}
+
+fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, args: &InspectArgs) -> Result<()> {
+    let t_avg: Array2<f64> = target.average().expect("non-empty");
+    let n_avg: Array2<f64> = nontarget.average().expect("non-empty");
+    let times_ms: Vec<f64> = target.times().iter().map(|t| t * 1000.0).collect();
+    let n_channels = target.n_channels();
+    let cols = (n_channels as f64).sqrt().ceil() as usize;
+    let rows = n_channels.div_ceil(cols);
+    let size = ((cols as u32) * 300, (rows as u32) * 220 + 40);
+    let lo = t_avg
+        .iter()
+        .chain(n_avg.iter())
+        .fold(f64::INFINITY, |a, &b| a.min(b));
+    let hi = t_avg
+        .iter()
+        .chain(n_avg.iter())
+        .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+    let pad = 0.05 * (hi - lo).max(1e-6);
+    let (y0, y1) = (lo - pad, hi + pad);
+    let (x0, x1) = (times_ms[0], *times_ms.last().expect("epoch has samples"));
+    crate::with_backend!(path, size, |root| {
+        let title = format!(
+            "target (n={}, red) vs non-target (n={}, blue), {}–{} Hz, µV",
+            target.n_epochs(),
+            nontarget.n_epochs(),
+            args.l_freq,
+            args.h_freq
+        );
+        let root = root
+            .titled(&title, (crate::plot::FONT_FAMILY, 20))
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let panels = root.split_evenly((rows, cols));
+        for (c, panel) in panels.iter().enumerate().take(n_channels) {
+            let mut chart = ChartBuilder::on(panel)
+                .caption(&target.ch_names()[c], (crate::plot::FONT_FAMILY, 16))
+                .margin(6)
+                .x_label_area_size(24)
+                .y_label_area_size(40)
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            chart
+                .configure_mesh()
+                .x_labels(5)
+                .y_labels(5)
+                .x_desc("ms")
+                .label_style((crate::plot::FONT_FAMILY, 11))
+                .draw()
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            for (avg, color) in [(&n_avg, BLUE), (&t_avg, RED)] {
+                chart
+                    .draw_series(LineSeries::new(
+                        times_ms
+                            .iter()
+                            .zip(avg.row(c).iter())
+                            .map(|(&t, &v)| (t, v)),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+            }
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,55 @@
+//! `oddball`: a P300 brain–computer interface that steers a simulated robot arm.
+//!
+//! Subcommands live in `cmd_*.rs`; errors are printed as a chain (`error: …: caused by …`) and the
+//! process exits with status 1 (2 for command-line usage errors, which clap reports itself).
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cmd_arm;
+mod cmd_inspect;
+mod plot;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "oddball",
+    version,
+    about = "P300 brain-computer interface driving a simulated robot arm"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
+    Inspect(cmd_inspect::InspectArgs),
+    /// Simulate the 2-DoF arm following direction commands (the paper's G by default).
+    Arm(cmd_arm::ArmArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Inspect(args) => cmd_inspect::run(&args),
+        Command::Arm(args) => cmd_arm::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("oddball: error: {err}");
+            // A cause whose text the previous message already quotes adds nothing.
+            let mut previous = err.to_string();
+            for cause in err.chain().skip(1) {
+                let text = cause.to_string();
+                if !previous.contains(&text) {
+                    eprintln!("  caused by: {text}");
+                }
+                previous = text;
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
