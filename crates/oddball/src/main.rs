@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod cmd_arm;
+mod cmd_decode;
 mod cmd_inspect;
 mod plot;
 
@@ -26,6 +27,10 @@ struct Cli {
 enum Command {
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
     Inspect(cmd_inspect::InspectArgs),
+    /// Fit a decoding pipeline on recordings and save the model (JSON).
+    Train(cmd_decode::TrainArgs),
+    /// Score pipelines on held-out recordings (or by cross-validation): AUC, speller accuracy vs repetitions, ITR.
+    Evaluate(cmd_decode::EvaluateArgs),
     /// Simulate the 2-DoF arm following direction commands (the paper's G by default).
     Arm(cmd_arm::ArmArgs),
 }
@@ -34,6 +39,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(args) => cmd_inspect::run(&args),
+        Command::Train(args) => cmd_decode::run_train(&args),
+        Command::Evaluate(args) => cmd_decode::run_evaluate(&args),
         Command::Arm(args) => cmd_arm::run(&args),
     };
     match result {

@@ -1,0 +1,588 @@
+//! Pipelines: transformers chained into a classifier, fit on epochs and labels, as a
+//! scikit-learn `Pipeline`; named presets; and the saved [`Model`] with its pre-processing and
+//! channel layout.
+//!
+//! A pipeline is `[channel selection] → features → [StandardScaler] → [PCA] → classifier`, where
+//! the features are either a per-epoch map with nothing to learn (amplitudes; the paper's
+//! amplitude + Hilbert–Huang + wavelet map) or learned xDAWN covariances projected to the
+//! Riemannian tangent space. Every learned step is fitted on the training epochs only.
+
+use ndarray::parallel::prelude::*;
+use ndarray::{s, Array1, Array2, Array3, ArrayView2, ArrayView3, Axis};
+use oddball_signal::filter::ButterworthParams;
+use serde::{Deserialize, Serialize};
+
+use crate::amplitude::{AmplitudeFeatures, PaperFeatures};
+use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
+use crate::ensemble::{ProbabilisticClassifier, SoftVote, SoftVoteParams};
+use crate::knn::{Knn, KnnParams};
+use crate::lda::{Lda, LdaParams};
+use crate::logistic::{Logistic, LogisticParams};
+use crate::pca::{Pca, PcaParams};
+use crate::riemann::{TangentSpace, TangentSpaceParams};
+use crate::scaler::{StandardScaler, StandardScalerParams};
+use crate::svm::{Calibration, Svm, SvmParams};
+use crate::xdawn::{XdawnCovariances, XdawnCovariancesParams};
+use crate::DecodeError;
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+impl ProbabilisticClassifier for Lda {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Lda::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Lda::decision_function(self, x)
+    }
+}
+
+impl ProbabilisticClassifier for Logistic {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Logistic::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Logistic::decision_function(self, x)
+    }
+}
+
+/// How an epoch becomes a feature vector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum FeatureParams {
+    /// Bin-averaged or decimated samples, flattened channel-major.
+    Amplitude(AmplitudeFeatures),
+    /// The paper's map: amplitudes + Hilbert–Huang (first IMF's instantaneous amplitude and
+    /// frequency) + bior2.2 wavelet approximation and detail.
+    Paper(PaperFeatures),
+    /// Every `step`-th sample, then xDAWN covariances, then the Riemannian tangent space.
+    XdawnTangent {
+        step: usize,
+        xdawn: XdawnCovariancesParams,
+        tangent: TangentSpaceParams,
+    },
+}
+
+/// Fitted features.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub enum Features {
+    Amplitude(AmplitudeFeatures),
+    Paper(PaperFeatures),
+    XdawnTangent(Box<XdawnTangent>),
+}
+
+/// Fitted xDAWN covariances and tangent space, on epochs decimated by `step`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct XdawnTangent {
+    pub step: usize,
+    pub xdawn: XdawnCovariances,
+    pub tangent: TangentSpace,
+}
+
+fn every_nth(epochs: ArrayView3<f64>, step: usize) -> Array3<f64> {
+    epochs.slice(s![.., .., ..;step]).to_owned()
+}
+
+impl FeatureParams {
+    fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Features> {
+        Ok(match self {
+            FeatureParams::Amplitude(a) => Features::Amplitude(*a),
+            FeatureParams::Paper(p) => Features::Paper(*p),
+            FeatureParams::XdawnTangent {
+                step,
+                xdawn,
+                tangent,
+            } => {
+                if *step == 0 {
+                    return Err(DecodeError::InvalidParameter {
+                        name: "step",
+                        value: "0".into(),
+                        reason: "the decimation step must be at least 1".into(),
+                    });
+                }
+                let x = every_nth(epochs, *step);
+                let xdawn = xdawn.fit(x.view(), y)?;
+                let covs = xdawn.transform(x.view())?;
+                let tangent = tangent.fit(covs.view())?;
+                Features::XdawnTangent(Box::new(XdawnTangent {
+                    step: *step,
+                    xdawn,
+                    tangent,
+                }))
+            }
+        })
+    }
+}
+
+impl Features {
+    /// `(n_epochs, n_features)`.
+    pub fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
+        match self {
+            Features::Amplitude(a) => a.transform(epochs),
+            Features::Paper(p) => p.transform(epochs),
+            Features::XdawnTangent(f) => {
+                // Epochs are independent: spread them over rayon's threads.
+                let x = every_nth(epochs, f.step);
+                let n_features = f.tangent.n_features();
+                let mut out = Array2::zeros((x.dim().0, n_features));
+                out.axis_iter_mut(Axis(0))
+                    .into_par_iter()
+                    .zip(x.axis_iter(Axis(0)).into_par_iter())
+                    .try_for_each(|(mut row, epoch)| -> Result<()> {
+                        let cov = f.xdawn.transform_epoch(epoch)?;
+                        row.assign(&f.tangent.transform_one(cov.view())?);
+                        Ok(())
+                    })?;
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// The classifier at the end of a pipeline.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum ClassifierParams {
+    Lda(LdaParams),
+    Logistic(LogisticParams),
+    Svm(SvmParams),
+    Knn(KnnParams),
+    /// Soft vote of members' P(target) (the paper's multi-classifier).
+    Vote(SoftVoteParams),
+}
+
+/// A fitted classifier.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub enum Classifier {
+    Lda(Lda),
+    Logistic(Logistic),
+    Svm(Svm),
+    Knn(Knn),
+    Vote(SoftVote),
+}
+
+impl ClassifierParams {
+    fn fit(&self, x: ArrayView2<f64>, y: &[bool]) -> Result<Classifier> {
+        Ok(match self {
+            ClassifierParams::Lda(p) => Classifier::Lda(p.fit(x, y)?),
+            ClassifierParams::Logistic(p) => Classifier::Logistic(p.fit(x, y)?),
+            ClassifierParams::Svm(p) => Classifier::Svm(p.fit(x, y)?),
+            ClassifierParams::Knn(p) => Classifier::Knn(p.fit(x, y)?),
+            ClassifierParams::Vote(p) => Classifier::Vote(p.fit(x, y)?),
+        })
+    }
+}
+
+impl Classifier {
+    fn inner(&self) -> &dyn ProbabilisticClassifier {
+        match self {
+            Classifier::Lda(m) => m,
+            Classifier::Logistic(m) => m,
+            Classifier::Svm(m) => m,
+            Classifier::Knn(m) => m,
+            Classifier::Vote(m) => m,
+        }
+    }
+}
+
+/// Unfitted pipeline settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PipelineParams {
+    /// A name for reports (the preset's name, or any).
+    pub name: String,
+    pub channel_selection: Option<ChannelSelectionParams>,
+    pub features: FeatureParams,
+    pub scaler: Option<StandardScalerParams>,
+    pub pca: Option<PcaParams>,
+    pub classifier: ClassifierParams,
+}
+
+/// The names [`PipelineParams::preset`] knows.
+pub const PRESETS: [&str; 5] = ["lda", "riemann", "paper", "paper-svm", "paper-knn"];
+
+impl PipelineParams {
+    /// A named preset for epochs sampled at `sfreq` Hz:
+    /// * `lda`: shrinkage LDA on bin-averaged amplitudes (bins of round(sfreq/25) samples);
+    /// * `riemann`: every round(sfreq/64)-th sample → XdawnCovariances(4 filters, OAS) →
+    ///   tangent space → logistic regression (pyRiemann's ERP pipeline);
+    /// * `paper`: the paper's amplitude + HHT + wavelet features → StandardScaler → PCA (95 %
+    ///   variance) → soft vote of an RBF SVM and a 3-NN;
+    /// * `paper-svm`, `paper-knn`: the same features with one of the two members alone.
+    pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
+        let paper_front = |classifier| -> Result<Self> {
+            Ok(Self {
+                name: name.to_string(),
+                channel_selection: None,
+                features: FeatureParams::Paper(PaperFeatures::for_sfreq(sfreq)?),
+                scaler: Some(StandardScalerParams::default()),
+                pca: Some(PcaParams::variance_fraction(0.95)),
+                classifier,
+            })
+        };
+        match name {
+            "lda" => Ok(Self {
+                name: name.to_string(),
+                channel_selection: None,
+                features: FeatureParams::Amplitude(AmplitudeFeatures::for_sfreq(sfreq)?),
+                scaler: None,
+                pca: None,
+                classifier: ClassifierParams::Lda(LdaParams::default()),
+            }),
+            "riemann" => Ok(Self {
+                name: name.to_string(),
+                channel_selection: None,
+                features: FeatureParams::XdawnTangent {
+                    step: ((sfreq / 64.0).round() as usize).max(1),
+                    xdawn: XdawnCovariancesParams::default(),
+                    tangent: TangentSpaceParams::default(),
+                },
+                scaler: None,
+                pca: None,
+                classifier: ClassifierParams::Logistic(LogisticParams::default()),
+            }),
+            "paper" => paper_front(ClassifierParams::Vote(SoftVoteParams::paper())),
+            // Alone, the SVM's decision value is the score: no probability calibration needed.
+            "paper-svm" => paper_front(ClassifierParams::Svm(SvmParams {
+                calibration: Calibration::None,
+                ..SvmParams::default()
+            })),
+            "paper-knn" => paper_front(ClassifierParams::Knn(KnnParams::default())),
+            other => Err(DecodeError::InvalidParameter {
+                name: "pipeline",
+                value: other.to_string(),
+                reason: format!("unknown preset; known: {}", PRESETS.join(", ")),
+            }),
+        }
+    }
+
+    /// The same pipeline with the paper's channel selection (drop the `n_drop` channels whose
+    /// target responses correlate least with the others) in front.
+    pub fn with_channel_drop(mut self, n_drop: usize) -> Self {
+        self.channel_selection = Some(ChannelSelectionParams {
+            count: ChannelCount::Drop(n_drop),
+        });
+        self
+    }
+
+    /// Fits every step on training `epochs` `(n_epochs, n_channels, n_times)` with labels `y`.
+    pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Pipeline> {
+        let (n_epochs, n_channels, n_times) = epochs.dim();
+        if y.len() != n_epochs {
+            return Err(DecodeError::LabelCount {
+                n_samples: n_epochs,
+                n_labels: y.len(),
+            });
+        }
+        let n_targets = y.iter().filter(|&&t| t).count();
+        if n_targets == 0 || n_targets == n_epochs {
+            return Err(DecodeError::NeedBothClasses {
+                n_targets,
+                n_nontargets: n_epochs - n_targets,
+            });
+        }
+        let channels = self
+            .channel_selection
+            .map(|p| p.fit(epochs, y))
+            .transpose()?;
+        let selected;
+        let epochs = match &channels {
+            Some(c) => {
+                selected = c.transform(epochs)?;
+                selected.view()
+            }
+            None => epochs.view(),
+        };
+        let features = self.features.fit(epochs, y)?;
+        let mut x = features.transform(epochs)?;
+        let scaler = match &self.scaler {
+            Some(p) => {
+                let s = p.fit(x.view())?;
+                x = s.transform(x.view())?;
+                Some(s)
+            }
+            None => None,
+        };
+        let pca = match &self.pca {
+            Some(p) => {
+                let m = p.fit(x.view())?;
+                x = m.transform(x.view())?;
+                Some(m)
+            }
+            None => None,
+        };
+        let classifier = self.classifier.fit(x.view(), y)?;
+        Ok(Pipeline {
+            name: self.name.clone(),
+            n_channels,
+            n_times,
+            channels,
+            features,
+            scaler,
+            pca,
+            classifier,
+        })
+    }
+}
+
+/// A fitted pipeline.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Pipeline {
+    name: String,
+    n_channels: usize,
+    n_times: usize,
+    channels: Option<ChannelSelection>,
+    features: Features,
+    scaler: Option<StandardScaler>,
+    pca: Option<Pca>,
+    classifier: Classifier,
+}
+
+impl Pipeline {
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Channels and samples per epoch it was fitted on.
+    pub fn epoch_shape(&self) -> (usize, usize) {
+        (self.n_channels, self.n_times)
+    }
+
+    /// Indices of the channels kept by channel selection (all when there is none).
+    pub fn selected_channels(&self) -> Vec<usize> {
+        match &self.channels {
+            Some(c) => c.selected.clone(),
+            None => (0..self.n_channels).collect(),
+        }
+    }
+
+    /// The fitted classifier.
+    pub fn classifier(&self) -> &Classifier {
+        &self.classifier
+    }
+
+    /// The fitted PCA, if the pipeline has one.
+    pub fn pca(&self) -> Option<&Pca> {
+        self.pca.as_ref()
+    }
+
+    /// The classifier's input `(n_epochs, n_features)` for `epochs`.
+    pub fn features(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
+        let (_, n_channels, n_times) = epochs.dim();
+        if (n_channels, n_times) != (self.n_channels, self.n_times) {
+            return Err(DecodeError::ShapeMismatch {
+                what: "epochs (n_channels, n_times)".into(),
+                expected: format!("({}, {})", self.n_channels, self.n_times),
+                got: format!("({n_channels}, {n_times})"),
+            });
+        }
+        let selected;
+        let epochs = match &self.channels {
+            Some(c) => {
+                selected = c.transform(epochs)?;
+                selected.view()
+            }
+            None => epochs.view(),
+        };
+        let mut x = self.features.transform(epochs)?;
+        if let Some(s) = &self.scaler {
+            x = s.transform(x.view())?;
+        }
+        if let Some(p) = &self.pca {
+            x = p.transform(x.view())?;
+        }
+        Ok(x)
+    }
+
+    /// Continuous target evidence per epoch (larger = more target-like).
+    pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let x = self.features(epochs)?;
+        self.classifier.inner().decision_function(x.view())
+    }
+
+    /// P(target) per epoch.
+    pub fn predict_proba(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let x = self.features(epochs)?;
+        self.classifier.inner().predict_proba(x.view())
+    }
+
+    /// Target evidence of one epoch `(n_channels, n_times)`, for online use.
+    pub fn score_epoch(&self, epoch: ArrayView2<f64>) -> Result<f64> {
+        let one = epoch.insert_axis(Axis(0));
+        Ok(self.decision_function(one)?[0])
+    }
+}
+
+/// Version of the saved-model format; a file of another version is refused at load.
+pub const MODEL_FORMAT_VERSION: u32 = 1;
+
+/// How continuous EEG becomes the epochs a model scores.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Preprocess {
+    /// Zero-phase band-pass applied to each recording (offline) before epoching.
+    pub band: ButterworthParams,
+    /// Epoch window relative to the onset, seconds (both ends included).
+    pub tmin: f64,
+    pub tmax: f64,
+}
+
+impl Preprocess {
+    /// The peer stack's pre-processing: 4th-order Butterworth 0.5–20 Hz, epochs 0–0.8 s.
+    pub fn peer() -> Self {
+        Self {
+            band: ButterworthParams {
+                order: 4,
+                band: oddball_signal::filter::Band::Bandpass {
+                    l_freq: 0.5,
+                    h_freq: 20.0,
+                },
+            },
+            tmin: 0.0,
+            tmax: 0.8,
+        }
+    }
+}
+
+/// A trained model as saved to disk: the pipeline plus everything needed to feed it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Model {
+    pub format_version: u32,
+    pub preprocess: Preprocess,
+    /// Sampling rate of the training data, Hz.
+    pub sfreq: f64,
+    /// Channel names, in the order the pipeline expects.
+    pub ch_names: Vec<String>,
+    pub pipeline: Pipeline,
+}
+
+impl Model {
+    pub fn new(
+        preprocess: Preprocess,
+        sfreq: f64,
+        ch_names: Vec<String>,
+        pipeline: Pipeline,
+    ) -> Self {
+        Self {
+            format_version: MODEL_FORMAT_VERSION,
+            preprocess,
+            sfreq,
+            ch_names,
+            pipeline,
+        }
+    }
+
+    /// JSON text of the model.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a model serialises")
+    }
+
+    /// Reads a model, refusing other format versions before decoding the rest.
+    pub fn from_json(text: &str) -> Result<Self> {
+        #[derive(Deserialize)]
+        struct Version {
+            format_version: Option<u32>,
+        }
+        let v: Version = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
+            reason: e.to_string(),
+        })?;
+        match v.format_version {
+            Some(MODEL_FORMAT_VERSION) => {}
+            found => {
+                return Err(DecodeError::ModelVersion {
+                    found,
+                    expected: MODEL_FORMAT_VERSION,
+                })
+            }
+        }
+        serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
+            reason: e.to_string(),
+        })
+    }
+
+    /// Checks that a recording's channels and rate are the ones the model was trained on.
+    pub fn check_layout(&self, ch_names: &[String], sfreq: f64) -> Result<()> {
+        if ch_names != self.ch_names.as_slice() || (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
+            return Err(DecodeError::LayoutMismatch {
+                expected: format!("{} Hz, channels {:?}", self.sfreq, self.ch_names),
+                got: format!("{sfreq} Hz, channels {ch_names:?}"),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Synthetic epochs: targets carry a positive bump at 300 ms on the later channels.
+    fn synthetic(n_epochs: usize, seed: u64) -> (Array3<f64>, Vec<bool>) {
+        let (n_ch, n_t, sfreq) = (4, 64, 64.0);
+        let mut state = seed;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let y: Vec<bool> = (0..n_epochs).map(|i| i % 5 == 0).collect();
+        let x = Array3::from_shape_fn((n_epochs, n_ch, n_t), |(e, c, t)| {
+            let tt = t as f64 / sfreq;
+            let bump = if y[e] {
+                4.0 * (c as f64 + 1.0) * (-((tt - 0.3) / 0.05).powi(2)).exp()
+            } else {
+                0.0
+            };
+            bump + 3.0 * noise() + (2.0 * std::f64::consts::PI * 10.0 * tt + c as f64).sin()
+        });
+        (x, y)
+    }
+
+    #[test]
+    fn presets_learn_a_separable_p300_and_round_trip_through_json() {
+        let (xtr, ytr) = synthetic(200, 1);
+        let (xte, yte) = synthetic(100, 2);
+        for name in ["lda", "riemann", "paper-svm"] {
+            let p = PipelineParams::preset(name, 64.0).unwrap();
+            let m = p.fit(xtr.view(), &ytr).unwrap();
+            let scores = m.decision_function(xte.view()).unwrap();
+            let auc = crate::metrics::roc_auc(scores.as_slice().unwrap(), &yte).unwrap();
+            assert!(auc > 0.9, "{name}: AUC {auc}");
+            let model = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], m);
+            let back = Model::from_json(&model.to_json()).unwrap();
+            let again = back.pipeline.decision_function(xte.view()).unwrap();
+            assert_eq!(again, scores, "{name}: a loaded model scores the same");
+            let one = back
+                .pipeline
+                .score_epoch(xte.index_axis(Axis(0), 3))
+                .unwrap();
+            assert!((one - scores[3]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn wrong_version_and_layout_are_clear_errors() {
+        let (x, y) = synthetic(60, 3);
+        let m = PipelineParams::preset("lda", 64.0)
+            .unwrap()
+            .fit(x.view(), &y)
+            .unwrap();
+        let model = Model::new(Preprocess::peer(), 64.0, vec!["Cz".into(); 4], m);
+        let text = model
+            .to_json()
+            .replace("\"format_version\":1", "\"format_version\":99");
+        assert!(matches!(
+            Model::from_json(&text),
+            Err(DecodeError::ModelVersion {
+                found: Some(99),
+                expected: 1
+            })
+        ));
+        assert!(matches!(
+            model.check_layout(&vec!["Cz".to_string(); 3], 64.0),
+            Err(DecodeError::LayoutMismatch { .. })
+        ));
+        let wrong = Array3::zeros((2, 3, 64));
+        assert!(matches!(
+            model.pipeline.decision_function(wrong.view()),
+            Err(DecodeError::ShapeMismatch { .. })
+        ));
+        assert!(PipelineParams::preset("nope", 64.0).is_err());
+    }
+}
