@@ -1,18 +1,11 @@
 //! `oddball arm`: the paper's G end to end through the command line.
 
-use std::process::Command;
+mod common;
 
 fn arm(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
-        .arg("arm")
-        .args(args)
-        .output()
-        .expect("oddball runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let mut all = vec!["arm"];
+    all.extend_from_slice(args);
+    common::oddball(&all)
 }
 
 #[test]

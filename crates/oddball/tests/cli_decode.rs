@@ -1,32 +1,13 @@
 //! `oddball train` / `oddball evaluate` on the real BCI2000 recordings (skipped when absent).
 
+mod common;
+
 use std::path::PathBuf;
-use std::process::Command;
+
+use common::oddball;
 
 fn data_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    if dir.join("bci2000-samplefiles-p300").is_dir() {
-        Some(dir.join("bci2000-samplefiles-p300"))
-    } else {
-        eprintln!("skipping: real EEG folder {} not found", dir.display());
-        None
-    }
-}
-
-fn oddball(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
-        .args(args)
-        .output()
-        .expect("oddball runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    common::data_dir().map(|d| d.join("bci2000-samplefiles-p300"))
 }
 
 fn field<'a>(json: &'a serde_json::Value, key: &str) -> &'a serde_json::Value {

@@ -1,33 +1,13 @@
 //! `oddball inspect` on the real recordings in `../shared/data` (skipped with a message when absent).
 
-use std::path::PathBuf;
-use std::process::Command;
+mod common;
 
-fn data_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: real EEG folder {} not found", dir.display());
-        None
-    }
-}
+use common::{data_dir, oddball};
 
 fn inspect(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
-        .arg("inspect")
-        .args(args)
-        .output()
-        .expect("oddball runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    let mut all = vec!["inspect"];
+    all.extend_from_slice(args);
+    oddball(&all)
 }
 
 #[test]
