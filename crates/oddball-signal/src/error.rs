@@ -44,6 +44,8 @@ pub enum SignalError {
         tmin: f64,
         tmax: f64,
     },
+    #[error("second-order section {index} has a0 = 0 or a non-finite coefficient")]
+    InvalidSection { index: usize },
     #[error("rejection threshold {threshold} µV must be positive and finite")]
     InvalidThreshold { threshold: f64 },
 }

@@ -130,13 +130,18 @@ fn to_rows(sos: &[Sos<f64>]) -> Vec<[f64; 6]> {
 }
 
 impl SosFilter {
-    /// Wraps scipy-layout sections; each row is normalised so that `a0 = 1`.
-    /// Panics if a row has `a0 == 0` (not a causal filter).
-    pub fn from_sections(sections: Vec<[f64; 6]>) -> Self {
+    /// Wraps scipy-layout sections; each row is normalised so that `a0 = 1`. A row with
+    /// `a0 = 0` or a non-finite coefficient is refused.
+    pub fn from_sections(sections: Vec<[f64; 6]>) -> Result<Self, SignalError> {
+        if let Some(index) = sections
+            .iter()
+            .position(|r| r[3] == 0.0 || r.iter().any(|v| !v.is_finite()))
+        {
+            return Err(SignalError::InvalidSection { index });
+        }
         let sections = sections
             .into_iter()
             .map(|r| {
-                assert!(r[3] != 0.0, "second-order section with a0 = 0");
                 [
                     r[0] / r[3],
                     r[1] / r[3],
@@ -147,7 +152,7 @@ impl SosFilter {
                 ]
             })
             .collect();
-        Self { sections }
+        Ok(Self { sections })
     }
 
     /// Butterworth design, scipy's `butter(order, Wn, btype, fs=sfreq, output='sos')`.
@@ -738,6 +743,20 @@ mod tests {
             f.sosfiltfilt(short.view()),
             Err(SignalError::SignalTooShort { .. })
         ));
+    }
+
+    #[test]
+    fn sections_with_a0_zero_or_nan_are_refused() {
+        let ok = SosFilter::from_sections(vec![[2.0, 0.0, 0.0, 2.0, -1.0, 0.0]]).unwrap();
+        assert_eq!(ok.sections()[0], [1.0, 0.0, 0.0, 1.0, -0.5, 0.0]);
+        assert_eq!(
+            SosFilter::from_sections(vec![[1.0; 6], [1.0, 0.0, 0.0, 0.0, 0.0, 0.0]]),
+            Err(SignalError::InvalidSection { index: 1 })
+        );
+        assert_eq!(
+            SosFilter::from_sections(vec![[f64::NAN, 0.0, 0.0, 1.0, 0.0, 0.0]]),
+            Err(SignalError::InvalidSection { index: 0 })
+        );
     }
 
     #[test]
