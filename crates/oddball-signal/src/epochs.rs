@@ -321,13 +321,18 @@ fn common_target(events: &[&Event]) -> Option<bool> {
     events.iter().all(|e| e.target == first).then_some(first)?
 }
 
-/// The mean of all epochs of each stimulus code, in code order.
-pub fn average_by_code(epochs: &Epochs) -> Vec<Evoked> {
+/// Epoch indices of each stimulus code, in epoch order.
+fn indices_by_code(epochs: &Epochs) -> BTreeMap<u32, Vec<usize>> {
     let mut by_code: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
     for (i, e) in epochs.events().iter().enumerate() {
         by_code.entry(e.code).or_default().push(i);
     }
     by_code
+}
+
+/// The mean of all epochs of each stimulus code, in code order.
+pub fn average_by_code(epochs: &Epochs) -> Vec<Evoked> {
+    indices_by_code(epochs)
         .into_iter()
         .map(|(code, idx)| {
             let evs: Vec<&Event> = idx.iter().map(|&i| &epochs.events()[i]).collect();
@@ -353,12 +358,8 @@ pub fn average_repetitions(epochs: &Epochs, n_reps: usize) -> Result<Epochs, Sig
     if n_reps == 0 {
         return Err(SignalError::NoEpochs);
     }
-    let mut by_code: BTreeMap<u32, Vec<usize>> = BTreeMap::new();
-    for (i, e) in epochs.events().iter().enumerate() {
-        by_code.entry(e.code).or_default().push(i);
-    }
     // Groups ordered by the position of their first epoch, so the output keeps time order.
-    let mut groups: Vec<Vec<usize>> = by_code
+    let mut groups: Vec<Vec<usize>> = indices_by_code(epochs)
         .into_values()
         .flat_map(|idx| {
             idx.chunks_exact(n_reps)

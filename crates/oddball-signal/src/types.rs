@@ -127,6 +127,17 @@ impl FromIterator<Event> for Events {
     }
 }
 
+/// Every event onset must lie inside a recording of `n_times` samples.
+fn check_events(events: &Events, n_times: usize) -> Result<(), SignalError> {
+    match events.iter().find(|e| e.onset >= n_times) {
+        Some(e) => Err(SignalError::EventOutOfRange {
+            onset: e.onset,
+            n_times,
+        }),
+        None => Ok(()),
+    }
+}
+
 fn check_sfreq(sfreq: f64) -> Result<(), SignalError> {
     if sfreq.is_finite() && sfreq > 0.0 {
         Ok(())
@@ -160,12 +171,7 @@ impl Raw {
                 n_channels: data.nrows(),
             });
         }
-        if let Some(e) = events.iter().find(|e| e.onset >= data.ncols()) {
-            return Err(SignalError::EventOutOfRange {
-                onset: e.onset,
-                n_times: data.ncols(),
-            });
-        }
+        check_events(&events, data.ncols())?;
         Ok(Self {
             data,
             sfreq,
@@ -199,12 +205,7 @@ impl Raw {
 
     /// Replaces the events (checked against the recording's length).
     pub fn set_events(&mut self, events: Events) -> Result<(), SignalError> {
-        if let Some(e) = events.iter().find(|e| e.onset >= self.n_times()) {
-            return Err(SignalError::EventOutOfRange {
-                onset: e.onset,
-                n_times: self.n_times(),
-            });
-        }
+        check_events(&events, self.n_times())?;
         self.events = events;
         Ok(())
     }

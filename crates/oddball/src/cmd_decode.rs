@@ -83,14 +83,10 @@ fn labels(epochs: &Epochs) -> Result<Vec<bool>> {
         .collect()
 }
 
-fn concat(parts: &[Epochs]) -> Result<Epochs> {
-    Ok(Epochs::concatenate(parts)?)
-}
-
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
     let (recs, eps) = load_epochs(&args.files, &pre)?;
-    let epochs = concat(&eps)?;
+    let epochs = Epochs::concatenate(&eps)?;
     let y = labels(&epochs)?;
     let params = PipelineParams::preset(&args.pipeline, epochs.sfreq())?;
     let t0 = Instant::now();
@@ -161,8 +157,8 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
     } else {
         vec![args.pipeline.clone()]
     };
-    let (_train_recs, train_eps) = load_epochs(&args.train, &pre)?;
-    let train = concat(&train_eps)?;
+    let (_, train_eps) = load_epochs(&args.train, &pre)?;
+    let train = Epochs::concatenate(&train_eps)?;
     let ytr = labels(&train)?;
     let (test_recs, test_eps) = load_epochs(&args.test, &pre)?;
     let mut results = Vec::new();
@@ -253,28 +249,27 @@ fn score_test(
         let y = labels(ep)?;
         if let Some(speller) = &rec.speller {
             let events = oddball_signal::Events::new(ep.events().to_vec());
-            let blocks: Vec<Vec<ScoredFlash>> = {
-                let mut idx = 0;
-                speller
-                    .character_blocks(&events)
-                    .iter()
-                    .map(|b| {
-                        let block = b
-                            .iter()
-                            .map(|e| {
-                                let f = ScoredFlash {
-                                    code: e.code,
-                                    target: e.target == Some(true),
-                                    score: scores[idx],
-                                };
-                                idx += 1;
-                                f
-                            })
-                            .collect();
-                        block
-                    })
-                    .collect()
-            };
+            let flashes: Vec<ScoredFlash> = ep
+                .events()
+                .iter()
+                .zip(scores.iter())
+                .map(|(e, &score)| ScoredFlash {
+                    code: e.code,
+                    target: e.target == Some(true),
+                    score,
+                })
+                .collect();
+            // Character blocks are consecutive runs of epochs: cut the flashes the same way.
+            let mut rest = flashes.as_slice();
+            let blocks: Vec<Vec<ScoredFlash>> = speller
+                .character_blocks(&events)
+                .iter()
+                .map(|b| {
+                    let (head, tail) = rest.split_at(b.len());
+                    rest = tail;
+                    head.to_vec()
+                })
+                .collect();
             let rows: Vec<u32> = (0..speller.n_rows())
                 .map(|r| speller.code_of_row(r))
                 .collect();
