@@ -248,6 +248,16 @@ fn score_test(
         score_s += t1.elapsed().as_secs_f64();
         let y = labels(ep)?;
         if let Some(speller) = &rec.speller {
+            // Characters are consecutive runs of flashes; a dropped epoch would shift every
+            // later character onto the wrong flashes.
+            if ep.n_epochs() != rec.raw.events().len() {
+                bail!(
+                    "{}: {} of {} flashes could not be epoched, so its characters cannot be scored",
+                    rec.path.display(),
+                    rec.raw.events().len() - ep.n_epochs(),
+                    rec.raw.events().len()
+                );
+            }
             let events = oddball_signal::Events::new(ep.events().to_vec());
             let flashes: Vec<ScoredFlash> = ep
                 .events()
