@@ -17,7 +17,7 @@ pub enum IoError {
     #[error("{path}: cannot {action}: {source}")]
     Io {
         path: PathBuf,
-        /// "read", "write" or "create".
+        /// "read", "write", "create" or "rename".
         action: &'static str,
         #[source]
         source: std::io::Error,
@@ -78,6 +78,38 @@ pub enum IoError {
         extension: Option<String>,
     },
 
+    /// A sample a writer was asked to store is not finite or does not fit the file's number type.
+    #[error("{path}: channel {channel:?} (index {channel_index}), sample {sample}: cannot write {value} µV: {reason}")]
+    UnwritableSample {
+        path: PathBuf,
+        channel: String,
+        channel_index: usize,
+        sample: usize,
+        value: f64,
+        reason: &'static str,
+    },
+
+    /// A state column given to the BCI2000 writer is invalid (see [`StateProblem`]).
+    #[error("{path}: state {state:?}: {problem}")]
+    InvalidState {
+        path: PathBuf,
+        state: String,
+        problem: StateProblem,
+    },
+
+    /// An extra parameter line given to the BCI2000 writer (the `index`-th, 0-based) is not a
+    /// parameter line the readers can parse, or defines a parameter that is already defined.
+    #[error(
+        "{path}: extra parameter line {index} ({line:?}): expected {expected}, found {found:?}"
+    )]
+    InvalidParameterLine {
+        path: PathBuf,
+        index: usize,
+        line: String,
+        expected: String,
+        found: String,
+    },
+
     /// The decoded data could not form a valid [`oddball_signal::Raw`].
     #[error("{path}: {source}")]
     Signal {
@@ -98,6 +130,9 @@ impl IoError {
             | IoError::Missing { path, .. }
             | IoError::Unsupported { path, .. }
             | IoError::UnknownFormat { path, .. }
+            | IoError::UnwritableSample { path, .. }
+            | IoError::InvalidState { path, .. }
+            | IoError::InvalidParameterLine { path, .. }
             | IoError::Signal { path, .. } => path,
         }
     }
@@ -111,6 +146,31 @@ impl IoError {
             _ => None,
         }
     }
+}
+
+/// What is wrong with a state column given to the BCI2000 writer ([`IoError::InvalidState`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StateProblem {
+    /// The column has `len` values but the recording has `n_times` samples.
+    #[error("{len} values for a recording of {n_times} samples")]
+    Length { len: usize, n_times: usize },
+    /// `value` at `sample` needs more than the state's `bits`.
+    #[error("value {value} at sample {sample} does not fit in {bits} bits (max {max})", max = (1u64 << bits) - 1)]
+    ValueTooWide {
+        sample: usize,
+        value: u64,
+        bits: u32,
+    },
+    /// The bit width is outside `1..=32`.
+    #[error("{bits} bits (a state has 1 to 32 bits)")]
+    Bits { bits: u32 },
+    /// The name is empty, contains whitespace, or is not printable ASCII.
+    #[error("invalid name: {reason}")]
+    Name { reason: &'static str },
+    /// Two columns (0-based indices `first` and `second`) have the same name.
+    #[error("given twice (columns {first} and {second})")]
+    Duplicate { first: usize, second: usize },
 }
 
 /// Reads a whole file, mapping the OS error to [`IoError::Io`].

@@ -1,4 +1,4 @@
-//! EEG file readers for the oddball P300 BCI, and an EDF+ writer.
+//! EEG file readers for the oddball P300 BCI, and BCI2000 and EDF+ writers.
 //!
 //! [`read`] picks the reader from the file extension and returns a [`Recording`]: the samples
 //! as an [`oddball_signal::Raw`] in µV `(n_channels, n_times)` with their stimulus events, the
@@ -7,7 +7,7 @@
 //!
 //! | extension | reader | events |
 //! |---|---|---|
-//! | `.dat` | [`bci2000`]: BCI2000 v1.0/v1.1 | `StimulusCode` 0 → non-zero, target from `StimulusType` |
+//! | `.dat` | [`bci2000`]: BCI2000 v1.0/v1.1; written by [`write_bci2000`] (v1.1, float32 µV, states from [`stimulus_states`] and the caller) | `StimulusCode` 0 → non-zero, target from `StimulusType` |
 //! | `.csv` | [`csv`]: time / channel / marker columns ([`CsvOptions::detect`]) | non-zero marker |
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //!
@@ -29,15 +29,16 @@ use oddball_signal::Raw;
 use serde::{Deserialize, Serialize};
 
 pub use bci2000::{
-    read_bci2000, read_bci2000_with, Bci2000Header, Bci2000Info, Bci2000Options, DataFormat,
-    Parameter, Parameters, StateDef, States,
+    read_bci2000, read_bci2000_with, stimulus_states, write_bci2000, Bci2000Header, Bci2000Info,
+    Bci2000Options, Bci2000WriteOptions, Bci2000WriteSummary, DataFormat, Parameter, Parameters,
+    StateColumn, StateDef, States,
 };
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
 pub use edf::{
     read_edf, read_edf_with, write_edf_plus, write_edf_plus_with, Annotation, EdfHeader, EdfInfo,
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
 };
-pub use error::IoError;
+pub use error::{IoError, StateProblem};
 pub use speller::Speller;
 
 /// The file format a recording was read from.

@@ -1,4 +1,5 @@
-//! BCI2000 `.dat` files, format versions 1.0 and 1.1, read from scratch.
+//! BCI2000 `.dat` files, format versions 1.0 and 1.1, read from scratch; and written (v1.1,
+//! float32) by [`write_bci2000`], see `write.rs`.
 //!
 //! There is no maintained Rust crate for BCI2000 files, and the format is small, so this reader
 //! is written here (checked against the independent Python reader `shared/peer/bci2000.py` by the
@@ -33,6 +34,7 @@
 //! of the incomplete record.
 
 pub mod params;
+mod write;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -42,6 +44,10 @@ use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
 pub use params::{ParamCell, ParamValue, Parameter, Parameters};
+pub use write::{
+    encode_value, stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary,
+    StateColumn,
+};
 
 use crate::error::read_file;
 use crate::speller::Speller;
