@@ -6,7 +6,8 @@ use std::str::FromStr;
 use nalgebra::Vector2;
 
 /// A direction command from the BCI. Each moves the desired pen position by one step `h` (m).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Command {
     /// `z + h`.
     Up,

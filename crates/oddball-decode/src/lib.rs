@@ -11,6 +11,7 @@
 pub mod amplitude;
 pub mod channel_select;
 pub mod covariance;
+pub mod decision;
 pub mod emd;
 pub mod ensemble;
 mod error;

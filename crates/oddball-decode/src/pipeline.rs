@@ -415,11 +415,21 @@ pub const MODEL_FORMAT_VERSION: u32 = 1;
 /// How continuous EEG becomes the epochs a model scores.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Preprocess {
-    /// Zero-phase band-pass applied to each recording (offline) before epoching.
+    /// Band-pass applied to each recording before epoching: zero-phase offline (after removing
+    /// each channel's mean), or causal when `causal` is set.
     pub band: ButterworthParams,
     /// Epoch window relative to the onset, seconds (both ends included).
     pub tmin: f64,
     pub tmax: f64,
+    /// Online processing: the band-pass runs forward only, from the first sample of the
+    /// recording with its steady state at that sample (what the streaming filter does), and no
+    /// mean is removed. Offline re-evaluation of an online session gives bit-identical epochs.
+    #[serde(default)]
+    pub causal: bool,
+    /// Epochs whose peak-to-peak amplitude on any channel exceeds this (µV) are rejected
+    /// (blinks, movement); online they add no evidence.
+    #[serde(default)]
+    pub reject_peak_to_peak_uv: Option<f64>,
 }
 
 impl Preprocess {
@@ -435,7 +445,44 @@ impl Preprocess {
             },
             tmin: 0.0,
             tmax: 0.8,
+            causal: false,
+            reject_peak_to_peak_uv: None,
         }
+    }
+
+    /// The paper's online pre-processing: causal 4th-order Butterworth 1–15 Hz, epochs of 600 ms
+    /// after each onset, epochs over 150 µV peak-to-peak rejected.
+    pub fn online() -> Self {
+        Self {
+            band: ButterworthParams::paper(),
+            tmin: 0.0,
+            tmax: 0.6,
+            causal: true,
+            reject_peak_to_peak_uv: Some(150.0),
+        }
+    }
+
+    /// Samples of an epoch at `sfreq`: round(tmin·sfreq) ..= round(tmax·sfreq) after the onset.
+    pub fn window(&self, sfreq: f64) -> (i64, usize) {
+        let first = (self.tmin * sfreq).round() as i64;
+        let last = (self.tmax * sfreq).round() as i64;
+        (first, (last - first + 1).max(0) as usize)
+    }
+
+    /// Whether an epoch `(n_channels, n_times)` passes the peak-to-peak rejection (and is
+    /// finite: a NaN or infinity always rejects).
+    pub fn accepts(&self, epoch: ndarray::ArrayView2<f64>) -> bool {
+        epoch.rows().into_iter().all(|row| {
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for &v in row {
+                if !v.is_finite() {
+                    return false;
+                }
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+            self.reject_peak_to_peak_uv.is_none_or(|t| hi - lo <= t)
+        })
     }
 }
 
@@ -449,6 +496,9 @@ pub struct Model {
     /// Channel names, in the order the pipeline expects.
     pub ch_names: Vec<String>,
     pub pipeline: Pipeline,
+    /// How scores become choices in a session (absent for models trained offline).
+    #[serde(default)]
+    pub decision: Option<crate::decision::DecisionModel>,
 }
 
 impl Model {
@@ -464,6 +514,7 @@ impl Model {
             sfreq,
             ch_names,
             pipeline,
+            decision: None,
         }
     }
 

@@ -78,7 +78,8 @@ pub fn run(args: &ArmArgs) -> Result<()> {
         fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
     }
     let expected = expected_path(start, &report);
-    draw(&sim, &report, &expected, &plot_path)
+    let keys = key_configurations(&sim, &report);
+    draw(&sim, &keys, &expected, &plot_path)
         .with_context(|| format!("drawing {}", plot_path.display()))?;
 
     print!("{}", table(&sim, &config, &report, &expected));
@@ -218,19 +219,22 @@ fn table(
 
 /// Joint angles at the key instants: the start, and the end of every command's period.
 fn key_configurations(sim: &ArmSim, report: &ProgramReport) -> Vec<(f64, Vector2<f64>)> {
+    let times: Vec<f64> = std::iter::once(0.0)
+        .chain(report.outcomes.iter().map(|o| o.stats().t_end_s))
+        .collect();
+    configurations_at(sim, &times)
+}
+
+/// Joint angles at the given simulation times (the recorded samples nearest to them).
+pub fn configurations_at(sim: &ArmSim, times: &[f64]) -> Vec<(f64, Vector2<f64>)> {
     let samples = sim.samples();
-    let at = |t: f64| -> Vector2<f64> {
-        let dt = sim.settings().dt_s;
-        let i = (t / dt).round() as usize;
-        samples.get(i).map_or(sim.state().q, |s| s.q)
-    };
-    std::iter::once((0.0, at(0.0)))
-        .chain(
-            report
-                .outcomes
-                .iter()
-                .map(|o| (o.stats().t_end_s, at(o.stats().t_end_s))),
-        )
+    let dt = sim.settings().dt_s;
+    times
+        .iter()
+        .map(|&t| {
+            let i = (t / dt).round() as usize;
+            (t, samples.get(i).map_or(sim.state().q, |s| s.q))
+        })
         .collect()
 }
 
@@ -332,9 +336,11 @@ fn board_rect(board: &Board) -> [(f64, f64); 2] {
     ]
 }
 
-fn draw(
+/// Draws the arm at the `keys` instants on its board (left) and the pen trace over the
+/// `expected` path (right, zoomed).
+pub fn draw(
     sim: &ArmSim,
-    report: &ProgramReport,
+    keys: &[(f64, Vector2<f64>)],
     expected: &[Vector2<f64>],
     path: &Path,
 ) -> Result<()> {
@@ -342,7 +348,6 @@ fn draw(
     const H: u32 = 720;
     let model = *sim.plant();
     let board = sim.workspace().board;
-    let keys = key_configurations(sim, report);
     let trace: Vec<(f64, f64)> = sim
         .trace()
         .points()
@@ -353,7 +358,7 @@ fn draw(
 
     let mut overview_pts: Vec<Vector2<f64>> = board.corners().to_vec();
     overview_pts.push(model.base());
-    for (_, q) in &keys {
+    for (_, q) in keys {
         overview_pts.push(model.elbow_position(q));
     }
     let mut zoom_pts: Vec<Vector2<f64>> = expected.to_vec();

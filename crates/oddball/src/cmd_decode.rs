@@ -10,7 +10,7 @@ use oddball_decode::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, Sco
 use oddball_decode::pipeline::{Model, Pipeline, PipelineParams, Preprocess, PRESETS};
 use oddball_io::Recording;
 use oddball_signal::detrend::{detrend, DetrendKind};
-use oddball_signal::epochs::EpochsParams;
+use oddball_signal::epochs::{EpochsParams, Reject};
 use oddball_signal::Epochs;
 use serde::Serialize;
 
@@ -63,11 +63,24 @@ pub fn load_epochs(paths: &[PathBuf], pre: &Preprocess) -> Result<(Vec<Recording
     Ok((recs, eps))
 }
 
+/// Offline: remove each channel's mean, zero-phase band-pass. Causal (models trained online):
+/// one forward pass from the first sample, as the streaming filter does. Then epochs, with the
+/// model's peak-to-peak rejection if it has one.
 fn preprocess(rec: &Recording, pre: &Preprocess) -> Result<Epochs> {
     let mut raw = rec.raw.clone();
-    detrend(raw.data_mut(), DetrendKind::Constant);
-    pre.band.design(raw.sfreq())?.apply_raw(&mut raw)?;
-    let (epochs, _dropped) = EpochsParams::new(pre.tmin, pre.tmax).cut(&raw)?;
+    let filter = pre.band.design(raw.sfreq())?;
+    if pre.causal {
+        let filtered = filter.sosfilt(raw.data().view(), true);
+        raw.data_mut().assign(&filtered);
+    } else {
+        detrend(raw.data_mut(), DetrendKind::Constant);
+        filter.apply_raw(&mut raw)?;
+    }
+    let mut params = EpochsParams::new(pre.tmin, pre.tmax);
+    if let Some(t) = pre.reject_peak_to_peak_uv {
+        params = params.with_reject(Reject::PeakToPeak(t));
+    }
+    let (epochs, _dropped) = params.cut(&raw)?;
     Ok(epochs)
 }
 
@@ -139,6 +152,13 @@ struct PipelineResult {
 pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
     if let Some(path) = &args.model {
         let model = load_model(path)?;
+        if let Some(first) = args.test.first() {
+            let rec =
+                oddball_io::read(first).with_context(|| format!("reading {}", first.display()))?;
+            if oddball_session::record::is_session(&rec) {
+                return evaluate_sessions(args, &model, path);
+            }
+        }
         let (test_recs, test_eps) = load_epochs(&args.test, &model.preprocess)?;
         for rec in &test_recs {
             model
@@ -382,4 +402,93 @@ fn cross_validate(
         fit_s: fit_s / folds as f64,
         score_epochs_per_s: n_scored as f64 / score_s.max(1e-12),
     })
+}
+
+/// Re-evaluates oddball session files (`oddball demo` writes `session.dat`) with a model:
+/// every online decision recomputed from the raw EEG, compared with the recorded one.
+fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> Result<()> {
+    use oddball_session::engine::TrialOutcome;
+    use oddball_session::record::{read_session, reevaluate};
+
+    #[derive(Serialize)]
+    struct SessionResult {
+        file: PathBuf,
+        decisions: Vec<oddball_session::record::Redecision>,
+        identical_to_recorded: usize,
+        accuracy: f64,
+        itr: Itr,
+    }
+    let mut results = Vec::new();
+    for path in &args.test {
+        let rec = oddball_io::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let saved = read_session(&rec).with_context(|| format!("reading {}", path.display()))?;
+        let decisions = reevaluate(&rec, &saved, model).with_context(|| {
+            format!(
+                "re-evaluating {} with {}",
+                path.display(),
+                model_path.display()
+            )
+        })?;
+        let name = |c: Option<u32>| {
+            c.and_then(|c| saved.bulbs.get(c as usize - 1))
+                .map_or("—".to_string(), |b| b.to_string())
+        };
+        println!("{}:", path.display());
+        for d in &decisions {
+            let decided = match d.outcome {
+                TrialOutcome::Chosen { code } => name(Some(code)),
+                _ => "abstain".into(),
+            };
+            println!(
+                "  trial {:>3}: intended {:<5} decided {:<7} rounds {}  recorded {:<7} {}",
+                d.number,
+                name(d.intended),
+                decided,
+                d.rounds,
+                if d.recorded.is_some() {
+                    name(d.recorded)
+                } else {
+                    "abstain".into()
+                },
+                if d.decided() == d.recorded {
+                    "same"
+                } else {
+                    "DIFFERENT"
+                }
+            );
+        }
+        let same = decisions
+            .iter()
+            .filter(|d| d.decided() == d.recorded)
+            .count();
+        let n = decisions.len().max(1) as f64;
+        let correct = decisions
+            .iter()
+            .filter(|d| d.decided().is_some() && d.decided() == d.intended)
+            .count();
+        let seconds = decisions.iter().map(|d| d.seconds).sum::<f64>() / n;
+        let accuracy = correct as f64 / n;
+        let itr = Itr::new(4, accuracy, seconds);
+        println!(
+            "  {} online decisions: {same} identical to the recorded ones; accuracy {:.1} % ({correct}/{}), ITR {:.2} bits/decision, {:.2} bits/min",
+            decisions.len(),
+            100.0 * accuracy,
+            decisions.len(),
+            itr.bits_per_selection,
+            itr.bits_per_minute
+        );
+        results.push(SessionResult {
+            file: path.clone(),
+            identical_to_recorded: same,
+            decisions,
+            accuracy,
+            itr,
+        });
+    }
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&results)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
 }

@@ -43,7 +43,8 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     }
     if let Some(plot) = &args.plot {
         let (target, nontarget) = erp_epochs(&recordings, args)?;
-        draw_erp(plot, &target, &nontarget, args)?;
+        let band = format!("{}–{} Hz", args.l_freq, args.h_freq);
+        draw_erp(plot, &target, &nontarget, &band)?;
         println!("wrote {}", plot.display());
     }
     Ok(())
@@ -178,7 +179,8 @@ fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, E
     Ok((target, nontarget))
 }
 
-fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, args: &InspectArgs) -> Result<()> {
+/// A grid of per-channel averages: targets red, non-targets blue; `band` names the filter.
+pub fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, band: &str) -> Result<()> {
     let t_avg: Array2<f64> = target.average().expect("non-empty");
     let n_avg: Array2<f64> = nontarget.average().expect("non-empty");
     let times_ms: Vec<f64> = target.times().iter().map(|t| t * 1000.0).collect();
@@ -199,11 +201,9 @@ fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, args: &InspectArgs
     let (x0, x1) = (times_ms[0], *times_ms.last().expect("epoch has samples"));
     crate::with_backend!(path, size, |root| {
         let title = format!(
-            "target (n={}, red) vs non-target (n={}, blue), {}–{} Hz, µV",
+            "target (n={}, red) vs non-target (n={}, blue), {band}, µV",
             target.n_epochs(),
             nontarget.n_epochs(),
-            args.l_freq,
-            args.h_freq
         );
         let root = root
             .titled(&title, (crate::plot::FONT_FAMILY, 20))

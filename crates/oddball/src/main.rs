@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 
 mod cmd_arm;
 mod cmd_decode;
+mod cmd_demo;
 mod cmd_inspect;
 mod plot;
 
@@ -25,6 +26,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// The whole closed loop without hardware: calibrate, then steer the arm through the letter G.
+    Demo(cmd_demo::DemoArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
     Inspect(cmd_inspect::InspectArgs),
     /// Fit a decoding pipeline on recordings and save the model (JSON).
@@ -38,6 +41,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Demo(args) => cmd_demo::run(&args),
         Command::Inspect(args) => cmd_inspect::run(&args),
         Command::Train(args) => cmd_decode::run_train(&args),
         Command::Evaluate(args) => cmd_decode::run_evaluate(&args),

@@ -1,0 +1,669 @@
+//! The session engine: calibration, training, and online control of the arm.
+//!
+//! A [`Session`] drives a [`Subject`] (anything that sees flashes and yields EEG: the simulated
+//! subject here, a live amplifier later) through the four-bulb paradigm:
+//!
+//! 1. **Calibration**: `calibration_per_bulb` labelled decisions per bulb, in seeded random
+//!    order, each with the paradigm's full rounds. Every epoch comes from the same causal
+//!    [`OnlineEpocher`] the online phase uses.
+//! 2. **Training**: the chosen preset is fitted on the accepted calibration epochs. Its scores
+//!    are turned into log-likelihood ratios by a [`ScoreModelParams`] fitted on
+//!    *cross-validated* scores (folds by decision), so the evidence is not over-confident.
+//! 3. **Online**: per decision, a countdown, then rounds of four flashes. Flashes are shown (to
+//!    the subject and the epocher) when the stream reaches their onset; each epoch is scored as
+//!    soon as its last sample (600 ms after onset) has arrived; after each complete round the
+//!    [`DecisionRule`] decides, continues or abstains. A decision issues the bulb's command to the
+//!    arm, which runs on the same clock as the EEG, one chunk at a time.
+//!
+//! Everything shown and decided is kept ([`SessionLog`]) so a session can be saved and
+//! re-evaluated offline to the same decisions ([`crate::record`]).
+
+use ndarray::{Array2, Array3, Axis};
+use oddball_arm::{ArmSim, Command};
+use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
+use oddball_decode::metrics::roc_auc;
+use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::online::{Marker, OnlineEpocher};
+use crate::paradigm::FourBulbParams;
+use crate::SessionError;
+
+/// A source of EEG that sees the flashes: the person in front of the panel.
+pub trait Subject {
+    fn sfreq(&self) -> f64;
+    fn ch_names(&self) -> &[String];
+    /// Samples produced so far.
+    fn position(&self) -> u64;
+    /// A flash of stimulus `code` at sample `onset` (≥ `position()`); `attended` when it is the
+    /// stimulus the person attends.
+    fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError>;
+    /// The next `n` samples `(n_channels, n)`, µV.
+    fn render(&mut self, n: usize) -> Array2<f64>;
+}
+
+impl Subject for crate::subject::SimulatedSubject {
+    fn sfreq(&self) -> f64 {
+        crate::subject::SimulatedSubject::sfreq(self)
+    }
+    fn ch_names(&self) -> &[String] {
+        crate::subject::SimulatedSubject::ch_names(self)
+    }
+    fn position(&self) -> u64 {
+        crate::subject::SimulatedSubject::position(self)
+    }
+    fn show(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), SessionError> {
+        self.flash(onset, attended)
+    }
+    fn render(&mut self, n: usize) -> Array2<f64> {
+        crate::subject::SimulatedSubject::render(self, n)
+    }
+}
+
+/// Settings of a session.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SessionParams {
+    pub paradigm: FourBulbParams,
+    pub preprocess: Preprocess,
+    /// Pipeline preset name (see `oddball_decode::pipeline::PRESETS`).
+    pub pipeline: String,
+    /// Calibration decisions per bulb.
+    pub calibration_per_bulb: usize,
+    /// The online decision rule (fixed rounds, or dynamic stopping).
+    pub rule: DecisionRule,
+    /// Samples per streamed chunk.
+    pub chunk: usize,
+    /// Cross-validation folds for the score model.
+    pub cv_folds: usize,
+    /// Seed of the flash orders and the calibration order.
+    pub seed: u64,
+}
+
+impl SessionParams {
+    /// The paper's session: four bulbs, 5 rounds, causal 1–15 Hz, 10 calibration decisions
+    /// per bulb, 20-sample chunks.
+    pub fn paper(pipeline: &str) -> Self {
+        let paradigm = FourBulbParams::paper();
+        Self {
+            paradigm,
+            preprocess: Preprocess::online(),
+            pipeline: pipeline.to_string(),
+            calibration_per_bulb: 10,
+            rule: DecisionRule::Fixed {
+                rounds: paradigm.n_rounds,
+            },
+            chunk: 20,
+            cv_folds: 5,
+            seed: 0,
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), SessionError> {
+        self.paradigm.validate()?;
+        self.rule.validate()?;
+        let bad = |name: &'static str, value: usize, reason: &str| {
+            Err(SessionError::InvalidParameter {
+                name,
+                value: value.to_string(),
+                reason: reason.into(),
+            })
+        };
+        if self.chunk == 0 {
+            return bad("chunk", 0, "at least one sample per chunk");
+        }
+        if self.cv_folds < 2 {
+            return bad("cv_folds", self.cv_folds, "at least 2 folds");
+        }
+        if self.calibration_per_bulb < self.cv_folds.div_ceil(4).max(1) {
+            return bad(
+                "calibration_per_bulb",
+                self.calibration_per_bulb,
+                "too few calibration decisions for the folds",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Calibration or online control.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Phase {
+    Calibration,
+    Online,
+}
+
+/// One flash as shown.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ShownFlash {
+    /// Onset, samples from the start of the session.
+    pub onset: u64,
+    pub code: u32,
+    /// Index of its trial in [`SessionLog::trials`].
+    pub trial: usize,
+    pub round: usize,
+    pub attended: bool,
+    /// The pipeline's score (online, accepted epochs only).
+    pub score: Option<f64>,
+    /// The epoch passed the amplitude rejection (`None` until its epoch completed).
+    pub accepted: Option<bool>,
+}
+
+/// How a trial ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum TrialOutcome {
+    /// A calibration trial: nothing decided.
+    Labelled,
+    Chosen {
+        code: u32,
+    },
+    Abstained,
+}
+
+/// One trial (a calibration decision or an online decision).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialRecord {
+    pub phase: Phase,
+    /// First sample of the countdown.
+    pub start: u64,
+    /// The sample at which the trial ended (exclusive): the decision was made once the samples
+    /// before it had arrived.
+    pub end: u64,
+    /// Code of the attended bulb (`None`: attending nothing).
+    pub intended: Option<u32>,
+    pub outcome: TrialOutcome,
+    /// Complete rounds the decision used.
+    pub rounds: usize,
+    /// Posterior per bulb at the decision (empty for calibration), and of "attending nothing".
+    pub posterior: Vec<f64>,
+    pub p_none: f64,
+    /// The arm refused the command (it would leave the board): the reason.
+    pub arm_refusal: Option<String>,
+    /// Pen position (x, z) in metres when the decision was made, before its command.
+    pub pen_m: Option<[f64; 2]>,
+}
+
+impl TrialRecord {
+    /// The decided code, if any.
+    pub fn decided(&self) -> Option<u32> {
+        match self.outcome {
+            TrialOutcome::Chosen { code } => Some(code),
+            _ => None,
+        }
+    }
+
+    /// Confidence: the posterior of the decided (or, abstaining, the best) bulb.
+    pub fn confidence(&self) -> f64 {
+        match self.outcome {
+            TrialOutcome::Chosen { code } => self.posterior[code as usize - 1],
+            _ => self.posterior.iter().copied().fold(0.0, f64::max),
+        }
+    }
+}
+
+/// What calibration measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationReport {
+    pub n_trials: usize,
+    pub n_epochs: usize,
+    pub n_targets: usize,
+    pub n_rejected: usize,
+    /// Epoch ROC-AUC of the cross-validated scores.
+    pub cv_auc: f64,
+    /// Separation of the cross-validated target and non-target scores, in pooled SDs.
+    pub d_prime: f64,
+    pub fit_seconds: f64,
+}
+
+/// Everything a session showed, recorded and decided.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SessionLog {
+    pub sfreq: f64,
+    pub ch_names: Vec<String>,
+    /// Raw samples as received, `(n_channels, n_times)`, µV.
+    pub raw: Array2<f64>,
+    pub flashes: Vec<ShownFlash>,
+    pub trials: Vec<TrialRecord>,
+}
+
+/// Calibration epochs kept for training.
+#[derive(Debug, Default)]
+struct Calibration {
+    epochs: Vec<Array2<f64>>,
+    labels: Vec<bool>,
+    trials: Vec<usize>,
+    /// Index of each epoch's flash.
+    flashes: Vec<usize>,
+    rejected: usize,
+}
+
+/// A running session.
+#[derive(Debug)]
+pub struct Session<S: Subject> {
+    params: SessionParams,
+    subject: S,
+    epocher: OnlineEpocher,
+    rng: ChaCha8Rng,
+    raw: Vec<Vec<f64>>,
+    flashes: Vec<ShownFlash>,
+    trials: Vec<TrialRecord>,
+    calibration: Calibration,
+    model: Option<Model>,
+    arm: Option<ArmSim>,
+    /// The arm runs from the first online decision on (it holds still during calibration).
+    arm_running: bool,
+    /// Pace the stream in real time: (wall-clock start, sample position at that instant).
+    realtime: Option<(std::time::Instant, u64)>,
+}
+
+impl<S: Subject> Session<S> {
+    /// A session with `subject`, optionally driving `arm`.
+    pub fn new(
+        params: SessionParams,
+        subject: S,
+        arm: Option<ArmSim>,
+    ) -> Result<Self, SessionError> {
+        params.validate()?;
+        let epocher = OnlineEpocher::new(
+            &params.preprocess,
+            subject.sfreq(),
+            subject.ch_names().len(),
+        )?;
+        Ok(Self {
+            rng: ChaCha8Rng::seed_from_u64(params.seed),
+            raw: vec![Vec::new(); subject.ch_names().len()],
+            params,
+            subject,
+            epocher,
+            flashes: Vec::new(),
+            trials: Vec::new(),
+            calibration: Calibration::default(),
+            model: None,
+            arm,
+            arm_running: false,
+            realtime: None,
+        })
+    }
+
+    /// Paces the session in real time (a simulated subject otherwise runs as fast as it can).
+    pub fn set_realtime(&mut self, on: bool) {
+        self.realtime = on.then(|| (std::time::Instant::now(), self.subject.position()));
+    }
+
+    pub fn params(&self) -> &SessionParams {
+        &self.params
+    }
+
+    pub fn model(&self) -> Option<&Model> {
+        self.model.as_ref()
+    }
+
+    /// Uses a model trained elsewhere (it must carry a decision model).
+    pub fn set_model(&mut self, model: Model) -> Result<(), SessionError> {
+        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        if model.decision.is_none() {
+            return Err(SessionError::InvalidParameter {
+                name: "model",
+                value: model.pipeline.name().to_string(),
+                reason: "the model has no decision model (train it in a session)".into(),
+            });
+        }
+        if model.preprocess != self.params.preprocess {
+            return Err(SessionError::InvalidParameter {
+                name: "model.preprocess",
+                value: format!("{:?}", model.preprocess),
+                reason: "differs from the session's pre-processing".into(),
+            });
+        }
+        self.model = Some(model);
+        Ok(())
+    }
+
+    pub fn arm(&self) -> Option<&ArmSim> {
+        self.arm.as_ref()
+    }
+
+    pub fn trials(&self) -> &[TrialRecord] {
+        &self.trials
+    }
+
+    /// The accepted calibration epochs (band-passed, as the model saw them), events flagged.
+    pub fn calibration_epochs(&self) -> Result<oddball_signal::Epochs, SessionError> {
+        let cal = &self.calibration;
+        let (n_ch, n_t) = cal.epochs.first().map_or((self.raw.len(), 0), |e| e.dim());
+        let mut x = Array3::zeros((cal.epochs.len(), n_ch, n_t));
+        for (i, e) in cal.epochs.iter().enumerate() {
+            x.index_axis_mut(Axis(0), i).assign(e);
+        }
+        let events = cal
+            .flashes
+            .iter()
+            .map(|&k| {
+                let f = &self.flashes[k];
+                oddball_signal::Event::new(f.onset as usize, f.code).with_target(f.attended)
+            })
+            .collect();
+        Ok(oddball_signal::Epochs::new(
+            x,
+            self.subject.sfreq(),
+            self.params.preprocess.tmin,
+            self.subject.ch_names().to_vec(),
+            events,
+        )?)
+    }
+
+    /// Sampling rate of the subject's EEG, Hz.
+    pub fn sfreq(&self) -> f64 {
+        self.subject.sfreq()
+    }
+
+    /// Seconds of EEG so far.
+    pub fn time_s(&self) -> f64 {
+        self.subject.position() as f64 / self.subject.sfreq()
+    }
+
+    /// Runs the calibration trials and trains the model.
+    pub fn calibrate(&mut self) -> Result<CalibrationReport, SessionError> {
+        let mut intended: Vec<u32> = (1..=4)
+            .flat_map(|c| std::iter::repeat_n(c, self.params.calibration_per_bulb))
+            .collect();
+        intended.shuffle(&mut self.rng);
+        let first = self.trials.len();
+        for code in intended {
+            self.run_trial(Phase::Calibration, Some(code))?;
+        }
+        self.train(first)
+    }
+
+    /// Fits the preset on the calibration epochs, the score model on cross-validated scores.
+    fn train(&mut self, first_trial: usize) -> Result<CalibrationReport, SessionError> {
+        let t0 = std::time::Instant::now();
+        let cal = &self.calibration;
+        let n = cal.epochs.len();
+        let (n_ch, n_t) = cal.epochs.first().map_or((0, 0), |e| e.dim());
+        let mut x = Array3::zeros((n, n_ch, n_t));
+        for (i, e) in cal.epochs.iter().enumerate() {
+            x.index_axis_mut(Axis(0), i).assign(e);
+        }
+        let y = &cal.labels;
+        let sfreq = self.subject.sfreq();
+        let params = PipelineParams::preset(&self.params.pipeline, sfreq)?;
+        // Out-of-fold scores, folds by trial so overlapping epochs never straddle a split.
+        let k = self.params.cv_folds;
+        let mut oof = vec![0.0; n];
+        for fold in 0..k {
+            let test: Vec<usize> = (0..n)
+                .filter(|&i| (cal.trials[i] - first_trial) % k == fold)
+                .collect();
+            let train: Vec<usize> = (0..n)
+                .filter(|&i| (cal.trials[i] - first_trial) % k != fold)
+                .collect();
+            if test.is_empty() {
+                continue;
+            }
+            let xtr = x.select(Axis(0), &train);
+            let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
+            let m = params.fit(xtr.view(), &ytr)?;
+            let s = m.decision_function(x.select(Axis(0), &test).view())?;
+            for (&i, &v) in test.iter().zip(s.iter()) {
+                oof[i] = v;
+            }
+        }
+        let cv_auc = roc_auc(&oof, y)?;
+        let scores = ScoreModelParams::default().fit(&oof, y)?;
+        let pipeline = params.fit(x.view(), y)?;
+        let mut model = Model::new(
+            self.params.preprocess,
+            sfreq,
+            self.subject.ch_names().to_vec(),
+            pipeline,
+        );
+        model.decision = Some(DecisionModel {
+            scores,
+            rule: self.params.rule,
+        });
+        self.model = Some(model);
+        Ok(CalibrationReport {
+            n_trials: self.trials.len() - first_trial,
+            n_epochs: n,
+            n_targets: y.iter().filter(|&&t| t).count(),
+            n_rejected: cal.rejected,
+            cv_auc,
+            d_prime: scores.d_prime(),
+            fit_seconds: t0.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// One online decision while the person attends `intended` (`None`: attends nothing).
+    pub fn decide(&mut self, intended: Option<Command>) -> Result<TrialRecord, SessionError> {
+        if self.model.is_none() {
+            return Err(SessionError::NotCalibrated);
+        }
+        let code = intended.map(|c| self.params.paradigm.code_of(c));
+        self.arm_running = true;
+        let i = self.run_trial(Phase::Online, code)?;
+        Ok(self.trials[i].clone())
+    }
+
+    /// Lets the arm finish its last movement: runs `seconds` more of EEG and arm.
+    pub fn idle(&mut self, seconds: f64) -> Result<(), SessionError> {
+        let n = (seconds * self.subject.sfreq()).round() as usize;
+        let mut done = 0;
+        while done < n {
+            let c = self.params.chunk.min(n - done);
+            self.advance(c)?;
+            done += c;
+        }
+        Ok(())
+    }
+
+    /// Ends the session, returning its log, the model and the arm.
+    pub fn finish(self) -> (SessionLog, Option<Model>, Option<ArmSim>) {
+        let n_ch = self.raw.len();
+        let n_t = self.raw.first().map_or(0, Vec::len);
+        let mut raw = Array2::zeros((n_ch, n_t));
+        for (c, r) in self.raw.iter().enumerate() {
+            raw.row_mut(c)
+                .assign(&ndarray::ArrayView1::from(r.as_slice()));
+        }
+        (
+            SessionLog {
+                sfreq: self.subject.sfreq(),
+                ch_names: self.subject.ch_names().to_vec(),
+                raw,
+                flashes: self.flashes,
+                trials: self.trials,
+            },
+            self.model,
+            self.arm,
+        )
+    }
+
+    /// Renders one chunk, feeds the epocher, records, runs the arm; handles completed epochs.
+    fn advance(&mut self, n: usize) -> Result<(), SessionError> {
+        let data = self.subject.render(n);
+        for (r, row) in self.raw.iter_mut().zip(data.rows()) {
+            r.extend(row.iter());
+        }
+        let ready = self.epocher.push_samples(data.view())?;
+        if let (Some(arm), true) = (&mut self.arm, self.arm_running) {
+            arm.run_for(n as f64 / self.subject.sfreq())?;
+        }
+        if let Some((t0, p0)) = self.realtime {
+            let due = (self.subject.position() - p0) as f64 / self.subject.sfreq();
+            let ahead = due - t0.elapsed().as_secs_f64();
+            if ahead > 0.0 {
+                std::thread::sleep(std::time::Duration::from_secs_f64(ahead));
+            }
+        }
+        for e in ready {
+            let f = &mut self.flashes[e.marker.tag];
+            f.accepted = Some(e.accepted);
+            match self.trials[f.trial].phase {
+                Phase::Calibration => {
+                    if e.accepted {
+                        self.calibration.epochs.push(e.data);
+                        self.calibration.labels.push(f.attended);
+                        self.calibration.trials.push(f.trial);
+                        self.calibration.flashes.push(e.marker.tag);
+                    } else {
+                        self.calibration.rejected += 1;
+                    }
+                }
+                Phase::Online => {
+                    if e.accepted {
+                        let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
+                        f.score = Some(model.pipeline.score_epoch(e.data.view())?);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs one trial to its end; returns its index.
+    fn run_trial(&mut self, phase: Phase, intended: Option<u32>) -> Result<usize, SessionError> {
+        let p = self.params.paradigm;
+        let sfreq = self.subject.sfreq();
+        let n_rounds = match phase {
+            Phase::Calibration => p.n_rounds,
+            Phase::Online => self.params.rule.max_rounds(),
+        };
+        let schedule = p.trial(&mut self.rng, n_rounds);
+        let start = self.subject.position();
+        let trial = self.trials.len();
+        self.trials.push(TrialRecord {
+            phase,
+            start,
+            end: start,
+            intended,
+            outcome: TrialOutcome::Labelled,
+            rounds: 0,
+            posterior: Vec::new(),
+            p_none: 0.0,
+            arm_refusal: None,
+            pen_m: None,
+        });
+        let planned: Vec<(u64, u32, usize)> = schedule
+            .flashes
+            .iter()
+            .map(|f| (start + (f.onset_s * sfreq).round() as u64, f.code, f.round))
+            .collect();
+        let first_flash = self.flashes.len();
+        let mut next = 0;
+        loop {
+            let pos = self.subject.position();
+            let end = pos + self.params.chunk as u64;
+            while next < planned.len() && planned[next].0 < end {
+                let (onset, code, round) = planned[next];
+                let attended = intended == Some(code);
+                self.subject.show(onset, code, attended)?;
+                self.epocher.push_marker(Marker {
+                    onset,
+                    code,
+                    tag: self.flashes.len(),
+                })?;
+                self.flashes.push(ShownFlash {
+                    onset,
+                    code,
+                    trial,
+                    round,
+                    attended,
+                    score: None,
+                    accepted: None,
+                });
+                next += 1;
+            }
+            self.advance(self.params.chunk)?;
+            let shown = &self.flashes[first_flash..];
+            match phase {
+                Phase::Calibration => {
+                    if next == planned.len() && shown.iter().all(|f| f.accepted.is_some()) {
+                        self.trials[trial].rounds = n_rounds;
+                        break;
+                    }
+                }
+                Phase::Online => {
+                    let rounds = complete_rounds(shown);
+                    let decision = self
+                        .model
+                        .as_ref()
+                        .and_then(|m| m.decision)
+                        .ok_or(SessionError::NotCalibrated)?;
+                    let (verdict, used) = decision.decide(&rounds);
+                    if verdict != Verdict::Continue || rounds.len() == n_rounds {
+                        self.conclude(trial, verdict, used)?;
+                        break;
+                    }
+                }
+            }
+        }
+        self.trials[trial].end = self.subject.position();
+        Ok(trial)
+    }
+
+    fn conclude(
+        &mut self,
+        trial: usize,
+        verdict: Verdict,
+        used: usize,
+    ) -> Result<(), SessionError> {
+        let t = &mut self.trials[trial];
+        t.rounds = used;
+        t.pen_m = self.arm.as_ref().map(|a| [a.pen()[0], a.pen()[1]]);
+        match verdict {
+            Verdict::Choose { index, posterior } => {
+                t.outcome = TrialOutcome::Chosen {
+                    code: index as u32 + 1,
+                };
+                t.posterior = posterior.p;
+                t.p_none = posterior.p_none;
+                let command = self
+                    .params
+                    .paradigm
+                    .command_of(index as u32 + 1)
+                    .expect("four bulbs");
+                if let Some(arm) = &mut self.arm {
+                    if let Err(e) = arm.issue(command) {
+                        t.arm_refusal = Some(e.to_string());
+                    }
+                }
+            }
+            Verdict::Abstain { posterior } => {
+                t.outcome = TrialOutcome::Abstained;
+                t.posterior = posterior.p;
+                t.p_none = posterior.p_none;
+            }
+            Verdict::Continue => {
+                // Rounds ran out without a verdict (cannot happen with a valid rule).
+                t.outcome = TrialOutcome::Abstained;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The scores of a trial's complete rounds, in order, stopping at the first incomplete one:
+/// `rounds[r][code − 1]`, `None` for a rejected epoch. A round is complete when all four of its
+/// flashes have their epoch.
+pub fn complete_rounds(flashes: &[ShownFlash]) -> Vec<Vec<Option<f64>>> {
+    let mut rounds: Vec<Vec<Option<f64>>> = Vec::new();
+    let mut seen: Vec<usize> = Vec::new();
+    for f in flashes {
+        if f.round >= rounds.len() {
+            rounds.resize(f.round + 1, vec![None; 4]);
+            seen.resize(f.round + 1, 0);
+        }
+        if f.accepted.is_some() && (1..=4).contains(&f.code) {
+            rounds[f.round][f.code as usize - 1] = f.score;
+            seen[f.round] += 1;
+        }
+    }
+    let n_complete = seen.iter().take_while(|&&n| n == 4).count();
+    rounds.truncate(n_complete);
+    rounds
+}

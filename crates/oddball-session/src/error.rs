@@ -1,0 +1,30 @@
+use thiserror::Error;
+
+/// Errors of the session crate.
+#[derive(Debug, Error)]
+pub enum SessionError {
+    #[error("invalid {name} = {value}: {reason}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        reason: String,
+    },
+    #[error("marker at sample {onset} arrived too late: its epoch starts before the oldest buffered sample {oldest_kept}")]
+    MarkerTooLate { onset: u64, oldest_kept: u64 },
+    #[error("the session has no model yet: calibrate first or load a model")]
+    NotCalibrated,
+    #[error(
+        "{path} is not a P300-speller recording (no TargetDefinitions): it cannot be replayed"
+    )]
+    NotASpeller { path: String },
+    #[error("{path} is not an oddball session file: no {missing}")]
+    NotASession { path: String, missing: String },
+    #[error(transparent)]
+    Signal(#[from] oddball_signal::SignalError),
+    #[error(transparent)]
+    Decode(#[from] oddball_decode::DecodeError),
+    #[error(transparent)]
+    Arm(#[from] oddball_arm::ArmError),
+    #[error(transparent)]
+    Io(#[from] oddball_io::IoError),
+}

@@ -1,0 +1,19 @@
+//! The closed loop of the oddball BCI: what the panel shows, who looks at it, and the engine that
+//! turns their EEG into arm commands.
+//!
+//! * [`paradigm`]: stimulus schedules, (onset time, stimulus code) pairs shared by the panel and
+//!   the decoder: the paper's four-bulb panel and the 6 × 6 row/column speller.
+//! * [`subject`]: a simulated subject who attends one stimulus and produces 8-channel EEG: 1/f
+//!   background, alpha, mains, drift, blinks, a visual response to every flash and a P300 to the
+//!   attended ones (presets easy, typical, hard).
+
+pub mod engine;
+mod error;
+pub mod online;
+pub mod paradigm;
+pub mod record;
+pub mod replay;
+pub mod subject;
+
+pub use error::SessionError;
+pub use subject::{SimulatedSubject, SubjectParams, SubjectPreset};

@@ -1,0 +1,318 @@
+//! Causal epoching of streamed samples: the streaming band-pass, a buffer, and the markers
+//! still waiting for their epoch.
+//!
+//! Samples arrive in chunks of any size; markers (flash onsets on the same sample clock) may
+//! arrive before or after their onset's samples, as long as the samples of their epoch are
+//! still buffered. As soon as the last sample of an epoch (`tmax` after its onset) has arrived,
+//! the epoch is handed out. Because [`StreamingFilter`] equals one offline causal pass over the
+//! whole recording, the epochs equal those [`offline_epochs`] cuts from the saved recording, bit
+//! for bit.
+
+use std::collections::VecDeque;
+
+use ndarray::{s, Array2, ArrayView2};
+use oddball_decode::pipeline::Preprocess;
+use oddball_signal::filter::{StreamInit, StreamingFilter};
+
+use crate::SessionError;
+
+/// A stimulus onset on the stream's sample clock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Marker {
+    /// Onset, samples from the first sample of the stream.
+    pub onset: u64,
+    pub code: u32,
+    /// The caller's reference (e.g. an index into its flash list).
+    pub tag: usize,
+}
+
+/// An epoch whose samples have all arrived.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadyEpoch {
+    pub marker: Marker,
+    /// Band-passed samples `(n_channels, n_times)`, µV.
+    pub data: Array2<f64>,
+    /// Passed the amplitude rejection (and holds no NaN or infinity).
+    pub accepted: bool,
+}
+
+/// Streaming filter + buffer + pending markers.
+#[derive(Debug)]
+pub struct OnlineEpocher {
+    filter: StreamingFilter,
+    pre: Preprocess,
+    /// Epoch window: first sample offset from the onset, and length.
+    first: i64,
+    n_times: usize,
+    n_channels: usize,
+    /// Filtered samples, per channel, starting at absolute sample `buf_start`.
+    buf: Vec<Vec<f64>>,
+    buf_start: u64,
+    received: u64,
+    /// Samples kept behind the newest one even when no marker waits (late markers).
+    keep: u64,
+    pending: VecDeque<Marker>,
+}
+
+impl OnlineEpocher {
+    /// An epocher for `n_channels` at `sfreq` Hz with the causal band-pass of `pre`.
+    pub fn new(pre: &Preprocess, sfreq: f64, n_channels: usize) -> Result<Self, SessionError> {
+        if !pre.causal {
+            return Err(SessionError::InvalidParameter {
+                name: "preprocess.causal",
+                value: "false".into(),
+                reason: "online epoching filters causally; use Preprocess::online()".into(),
+            });
+        }
+        let filter = pre.band.design(sfreq)?;
+        let (first, n_times) = pre.window(sfreq);
+        if n_times == 0 {
+            return Err(SessionError::InvalidParameter {
+                name: "preprocess.tmax",
+                value: pre.tmax.to_string(),
+                reason: "the epoch window is empty".into(),
+            });
+        }
+        Ok(Self {
+            filter: StreamingFilter::new(filter, n_channels, StreamInit::Steady),
+            pre: *pre,
+            first,
+            n_times,
+            n_channels,
+            buf: vec![Vec::new(); n_channels],
+            buf_start: 0,
+            received: 0,
+            keep: (2.0 * sfreq).ceil() as u64 + n_times as u64,
+            pending: VecDeque::new(),
+        })
+    }
+
+    /// Samples received so far.
+    pub fn received(&self) -> u64 {
+        self.received
+    }
+
+    /// Samples per epoch.
+    pub fn n_times(&self) -> usize {
+        self.n_times
+    }
+
+    /// The first sample after `onset` at which its epoch is complete (exclusive end).
+    pub fn epoch_end(&self, onset: u64) -> i64 {
+        onset as i64 + self.first + self.n_times as i64
+    }
+
+    /// Registers a marker. Refused when its epoch starts before the first buffered sample or
+    /// before the stream's start.
+    pub fn push_marker(&mut self, marker: Marker) -> Result<(), SessionError> {
+        let start = marker.onset as i64 + self.first;
+        if start < self.buf_start as i64 {
+            return Err(SessionError::MarkerTooLate {
+                onset: marker.onset,
+                oldest_kept: self.buf_start,
+            });
+        }
+        // Keep pending markers ordered by onset.
+        let at = self
+            .pending
+            .iter()
+            .position(|m| m.onset > marker.onset)
+            .unwrap_or(self.pending.len());
+        self.pending.insert(at, marker);
+        Ok(())
+    }
+
+    /// Filters a chunk `(n_channels, n)` of raw µV and returns the epochs it completes, in onset
+    /// order.
+    pub fn push_samples(
+        &mut self,
+        chunk: ArrayView2<f64>,
+    ) -> Result<Vec<ReadyEpoch>, SessionError> {
+        if chunk.nrows() != self.n_channels {
+            return Err(SessionError::InvalidParameter {
+                name: "chunk",
+                value: format!("{} channels", chunk.nrows()),
+                reason: format!("the stream has {} channels", self.n_channels),
+            });
+        }
+        let filtered = self.filter.process(chunk)?;
+        for (b, row) in self.buf.iter_mut().zip(filtered.rows()) {
+            b.extend(row.iter());
+        }
+        self.received += chunk.ncols() as u64;
+        let mut ready = Vec::new();
+        while let Some(m) = self.pending.front() {
+            if self.epoch_end(m.onset) > self.received as i64 {
+                break;
+            }
+            let m = self.pending.pop_front().expect("front exists");
+            let lo = (m.onset as i64 + self.first - self.buf_start as i64) as usize;
+            let mut data = Array2::zeros((self.n_channels, self.n_times));
+            for (c, b) in self.buf.iter().enumerate() {
+                data.row_mut(c)
+                    .assign(&ndarray::ArrayView1::from(&b[lo..lo + self.n_times]));
+            }
+            let accepted = self.pre.accepts(data.view());
+            ready.push(ReadyEpoch {
+                marker: m,
+                data,
+                accepted,
+            });
+        }
+        self.trim();
+        Ok(ready)
+    }
+
+    fn trim(&mut self) {
+        let mut oldest = self.received.saturating_sub(self.keep);
+        if let Some(m) = self.pending.front() {
+            oldest = oldest.min((m.onset as i64 + self.first).max(0) as u64);
+        }
+        let drop = oldest.saturating_sub(self.buf_start) as usize;
+        // Amortise: move memory only when a good share of the buffer can go.
+        if drop > 4096 && drop * 2 > self.buf[0].len() {
+            for b in &mut self.buf {
+                b.drain(..drop);
+            }
+            self.buf_start += drop as u64;
+        }
+    }
+}
+
+/// The epochs of `onsets` cut from a whole recording `(n_channels, n_times)` the way
+/// [`OnlineEpocher`] cuts them from the stream: one causal pass with the steady state at the
+/// first sample. Epochs that do not fit in the recording are `None`.
+pub fn offline_epochs(
+    pre: &Preprocess,
+    sfreq: f64,
+    data: ArrayView2<f64>,
+    onsets: &[u64],
+) -> Result<Vec<Option<ReadyEpoch>>, SessionError> {
+    let filter = pre.band.design(sfreq)?;
+    let filtered = filter.sosfilt(data, true);
+    let (first, n_times) = pre.window(sfreq);
+    Ok(onsets
+        .iter()
+        .enumerate()
+        .map(|(tag, &onset)| {
+            let lo = onset as i64 + first;
+            if lo < 0 || lo as usize + n_times > filtered.ncols() {
+                return None;
+            }
+            let lo = lo as usize;
+            let epoch = filtered.slice(s![.., lo..lo + n_times]).to_owned();
+            Some(ReadyEpoch {
+                marker: Marker {
+                    onset,
+                    code: 0,
+                    tag,
+                },
+                accepted: pre.accepts(epoch.view()),
+                data: epoch,
+            })
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn signal(n_ch: usize, n: usize) -> Array2<f64> {
+        Array2::from_shape_fn((n_ch, n), |(c, t)| {
+            let t = t as f64 / 100.0;
+            20.0 * (2.0 * std::f64::consts::PI * 3.0 * t + c as f64).sin()
+                + 5.0 * (2.0 * std::f64::consts::PI * 11.0 * t).cos()
+                + 40.0
+                + c as f64
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// Any chunking and any marker timing give the epochs the offline cut gives, bit for bit.
+        #[test]
+        fn streamed_epochs_equal_offline_epochs(
+            chunks in proptest::collection::vec(1usize..180, 1..40),
+            onsets in proptest::collection::vec(0u64..2500, 0..12),
+        ) {
+            let n: usize = chunks.iter().sum();
+            let data = signal(3, n);
+            let pre = Preprocess::online();
+            let mut ep = OnlineEpocher::new(&pre, 100.0, 3).unwrap();
+            let mut sorted = onsets.clone();
+            sorted.sort_unstable();
+            for (tag, &onset) in sorted.iter().enumerate() {
+                ep.push_marker(Marker { onset, code: 1, tag }).unwrap();
+            }
+            let mut got = Vec::new();
+            let mut at = 0;
+            for c in chunks {
+                got.extend(ep.push_samples(data.slice(s![.., at..at + c])).unwrap());
+                at += c;
+            }
+            let offline = offline_epochs(&pre, 100.0, data.view(), &sorted).unwrap();
+            let expected: Vec<_> = offline.into_iter().flatten().collect();
+            prop_assert_eq!(got.len(), expected.len());
+            for (g, e) in got.iter().zip(&expected) {
+                prop_assert_eq!(g.marker.onset, e.marker.onset);
+                prop_assert_eq!(&g.data, &e.data);
+                prop_assert_eq!(g.accepted, e.accepted);
+            }
+        }
+    }
+
+    #[test]
+    fn late_markers_within_the_buffer_still_get_their_epoch() {
+        let pre = Preprocess::online();
+        let data = signal(2, 20_000);
+        let mut ep = OnlineEpocher::new(&pre, 100.0, 2).unwrap();
+        let mut got = ep.push_samples(data.slice(s![.., ..10_000])).unwrap();
+        assert!(got.is_empty());
+        // 1 s late: still buffered.
+        ep.push_marker(Marker {
+            onset: 9_900,
+            code: 2,
+            tag: 0,
+        })
+        .unwrap();
+        got.extend(ep.push_samples(data.slice(s![.., 10_000..10_001])).unwrap());
+        assert_eq!(got.len(), 1);
+        let offline = offline_epochs(&pre, 100.0, data.view(), &[9_900]).unwrap();
+        assert_eq!(got[0].data, offline[0].as_ref().unwrap().data);
+        // Long gone: a clear error.
+        ep.push_samples(data.slice(s![.., 10_001..])).unwrap();
+        let err = ep
+            .push_marker(Marker {
+                onset: 100,
+                code: 1,
+                tag: 1,
+            })
+            .unwrap_err();
+        assert!(
+            matches!(err, SessionError::MarkerTooLate { onset: 100, .. }),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn nan_and_blinks_reject_the_epoch() {
+        let pre = Preprocess::online();
+        let mut data = signal(2, 1000);
+        data[[1, 300]] = 5000.0;
+        let mut ep = OnlineEpocher::new(&pre, 100.0, 2).unwrap();
+        for (tag, onset) in [100u64, 280, 600].into_iter().enumerate() {
+            ep.push_marker(Marker {
+                onset,
+                code: 1,
+                tag,
+            })
+            .unwrap();
+        }
+        let got = ep.push_samples(data.view()).unwrap();
+        let accepted: Vec<bool> = got.iter().map(|e| e.accepted).collect();
+        assert_eq!(accepted, [true, false, true]);
+        assert!(OnlineEpocher::new(&Preprocess::peer(), 100.0, 2).is_err());
+    }
+}

@@ -1,0 +1,282 @@
+//! A session on disk: BCI2000 `.dat` (float32 samples, so the µV values come back bit for bit)
+//! with the flashes, trials and decisions as states, and the offline re-evaluation that turns
+//! the file back into the same decisions.
+//!
+//! States written (besides BCI2000's `StimulusCode`/`StimulusType`, held for each flash's
+//! on-time; `StimulusType` = 1 on the attended bulb):
+//!
+//! | state | bits | value over a trial's samples `[start, end)` |
+//! |---|---|---|
+//! | `TrialNumber` | 16 | the trial's number, from 1 (0 between trials) |
+//! | `TargetCode` | 8 | the attended bulb's code (0: attending nothing) |
+//! | `ResultCode` | 8 | the decided bulb's code (0: calibration or abstention) |
+//! | `Calibration` | 1 | 1 for calibration trials |
+//!
+//! A trial's `end` is the sample at which its decision was made: the decoder had received every
+//! sample before it. Parameters under `Application:Oddball` name the paradigm and the command of
+//! each bulb. Re-evaluation ([`reevaluate`]) filters the whole file causally (equal, bit for bit,
+//! to the online stream), scores each flash whose epoch was complete before the trial's end,
+//! and replays the decision rule over complete rounds.
+
+use std::path::Path;
+
+use oddball_arm::Command;
+use oddball_decode::decision::Verdict;
+use oddball_decode::pipeline::Model;
+use oddball_io::{
+    stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary, Recording,
+    StateColumn,
+};
+use oddball_signal::{Event, Events, Raw};
+use serde::{Deserialize, Serialize};
+
+use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome};
+use crate::online::offline_epochs;
+use crate::paradigm::FourBulbParams;
+use crate::SessionError;
+
+/// Writes a session log as a BCI2000 `.dat` file.
+pub fn save_session(
+    path: impl AsRef<Path>,
+    log: &SessionLog,
+    paradigm: &FourBulbParams,
+) -> Result<Bci2000WriteSummary, SessionError> {
+    let n = log.raw.ncols();
+    let events = Events::new(
+        log.flashes
+            .iter()
+            .filter(|f| (f.onset as usize) < n)
+            .map(|f| Event::new(f.onset as usize, f.code).with_target(f.attended))
+            .collect(),
+    );
+    let raw = Raw::new(log.raw.clone(), log.sfreq, log.ch_names.clone(), events)?;
+    let flash_samples = (paradigm.flash_s * log.sfreq).round() as usize;
+    let mut states = stimulus_states(raw.events(), n, flash_samples);
+    let mut trial_no = vec![0u64; n];
+    let mut target = vec![0u64; n];
+    let mut result = vec![0u64; n];
+    let mut calib = vec![0u64; n];
+    for (i, t) in log.trials.iter().enumerate() {
+        let (a, b) = (t.start as usize, (t.end as usize).min(n));
+        for s in a..b {
+            trial_no[s] = i as u64 + 1;
+            target[s] = u64::from(t.intended.unwrap_or(0));
+            result[s] = u64::from(t.decided().unwrap_or(0));
+            calib[s] = u64::from(t.phase == Phase::Calibration);
+        }
+    }
+    states.push(StateColumn::new("TrialNumber", 16, trial_no));
+    states.push(StateColumn::new("TargetCode", 8, target));
+    states.push(StateColumn::new("ResultCode", 8, result));
+    states.push(StateColumn::new("Calibration", 1, calib));
+    let bulbs: Vec<&str> = paradigm.bulbs.iter().map(|c| c.name()).collect();
+    let options = Bci2000WriteOptions {
+        extra_parameters: vec![
+            "Application:Oddball string Paradigm= four-bulb % % % // oddball's four-bulb panel"
+                .into(),
+            format!(
+                "Application:Oddball list BulbCommands= 4 {} % % % // command of stimulus codes 1..4",
+                bulbs.join(" ")
+            ),
+            format!(
+                "Application:Oddball float FlashDuration= {}s % % % // bulb on-time",
+                paradigm.flash_s
+            ),
+            format!(
+                "Application:Oddball float RoundDuration= {}s % % % // a round of four flashes",
+                paradigm.round_s
+            ),
+            format!(
+                "Application:Oddball float Countdown= {}s % % % // before each decision",
+                paradigm.countdown_s
+            ),
+        ],
+    };
+    Ok(write_bci2000(path, &raw, &states, &options)?)
+}
+
+/// One trial as read back from a file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SavedTrial {
+    pub number: usize,
+    pub phase: Phase,
+    pub start: u64,
+    pub end: u64,
+    pub intended: Option<u32>,
+    /// The decision recorded in the file (`None`: abstention or calibration).
+    pub recorded: Option<u32>,
+    /// Indices into the recording's events of the trial's flashes, in order.
+    pub flashes: Vec<usize>,
+}
+
+/// A four-bulb session read back from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedSession {
+    pub bulbs: [Command; 4],
+    pub trials: Vec<SavedTrial>,
+}
+
+/// Whether a recording is an oddball four-bulb session file.
+pub fn is_session(rec: &Recording) -> bool {
+    rec.bci2000()
+        .and_then(|b| b.parameters.get("Paradigm"))
+        .and_then(|p| p.as_str())
+        == Some("four-bulb")
+}
+
+/// Reads the trials of a session file.
+pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
+    let path = rec.path.display().to_string();
+    let missing = |what: &str| SessionError::NotASession {
+        path: path.clone(),
+        missing: what.to_string(),
+    };
+    let info = rec.bci2000().ok_or_else(|| missing("BCI2000 format"))?;
+    if !is_session(rec) {
+        return Err(missing("parameter Paradigm= four-bulb"));
+    }
+    let names = info
+        .parameters
+        .get("BulbCommands")
+        .and_then(|p| p.list_items())
+        .ok_or_else(|| missing("parameter BulbCommands"))?;
+    let parsed: Vec<Command> = names
+        .iter()
+        .map(|n| n.parse::<Command>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| missing("four commands in BulbCommands"))?;
+    let bulbs: [Command; 4] = parsed
+        .try_into()
+        .map_err(|_| missing("four commands in BulbCommands"))?;
+    let state = |name: &str| {
+        info.states
+            .get(name)
+            .ok_or_else(|| missing(&format!("state {name}")))
+    };
+    let trial_no = state("TrialNumber")?;
+    let target = state("TargetCode")?;
+    let result = state("ResultCode")?;
+    let calib = state("Calibration")?;
+    let events = rec.raw.events().as_slice();
+    let mut trials: Vec<SavedTrial> = Vec::new();
+    let mut t = 0;
+    while t < trial_no.len() {
+        let no = trial_no[t];
+        if no == 0 {
+            t += 1;
+            continue;
+        }
+        let start = t;
+        while t < trial_no.len() && trial_no[t] == no {
+            t += 1;
+        }
+        let flashes = events
+            .iter()
+            .enumerate()
+            .filter(|(_, e)| (start..t).contains(&e.onset))
+            .map(|(i, _)| i)
+            .collect();
+        trials.push(SavedTrial {
+            number: no as usize,
+            phase: if calib[start] != 0 {
+                Phase::Calibration
+            } else {
+                Phase::Online
+            },
+            start: start as u64,
+            end: t as u64,
+            intended: (target[start] != 0).then_some(target[start] as u32),
+            recorded: (result[start] != 0).then_some(result[start] as u32),
+            flashes,
+        });
+    }
+    Ok(SavedSession { bulbs, trials })
+}
+
+/// A decision recomputed from the file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Redecision {
+    pub number: usize,
+    pub intended: Option<u32>,
+    pub recorded: Option<u32>,
+    pub outcome: TrialOutcome,
+    pub rounds: usize,
+    pub posterior: Vec<f64>,
+    /// Seconds from the trial's start to the decision.
+    pub seconds: f64,
+}
+
+impl Redecision {
+    pub fn decided(&self) -> Option<u32> {
+        match self.outcome {
+            TrialOutcome::Chosen { code } => Some(code),
+            _ => None,
+        }
+    }
+}
+
+/// Recomputes every online decision of a session file with `model` (which must carry its
+/// decision model, as session-trained models do).
+pub fn reevaluate(
+    rec: &Recording,
+    saved: &SavedSession,
+    model: &Model,
+) -> Result<Vec<Redecision>, SessionError> {
+    let raw = &rec.raw;
+    model.check_layout(raw.ch_names(), raw.sfreq())?;
+    let decision = model.decision.ok_or(SessionError::NotCalibrated)?;
+    let events = raw.events().as_slice();
+    let onsets: Vec<u64> = events.iter().map(|e| e.onset as u64).collect();
+    let epochs = offline_epochs(&model.preprocess, raw.sfreq(), raw.data().view(), &onsets)?;
+    let (first, n_times) = model.preprocess.window(raw.sfreq());
+    let mut out = Vec::new();
+    for t in saved.trials.iter().filter(|t| t.phase == Phase::Online) {
+        let mut shown = Vec::with_capacity(t.flashes.len());
+        for (k, &i) in t.flashes.iter().enumerate() {
+            let e = &events[i];
+            let ready = e.onset as i64 + first + n_times as i64 <= t.end as i64;
+            let (accepted, score) = match (&epochs[i], ready) {
+                (Some(ep), true) => {
+                    let score = if ep.accepted {
+                        Some(model.pipeline.score_epoch(ep.data.view())?)
+                    } else {
+                        None
+                    };
+                    (Some(ep.accepted), score)
+                }
+                _ => (None, None),
+            };
+            shown.push(ShownFlash {
+                onset: e.onset as u64,
+                code: e.code,
+                trial: t.number,
+                round: k / 4,
+                attended: e.target == Some(true),
+                score,
+                accepted,
+            });
+        }
+        let rounds = complete_rounds(&shown);
+        let (verdict, used) = decision.decide(&rounds);
+        let (outcome, posterior) = match verdict {
+            Verdict::Choose { index, posterior } => (
+                TrialOutcome::Chosen {
+                    code: index as u32 + 1,
+                },
+                posterior.p,
+            ),
+            Verdict::Abstain { posterior } => (TrialOutcome::Abstained, posterior.p),
+            Verdict::Continue => (TrialOutcome::Abstained, Vec::new()),
+        };
+        out.push(Redecision {
+            number: t.number,
+            intended: t.intended,
+            recorded: t.recorded,
+            outcome,
+            rounds: used,
+            posterior,
+            seconds: (t.end - t.start) as f64 / raw.sfreq(),
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,67 @@
+//! The replay subject on the real BCI2000 speller files (skipped when ../shared/data is absent).
+
+use std::path::PathBuf;
+
+use oddball_arm::Command;
+use oddball_decode::decision::DecisionRule;
+use oddball_session::engine::TrialOutcome;
+use oddball_session::replay::{calibrate, replay, ReplayParams};
+
+fn data_file(name: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("ODDBALL_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
+    let p = dir.join("bci2000-samplefiles-p300").join(name);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("skipping: {} not found (set ODDBALL_DATA)", p.display());
+        None
+    }
+}
+
+#[test]
+fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_rounds() {
+    let (Some(cal), Some(test)) = (data_file("eeg3_1.dat"), data_file("eeg3_2.dat")) else {
+        return;
+    };
+    let cal = oddball_io::read(cal).unwrap();
+    let test = oddball_io::read(test).unwrap();
+    for pipeline in ["lda", "riemann"] {
+        let params = ReplayParams::paper(pipeline);
+        let (model, report) = calibrate(&cal, &params).unwrap();
+        let fixed = replay(&test, &model, &Command::LETTER_G, &params).unwrap();
+        let mut dyn_params = params.clone();
+        dyn_params.rule = DecisionRule::dynamic(5);
+        let dynamic = replay(&test, &model, &Command::LETTER_G, &dyn_params).unwrap();
+        let acc = |d: &[oddball_session::replay::ReplayDecision]| {
+            d.iter()
+                .filter(|d| d.decided(&params.paradigm) == Some(d.intended))
+                .count() as f64
+                / d.len() as f64
+        };
+        let mean_rounds =
+            dynamic.iter().map(|d| d.rounds as f64).sum::<f64>() / dynamic.len() as f64;
+        let abstained = dynamic
+            .iter()
+            .filter(|d| d.outcome == TrialOutcome::Abstained)
+            .count();
+        eprintln!(
+            "{pipeline}: cv AUC {:.3}, d' {:.2}; {} decisions; fixed 5 rounds accuracy {:.3}; dynamic accuracy {:.3}, mean rounds {:.2}, abstained {}",
+            report.cv_auc,
+            report.d_prime,
+            fixed.len(),
+            acc(&fixed),
+            acc(&dynamic),
+            mean_rounds,
+            abstained
+        );
+        assert_eq!(fixed.len(), 24, "4 characters × (rows, columns) × 3");
+        assert!(fixed.iter().all(|d| d.rounds == 5));
+        assert!(
+            acc(&fixed) >= 0.75,
+            "{pipeline}: far above the 0.25 of chance"
+        );
+        assert!(mean_rounds < 5.0);
+    }
+}

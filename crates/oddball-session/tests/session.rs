@@ -1,0 +1,119 @@
+//! The session engine end to end on the simulated subject: calibration, online decisions driving
+//! the arm, dynamic stopping, abstention, and the saved session re-evaluated offline.
+
+use oddball_arm::{ArmConfig, ArmSim, Command};
+use oddball_decode::decision::DecisionRule;
+use oddball_session::engine::{Session, SessionParams, TrialOutcome};
+use oddball_session::record::{read_session, reevaluate, save_session};
+use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
+
+fn session(preset: SubjectPreset, seed: u64, rule: DecisionRule) -> Session<SimulatedSubject> {
+    let subject = SubjectParams::preset(preset)
+        .with_seed(seed)
+        .build()
+        .unwrap();
+    let mut params = SessionParams::paper("lda");
+    params.seed = seed;
+    params.rule = rule;
+    let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
+    Session::new(params, subject, Some(arm)).unwrap()
+}
+
+const FIXED: DecisionRule = DecisionRule::Fixed { rounds: 5 };
+
+#[test]
+fn the_typical_subject_draws_the_letter_g_and_the_saved_session_re_evaluates_identically() {
+    let mut s = session(SubjectPreset::Typical, 1, FIXED);
+    let cal = s.calibrate().unwrap();
+    assert_eq!((cal.n_trials, cal.n_epochs), (40, 800));
+    assert!(cal.cv_auc > 0.85, "calibration AUC {}", cal.cv_auc);
+    let start = s.arm().unwrap().pen();
+    for &c in &Command::LETTER_G {
+        let t = s.decide(Some(c)).unwrap();
+        assert_eq!(t.rounds, 5);
+        assert_eq!(t.decided(), Some(s.params().paradigm.code_of(c)), "{t:?}");
+        assert!(t.arm_refusal.is_none());
+    }
+    s.idle(1.5).unwrap();
+    // The pen ends where the G ends: up, left, down, right, up, left = (−h, +h) from the start.
+    let h = ArmConfig::default().reference.step_m;
+    let end = s.arm().unwrap().pen();
+    assert!(((end - start) - nalgebra::Vector2::new(-h, h)).norm() < 0.5e-3);
+
+    let paradigm = s.params().paradigm;
+    let (log, model, _) = s.finish();
+    let model = model.unwrap();
+    let dir = std::env::temp_dir().join(format!("oddball-session-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("session.dat");
+    save_session(&path, &log, &paradigm).unwrap();
+    let rec = oddball_io::read(&path).unwrap();
+    assert_eq!(
+        rec.raw.data(),
+        &log.raw,
+        "float32 samples come back bit for bit"
+    );
+    let saved = read_session(&rec).unwrap();
+    assert_eq!(saved.trials.len(), 46);
+    assert_eq!(saved.bulbs, paradigm.bulbs);
+    let again = reevaluate(&rec, &saved, &model).unwrap();
+    let online: Vec<_> = log
+        .trials
+        .iter()
+        .filter(|t| t.outcome != TrialOutcome::Labelled)
+        .collect();
+    assert_eq!(again.len(), online.len());
+    for (a, o) in again.iter().zip(online) {
+        assert_eq!(a.outcome, o.outcome);
+        assert_eq!(a.rounds, o.rounds);
+        assert_eq!(a.posterior, o.posterior, "posteriors equal bit for bit");
+        assert_eq!(a.recorded, o.decided());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_same_seed_gives_the_same_session() {
+    let run = || {
+        let mut s = session(SubjectPreset::Typical, 7, FIXED);
+        s.calibrate().unwrap();
+        s.decide(Some(Command::Up)).unwrap();
+        let (log, model, _) = s.finish();
+        (log, model.unwrap().to_json())
+    };
+    let (a, ma) = run();
+    let (b, mb) = run();
+    assert_eq!(a, b);
+    assert_eq!(ma, mb);
+}
+
+#[test]
+fn dynamic_stopping_saves_rounds_and_a_person_attending_nothing_gets_abstentions() {
+    let mut s = session(SubjectPreset::Easy, 3, DecisionRule::dynamic(5));
+    s.calibrate().unwrap();
+    let mut rounds = 0;
+    let mut right = 0;
+    for &c in Command::LETTER_G.iter().chain(&Command::LETTER_G) {
+        let t = s.decide(Some(c)).unwrap();
+        rounds += t.rounds;
+        right += usize::from(t.decided() == Some(s.params().paradigm.code_of(c)));
+    }
+    let mean = rounds as f64 / 12.0;
+    assert!(mean < 4.0, "mean rounds {mean}");
+    assert!(right >= 11, "{right}/12 right");
+    let mut abstained = 0;
+    for _ in 0..10 {
+        let t = s.decide(None).unwrap();
+        abstained += usize::from(t.outcome == TrialOutcome::Abstained);
+    }
+    assert!(
+        abstained >= 8,
+        "abstained {abstained}/10 while attending nothing"
+    );
+}
+
+#[test]
+fn deciding_before_calibration_is_an_error() {
+    let mut s = session(SubjectPreset::Easy, 1, FIXED);
+    assert!(s.decide(Some(Command::Up)).is_err());
+}
