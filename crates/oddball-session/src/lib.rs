@@ -14,6 +14,7 @@ pub mod paradigm;
 pub mod record;
 pub mod replay;
 pub mod subject;
+pub mod task;
 
 pub use error::SessionError;
 pub use subject::{SimulatedSubject, SubjectParams, SubjectPreset};

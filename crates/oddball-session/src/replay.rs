@@ -245,6 +245,183 @@ pub fn panel_seconds(p: &FourBulbParams, pre: &Preprocess, rounds: usize) -> f64
     p.countdown_s + rounds.saturating_sub(1) as f64 * p.round_s + p.onset_in_round(3) + pre.tmax
 }
 
+/// One decision's worth of real flashes: a character's rows (or columns) over
+/// `rounds_per_decision` sequences.
+#[derive(Debug, Clone, PartialEq)]
+struct Slot {
+    character: usize,
+    dimension: Dimension,
+    first_sequence: usize,
+    target: u32,
+    /// The other codes of the dimension.
+    others: Vec<u32>,
+    /// Per sequence, the score of each code of the dimension (`None`: rejected epoch).
+    scores: Vec<std::collections::BTreeMap<u32, Option<f64>>>,
+}
+
+/// Real speller EEG as a source of four-choice decisions, one at a time, for whatever the
+/// person intends next (the decision slots are used in recorded order).
+#[derive(Debug, Clone)]
+pub struct ReplaySource {
+    slots: Vec<Slot>,
+    next: usize,
+    decision: DecisionModel,
+    paradigm: FourBulbParams,
+    preprocess: Preprocess,
+    rng: ChaCha8Rng,
+}
+
+impl ReplaySource {
+    /// Streams and scores every flash of `rec` with `model`, and cuts the decision slots.
+    pub fn new(
+        rec: &Recording,
+        model: &Model,
+        params: &ReplayParams,
+    ) -> Result<Self, SessionError> {
+        model.check_layout(rec.raw.ch_names(), rec.raw.sfreq())?;
+        params.rule.validate()?;
+        let decision = DecisionModel {
+            scores: model.decision.ok_or(SessionError::NotCalibrated)?.scores,
+            rule: params.rule,
+        };
+        let speller = rec
+            .speller
+            .as_ref()
+            .ok_or_else(|| SessionError::NotASpeller {
+                path: rec.path.display().to_string(),
+            })?;
+        let events = rec.raw.events().as_slice();
+        let chars = character_of_events(rec)?;
+        let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;
+        let scores: Vec<Option<Option<f64>>> = epochs
+            .iter()
+            .map(|e| match e {
+                Some(e) if e.accepted => model
+                    .pipeline
+                    .score_epoch(e.data.view())
+                    .map(|s| Some(Some(s))),
+                Some(_) => Ok(Some(None)),
+                None => Ok(None),
+            })
+            .collect::<Result<_, _>>()?;
+        let per_seq = speller.n_rows() + speller.n_cols();
+        let n_chars = chars.last().map_or(0, |c| c + 1);
+        let r = params.rounds_per_decision.max(params.rule.max_rounds());
+        let mut slots = Vec::new();
+        for ch in 0..n_chars {
+            let idx: Vec<usize> = (0..events.len()).filter(|&i| chars[i] == ch).collect();
+            let n_seq = idx.len() / per_seq;
+            for dim in [Dimension::Rows, Dimension::Columns] {
+                let codes: Vec<u32> = match dim {
+                    Dimension::Rows => (0..speller.n_rows())
+                        .map(|i| speller.code_of_row(i))
+                        .collect(),
+                    Dimension::Columns => (0..speller.n_cols())
+                        .map(|i| speller.code_of_col(i))
+                        .collect(),
+                };
+                let Some(target) = idx
+                    .iter()
+                    .find(|&&i| events[i].target == Some(true) && codes.contains(&events[i].code))
+                    .map(|&i| events[i].code)
+                else {
+                    continue;
+                };
+                'slot: for d in 0..n_seq / r {
+                    let mut per_sequence = Vec::with_capacity(r);
+                    for seq in d * r..(d + 1) * r {
+                        let seq_idx = &idx[seq * per_seq..(seq + 1) * per_seq];
+                        let mut m = std::collections::BTreeMap::new();
+                        for &code in &codes {
+                            match seq_idx.iter().find(|&&i| events[i].code == code) {
+                                Some(&i) => match scores[i] {
+                                    Some(s) => {
+                                        m.insert(code, s);
+                                    }
+                                    None => continue 'slot,
+                                },
+                                None => continue 'slot,
+                            }
+                        }
+                        per_sequence.push(m);
+                    }
+                    slots.push(Slot {
+                        character: ch,
+                        dimension: dim,
+                        first_sequence: d * r,
+                        target,
+                        others: codes.iter().copied().filter(|&c| c != target).collect(),
+                        scores: per_sequence,
+                    });
+                }
+            }
+        }
+        Ok(Self {
+            slots,
+            next: 0,
+            decision,
+            paradigm: params.paradigm,
+            preprocess: model.preprocess,
+            rng: ChaCha8Rng::seed_from_u64(params.seed),
+        })
+    }
+
+    /// Decisions left.
+    pub fn remaining(&self) -> usize {
+        self.slots.len() - self.next
+    }
+
+    /// The next decision while the person intends `intended`; `None` when the recording is used up.
+    pub fn decide(&mut self, intended: Command) -> Option<ReplayDecision> {
+        let slot = self.slots.get(self.next)?;
+        self.next += 1;
+        let mut others = slot.others.clone();
+        others.shuffle(&mut self.rng);
+        others.truncate(3);
+        let attended_bulb = self.paradigm.code_of(intended) as usize - 1;
+        let mut source = [0u32; 4];
+        let mut it = others.into_iter();
+        for (k, s) in source.iter_mut().enumerate() {
+            *s = if k == attended_bulb {
+                slot.target
+            } else {
+                it.next().expect("three non-targets")
+            };
+        }
+        let rounds: Vec<Vec<Option<f64>>> = slot
+            .scores
+            .iter()
+            .map(|m| source.iter().map(|c| m[c]).collect())
+            .collect();
+        let (verdict, used) = self.decision.decide(&rounds);
+        let (outcome, posterior, p_none) = match verdict {
+            Verdict::Choose { index, posterior } => (
+                TrialOutcome::Chosen {
+                    code: index as u32 + 1,
+                },
+                posterior.p,
+                posterior.p_none,
+            ),
+            Verdict::Abstain { posterior } => {
+                (TrialOutcome::Abstained, posterior.p, posterior.p_none)
+            }
+            Verdict::Continue => (TrialOutcome::Abstained, vec![0.25; 4], 0.0),
+        };
+        Some(ReplayDecision {
+            character: slot.character,
+            dimension: slot.dimension,
+            first_sequence: slot.first_sequence,
+            intended,
+            bulb_source_codes: source,
+            outcome,
+            rounds: used,
+            posterior,
+            p_none,
+            seconds: panel_seconds(&self.paradigm, &self.preprocess, used),
+        })
+    }
+}
+
 /// Plays `rec` back as four-choice decisions, the person intending `commands` in turn
 /// (cycled), as many decisions as the recording holds.
 pub fn replay(
@@ -260,116 +437,10 @@ pub fn replay(
             reason: "at least one command".into(),
         });
     }
-    model.check_layout(rec.raw.ch_names(), rec.raw.sfreq())?;
-    let decision = DecisionModel {
-        scores: model.decision.ok_or(SessionError::NotCalibrated)?.scores,
-        rule: params.rule,
-    };
-    params.rule.validate()?;
-    let speller = rec
-        .speller
-        .as_ref()
-        .ok_or_else(|| SessionError::NotASpeller {
-            path: rec.path.display().to_string(),
-        })?;
-    let events = rec.raw.events().as_slice();
-    let chars = character_of_events(rec)?;
-    let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;
-    let scores: Vec<Option<f64>> = epochs
-        .iter()
-        .map(|e| match e {
-            Some(e) if e.accepted => model.pipeline.score_epoch(e.data.view()).map(Some),
-            _ => Ok(None),
-        })
-        .collect::<Result<_, _>>()?;
-    let complete: Vec<bool> = epochs.iter().map(Option::is_some).collect();
-    let per_seq = speller.n_rows() + speller.n_cols();
-    let n_chars = chars.last().map_or(0, |c| c + 1);
-    let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+    let mut source = ReplaySource::new(rec, model, params)?;
     let mut out = Vec::new();
-    let r = params.rounds_per_decision.max(params.rule.max_rounds());
-    for ch in 0..n_chars {
-        let idx: Vec<usize> = (0..events.len()).filter(|&i| chars[i] == ch).collect();
-        let n_seq = idx.len() / per_seq;
-        for dim in [Dimension::Rows, Dimension::Columns] {
-            let codes: Vec<u32> = match dim {
-                Dimension::Rows => (0..speller.n_rows())
-                    .map(|i| speller.code_of_row(i))
-                    .collect(),
-                Dimension::Columns => (0..speller.n_cols())
-                    .map(|i| speller.code_of_col(i))
-                    .collect(),
-            };
-            let targets: Vec<u32> = idx
-                .iter()
-                .filter(|&&i| events[i].target == Some(true) && codes.contains(&events[i].code))
-                .map(|&i| events[i].code)
-                .collect();
-            let Some(&target) = targets.first() else {
-                continue;
-            };
-            for d in 0..n_seq / r {
-                let intended = commands[out.len() % commands.len()];
-                let mut others: Vec<u32> = codes.iter().copied().filter(|&c| c != target).collect();
-                others.shuffle(&mut rng);
-                others.truncate(3);
-                let attended_bulb = params.paradigm.code_of(intended) as usize - 1;
-                let mut source = [0u32; 4];
-                let mut it = others.into_iter();
-                for (k, s) in source.iter_mut().enumerate() {
-                    *s = if k == attended_bulb {
-                        target
-                    } else {
-                        it.next().expect("three non-targets")
-                    };
-                }
-                let mut rounds = Vec::new();
-                for seq in d * r..(d + 1) * r {
-                    let seq_idx = &idx[seq * per_seq..(seq + 1) * per_seq];
-                    let mut round = vec![None; 4];
-                    let mut all = true;
-                    for (k, &src) in source.iter().enumerate() {
-                        match seq_idx.iter().find(|&&i| events[i].code == src) {
-                            Some(&i) if complete[i] => round[k] = scores[i],
-                            _ => all = false,
-                        }
-                    }
-                    if !all {
-                        break;
-                    }
-                    rounds.push(round);
-                }
-                if rounds.len() < r {
-                    continue;
-                }
-                let (verdict, used) = decision.decide(&rounds);
-                let (outcome, posterior, p_none) = match verdict {
-                    Verdict::Choose { index, posterior } => (
-                        TrialOutcome::Chosen {
-                            code: index as u32 + 1,
-                        },
-                        posterior.p,
-                        posterior.p_none,
-                    ),
-                    Verdict::Abstain { posterior } => {
-                        (TrialOutcome::Abstained, posterior.p, posterior.p_none)
-                    }
-                    Verdict::Continue => (TrialOutcome::Abstained, vec![0.25; 4], 0.0),
-                };
-                out.push(ReplayDecision {
-                    character: ch,
-                    dimension: dim,
-                    first_sequence: d * r,
-                    intended,
-                    bulb_source_codes: source,
-                    outcome,
-                    rounds: used,
-                    posterior,
-                    p_none,
-                    seconds: panel_seconds(&params.paradigm, &model.preprocess, used),
-                });
-            }
-        }
+    while let Some(d) = source.decide(commands[out.len() % commands.len()]) {
+        out.push(d);
     }
     Ok(out)
 }

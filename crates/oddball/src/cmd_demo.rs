@@ -21,13 +21,14 @@ use oddball_session::engine::{CalibrationReport, Session, SessionParams, TrialOu
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::record::save_session;
 use oddball_session::replay::{self, ReplayParams};
-use oddball_session::subject::{SubjectParams, SubjectPreset};
+use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 use oddball_signal::Epochs;
 use serde::Serialize;
 
-/// Options of `oddball demo`.
+/// Who watches the panel and how the session decides: shared by `oddball demo` and
+/// `oddball task`.
 #[derive(Debug, clap::Args)]
-pub struct DemoArgs {
+pub struct SessionOptions {
     /// Who watches the panel: easy, typical or hard (simulated), or replay:FILE (a BCI2000
     /// P300-speller recording played back as four-choice decisions).
     #[arg(long, default_value = "typical")]
@@ -36,9 +37,6 @@ pub struct DemoArgs {
     /// name ends in _1 instead of _N, e.g. eeg3_1.dat for eeg3_2.dat].
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<PathBuf>,
-    /// Comma-separated intended commands (up, down, left, right); the paper's letter G by default.
-    #[arg(long, default_value = "up,left,down,right,up,left")]
-    pub commands: String,
     /// Seed of the simulated subject and the flash orders.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -46,7 +44,7 @@ pub struct DemoArgs {
     #[arg(long)]
     pub realtime: bool,
     /// Stop flashing as soon as one bulb is probable enough (and abstain when none is
-    /// credible); the report puts it beside fixed rounds.
+    /// credible).
     #[arg(long)]
     pub dynamic_stopping: bool,
     /// Posterior at which dynamic stopping decides.
@@ -61,10 +59,75 @@ pub struct DemoArgs {
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]
     pub calibration_per_bulb: usize,
+}
+
+impl SessionOptions {
+    /// The fixed rule (5 rounds) and the rule in effect.
+    pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
+        let fixed = DecisionRule::Fixed {
+            rounds: FourBulbParams::paper().n_rounds,
+        };
+        let dynamic = DecisionRule::Dynamic {
+            threshold: self.threshold,
+            min_rounds: 1,
+            max_rounds: self.max_rounds,
+            credible: 0.5,
+            p_no_control: 0.2,
+        };
+        dynamic
+            .validate()
+            .context("checking --threshold/--max-rounds")?;
+        Ok((
+            fixed,
+            if self.dynamic_stopping {
+                dynamic
+            } else {
+                fixed
+            },
+        ))
+    }
+
+    /// The simulated preset, or `None` for a replayed subject; an unknown name is an error.
+    pub fn preset(&self) -> Result<Option<SubjectPreset>> {
+        match self.subject.strip_prefix("replay:") {
+            Some(_) => Ok(None),
+            None => {
+                Ok(Some(self.subject.parse().map_err(|e| {
+                    anyhow::anyhow!("--subject {}: {e}", self.subject)
+                })?))
+            }
+        }
+    }
+
+    /// The replayed file and its calibration file, for `replay:FILE` subjects.
+    pub fn replay_files(&self) -> Result<Option<(PathBuf, PathBuf)>> {
+        let Some(file) = self.subject.strip_prefix("replay:") else {
+            return Ok(None);
+        };
+        let file = PathBuf::from(file);
+        let cal = match &self.calibration {
+            Some(c) => c.clone(),
+            None => sibling_calibration(&file)?,
+        };
+        Ok(Some((file, cal)))
+    }
+}
+
+/// Options of `oddball demo`.
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    #[command(flatten)]
+    pub session: SessionOptions,
+    /// Comma-separated intended commands (up, down, left, right); the paper's letter G by default.
+    #[arg(long, default_value = "up,left,down,right,up,left")]
+    pub commands: String,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/demo")]
     pub out: PathBuf,
 }
+
+/// What a replayed subject's report says about its decisions.
+pub const REPLAY_NOTE: &str = "replayed speller flashes: the four bulbs of each decision are the target and three non-target rows (or columns) of one spelled character; seconds and ITR use the four-bulb panel's timing; the raw EEG is the source file itself, so no session.dat is written";
 
 /// One decision as reported.
 #[derive(Debug, Clone, Serialize)]
@@ -195,66 +258,39 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if commands.is_empty() {
         bail!("--commands is empty: give at least one of up, down, left, right");
     }
-    let fixed = DecisionRule::Fixed {
-        rounds: FourBulbParams::paper().n_rounds,
-    };
-    let dynamic = DecisionRule::Dynamic {
-        threshold: args.threshold,
-        min_rounds: 1,
-        max_rounds: args.max_rounds,
-        credible: 0.5,
-        p_no_control: 0.2,
-    };
-    dynamic
-        .validate()
-        .context("checking --threshold/--max-rounds")?;
-    let rule = if args.dynamic_stopping {
-        dynamic
-    } else {
-        fixed
-    };
-    let preset: Option<SubjectPreset> = match args.subject.strip_prefix("replay:") {
-        Some(_) => None,
-        None => Some(
-            args.subject
-                .parse()
-                .map_err(|e| anyhow::anyhow!("--subject {}: {e}", args.subject))?,
-        ),
-    };
+    let (fixed, rule) = args.session.rules()?;
+    let preset = args.session.preset()?;
+    let replay_files = args.session.replay_files()?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
 
-    let (run, comparison, subject_label, note) = match args.subject.strip_prefix("replay:") {
-        Some(file) => {
-            let file = PathBuf::from(file);
-            let cal = match &args.calibration {
-                Some(c) => c.clone(),
-                None => sibling_calibration(&file)?,
-            };
+    let (run, comparison, subject_label, note) = match (replay_files, preset) {
+        (Some((file, cal)), _) => {
             println!(
                 "oddball demo: replaying {} (calibration {}), pipeline {}, {}",
                 file.display(),
                 cal.display(),
-                args.pipeline,
+                args.session.pipeline,
                 rule_name(&rule)
             );
-            fs::create_dir_all(&args.out)
-                .with_context(|| format!("creating {}", args.out.display()))?;
             let (run, comparison) = run_replay(args, &file, &cal, &commands, rule, fixed)?;
             (
                 run,
                 comparison,
                 format!("replay:{}", file.display()),
-                Some("replayed speller flashes: the four bulbs of each decision are the target and three non-target rows (or columns) of one spelled character; seconds and ITR use the four-bulb panel's timing; the raw EEG is the source file itself, so no session.dat is written"),
+                Some(REPLAY_NOTE),
             )
         }
-        None => {
-            let preset = preset.expect("parsed above");
-            fs::create_dir_all(&args.out)
-                .with_context(|| format!("creating {}", args.out.display()))?;
+        (None, preset) => {
+            let preset = preset.expect("a simulated preset when not replaying");
             println!(
                 "oddball demo: {} simulated subject (seed {}), pipeline {}, {}; calibration: {} decisions per bulb",
-                preset, args.seed, args.pipeline, rule_name(&rule), args.calibration_per_bulb
+                preset,
+                args.session.seed,
+                args.session.pipeline,
+                rule_name(&rule),
+                args.session.calibration_per_bulb
             );
-            let comparison = if args.dynamic_stopping {
+            let comparison = if args.session.dynamic_stopping {
                 // The same subject and calibration (same seed), online with fixed rounds.
                 let quiet = run_simulated(args, preset, fixed, &commands, None, false)?;
                 Some(scores(&quiet.rows, &fixed))
@@ -309,8 +345,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .context("drawing pen_trace.png")?;
     let summary = Summary {
         subject: &subject_label,
-        pipeline: &args.pipeline,
-        seed: args.seed,
+        pipeline: &args.session.pipeline,
+        seed: args.session.seed,
         commands: commands.clone(),
         calibration: (&run.calibration).into(),
         result: &result,
@@ -336,6 +372,87 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     Ok(())
 }
 
+/// A simulated subject's session, calibrated, with its arm (recording its samples); prints the
+/// calibration when `verbose`. Returns the pen's start position too.
+pub fn calibrated_session(
+    opts: &SessionOptions,
+    preset: SubjectPreset,
+    rule: DecisionRule,
+    verbose: bool,
+) -> Result<(Session<SimulatedSubject>, CalibrationReport, Vector2<f64>)> {
+    let subject = SubjectParams::preset(preset)
+        .with_seed(opts.seed)
+        .build()
+        .context("building the simulated subject")?;
+    let mut params = SessionParams::paper(&opts.pipeline);
+    params.seed = opts.seed;
+    params.rule = rule;
+    params.calibration_per_bulb = opts.calibration_per_bulb;
+    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
+    arm.set_recording(true);
+    let pen_start = arm.pen();
+    let mut session = Session::new(params, subject, Some(arm)).context("setting up the session")?;
+    session.set_realtime(opts.realtime && verbose);
+    let calibration = session.calibrate().context("calibrating")?;
+    if verbose {
+        println!(
+            "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
+            calibration.n_trials,
+            calibration.n_epochs,
+            calibration.n_targets,
+            calibration.n_rejected,
+            session.time_s(),
+            calibration.cv_auc,
+            calibration.d_prime
+        );
+    }
+    Ok((session, calibration, pen_start))
+}
+
+/// A replayed subject: the calibration recording read and trained on, the test recording read.
+pub struct Replayed {
+    pub calibration_recording: oddball_io::Recording,
+    pub test: oddball_io::Recording,
+    pub model: oddball_decode::pipeline::Model,
+    pub calibration: CalibrationReport,
+    pub params: ReplayParams,
+}
+
+/// Reads both files and calibrates on the first; prints the calibration.
+pub fn calibrated_replay(
+    opts: &SessionOptions,
+    file: &Path,
+    cal_file: &Path,
+    rule: DecisionRule,
+) -> Result<Replayed> {
+    let cal =
+        oddball_io::read(cal_file).with_context(|| format!("reading {}", cal_file.display()))?;
+    let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
+    let mut params = ReplayParams::paper(&opts.pipeline);
+    params.seed = opts.seed;
+    params.rule = rule;
+    params.rounds_per_decision = rule.max_rounds().max(FourBulbParams::paper().n_rounds);
+    let (model, calibration) = replay::calibrate(&cal, &params)
+        .with_context(|| format!("calibrating on {}", cal_file.display()))?;
+    println!(
+        "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
+        calibration.n_trials,
+        calibration.n_epochs,
+        calibration.n_targets,
+        calibration.n_rejected,
+        cal_file.display(),
+        calibration.cv_auc,
+        calibration.d_prime
+    );
+    Ok(Replayed {
+        calibration_recording: cal,
+        test,
+        model,
+        calibration,
+        params,
+    })
+}
+
 fn run_simulated(
     args: &DemoArgs,
     preset: SubjectPreset,
@@ -344,33 +461,8 @@ fn run_simulated(
     save: Option<&Path>,
     verbose: bool,
 ) -> Result<Run> {
-    let subject = SubjectParams::preset(preset)
-        .with_seed(args.seed)
-        .build()
-        .context("building the simulated subject")?;
-    let mut params = SessionParams::paper(&args.pipeline);
-    params.seed = args.seed;
-    params.rule = rule;
-    params.calibration_per_bulb = args.calibration_per_bulb;
-    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
-    arm.set_recording(true);
-    let pen_start = arm.pen();
-    let mut session = Session::new(params, subject, Some(arm)).context("setting up the session")?;
-    session.set_realtime(args.realtime && verbose);
-    let calibration = session.calibrate().context("calibrating")?;
-    let calibration_s = session.time_s();
-    if verbose {
-        println!(
-            "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
-            calibration.n_trials,
-            calibration.n_epochs,
-            calibration.n_targets,
-            calibration.n_rejected,
-            calibration_s,
-            calibration.cv_auc,
-            calibration.d_prime
-        );
-    }
+    let (mut session, calibration, pen_start) =
+        calibrated_session(&args.session, preset, rule, verbose)?;
     let mut rows = Vec::new();
     for (index, &command) in commands.iter().enumerate() {
         let t = session
@@ -431,25 +523,13 @@ fn run_replay(
     rule: DecisionRule,
     fixed: DecisionRule,
 ) -> Result<(Run, Option<Scores>)> {
-    let cal =
-        oddball_io::read(cal_file).with_context(|| format!("reading {}", cal_file.display()))?;
-    let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
-    let mut params = ReplayParams::paper(&args.pipeline);
-    params.seed = args.seed;
-    params.rule = rule;
-    params.rounds_per_decision = rule.max_rounds().max(FourBulbParams::paper().n_rounds);
-    let (model, calibration) = replay::calibrate(&cal, &params)
-        .with_context(|| format!("calibrating on {}", cal_file.display()))?;
-    println!(
-        "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
-        calibration.n_trials,
-        calibration.n_epochs,
-        calibration.n_targets,
-        calibration.n_rejected,
-        cal_file.display(),
-        calibration.cv_auc,
-        calibration.d_prime
-    );
+    let Replayed {
+        calibration_recording: cal,
+        test,
+        model,
+        calibration,
+        params,
+    } = calibrated_replay(&args.session, file, cal_file, rule)?;
     let to_rows = |decisions: &[replay::ReplayDecision]| -> Vec<Row> {
         decisions
             .iter()
@@ -513,7 +593,7 @@ fn run_replay(
 }
 
 /// Calibration epochs of a replayed recording as `Epochs` (accepted ones), for the ERP plot.
-fn epochs_of(
+pub fn epochs_of(
     rec: &oddball_io::Recording,
     epochs: &[Option<oddball_session::online::ReadyEpoch>],
 ) -> Result<Epochs> {
@@ -540,7 +620,7 @@ fn epochs_of(
     )?)
 }
 
-fn split_targets(epochs: &Epochs) -> (Epochs, Epochs) {
+pub fn split_targets(epochs: &Epochs) -> (Epochs, Epochs) {
     let idx = |want: bool| -> Vec<usize> {
         (0..epochs.n_epochs())
             .filter(|&i| epochs.events()[i].target == Some(want))

@@ -11,6 +11,7 @@ mod cmd_arm;
 mod cmd_decode;
 mod cmd_demo;
 mod cmd_inspect;
+mod cmd_task;
 mod plot;
 
 #[derive(Debug, Parser)]
@@ -28,6 +29,8 @@ struct Cli {
 enum Command {
     /// The whole closed loop without hardware: calibrate, then steer the arm through the letter G.
     Demo(cmd_demo::DemoArgs),
+    /// Tasks: steer the pen to targets (track) or draw text (draw), with study metrics.
+    Task(cmd_task::TaskArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
     Inspect(cmd_inspect::InspectArgs),
     /// Fit a decoding pipeline on recordings and save the model (JSON).
@@ -42,6 +45,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => cmd_demo::run(&args),
+        Command::Task(args) => cmd_task::run(&args),
         Command::Inspect(args) => cmd_inspect::run(&args),
         Command::Train(args) => cmd_decode::run_train(&args),
         Command::Evaluate(args) => cmd_decode::run_evaluate(&args),
