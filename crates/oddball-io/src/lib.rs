@@ -3,23 +3,28 @@
 //! [`read`] picks the reader from the file extension and returns a [`Recording`]: the samples
 //! as an [`oddball_signal::Raw`] in µV `(n_channels, n_times)` with their stimulus events, the
 //! [`Format`], a [`Speller`] layout for P300-speller files, and the format's own [`Details`]
-//! (BCI2000 parameters and states, CSV timestamps, EDF headers and annotations).
+//! (BCI2000 parameters and states, CSV timestamps, EDF headers and annotations, NIC timestamps
+//! and accelerometer).
 //!
 //! | extension | reader | events |
 //! |---|---|---|
 //! | `.dat` | [`bci2000`]: BCI2000 v1.0/v1.1; written by [`write_bci2000`] (v1.1, float32 µV, states from [`stimulus_states`] and the caller) | `StimulusCode` 0 → non-zero, target from `StimulusType` |
 //! | `.csv` | [`csv`]: time / channel / marker columns ([`CsvOptions::detect`]) | non-zero marker |
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
+//! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
 //!
-//! All three readers are written from scratch in this crate (each module says why). They share
+//! All four readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
-//! the byte offset (CSV: line and column), never a panic and never a silently shortened recording;
-//! header counts are checked against the file length before anything is allocated.
+//! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
+//! shortened recording; header counts are checked against the file length before anything is
+//! allocated.
 
 pub mod bci2000;
 pub mod csv;
+pub mod easy;
 pub mod edf;
 mod error;
+mod tempfile;
 pub mod speller;
 mod units;
 
@@ -34,6 +39,10 @@ pub use bci2000::{
     StateColumn, StateDef, States,
 };
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
+pub use easy::{
+    read_easy, read_easy_with, write_easy, EasyInfo, EasyInfoFile, EasyLayout, EasyOptions,
+    EasySfreqSource, EasyWriteOptions, EasyWriteSummary,
+};
 pub use edf::{
     read_edf, read_edf_with, write_edf_plus, write_edf_plus_with, Annotation, EdfHeader, EdfInfo,
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
@@ -51,6 +60,8 @@ pub enum Format {
     EdfPlus,
     Bdf,
     BdfPlus,
+    /// Neuroelectrics NIC `.easy` (with its `.info`).
+    Easy,
 }
 
 /// The format-specific contents of a recording.
@@ -59,6 +70,7 @@ pub enum Details {
     Bci2000(Box<Bci2000Info>),
     Csv(CsvInfo),
     Edf(Box<EdfInfo>),
+    Easy(EasyInfo),
 }
 
 /// A recording read from a file.
@@ -98,10 +110,19 @@ impl Recording {
             _ => None,
         }
     }
+
+    /// Layout, triggers, timestamps, accelerometer and `.info` entries, for `.easy` files.
+    pub fn easy(&self) -> Option<&EasyInfo> {
+        match &self.details {
+            Details::Easy(e) => Some(e),
+            _ => None,
+        }
+    }
 }
 
 /// Reads a recording, choosing the reader by extension (case-insensitive): `.dat` → BCI2000,
-/// `.csv` → CSV with [`CsvOptions::detect`], `.edf`/`.bdf` → EDF/BDF (the header decides which).
+/// `.csv` → CSV with [`CsvOptions::detect`], `.edf`/`.bdf` → EDF/BDF (the header decides which),
+/// `.easy` → NIC with the `.info` beside it ([`read_easy`]).
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
     let ext = path
@@ -112,6 +133,7 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         Some("dat") => read_bci2000(path),
         Some("csv") => read_csv_auto(path),
         Some("edf") | Some("bdf") => read_edf(path),
+        Some("easy") => read_easy(path),
         _ => Err(IoError::UnknownFormat {
             path: path.to_path_buf(),
             extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
