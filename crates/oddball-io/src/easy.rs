@@ -1023,6 +1023,9 @@ pub struct EasyWriteOptions {
     pub start_ms: u64,
     /// `Device class` in the `.info`; default `STARSTIM`. One line of printable text.
     pub device_class: String,
+    /// More `key: value` lines for the end of the `.info` (one line each, no line breaks);
+    /// the reader returns them with the others in [`EasyInfo::info`].
+    pub extra_info: Vec<(String, String)>,
 }
 
 impl Default for EasyWriteOptions {
@@ -1030,6 +1033,7 @@ impl Default for EasyWriteOptions {
         Self {
             start_ms: 0,
             device_class: "STARSTIM".into(),
+            extra_info: Vec::new(),
         }
     }
 }
@@ -1193,6 +1197,13 @@ pub fn write_easy(
     let _ = writeln!(info, "EEG montage:");
     for (k, name) in raw.ch_names().iter().enumerate() {
         let _ = writeln!(info, "\tChannel {}: {name}", k + 1);
+    }
+    if !options.extra_info.is_empty() {
+        let _ = writeln!(info);
+        for (key, value) in &options.extra_info {
+            let clean = |t: &str| t.replace(['\r', '\n'], " ");
+            let _ = writeln!(info, "{}: {}", clean(key).replace(':', ";"), clean(value));
+        }
     }
 
     // The .easy, then both renamed into place (.info first).

@@ -24,8 +24,8 @@ pub mod csv;
 pub mod easy;
 pub mod edf;
 mod error;
-mod tempfile;
 pub mod speller;
+mod tempfile;
 mod units;
 
 use std::path::{Path, PathBuf};

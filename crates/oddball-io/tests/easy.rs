@@ -503,7 +503,7 @@ proptest! {
     fn random_recordings_round_trip(raw in arb_raw(), start in 0u64..2_000_000_000_000) {
         let tmp = TempDir::new("easy-prop");
         let path = tmp.path().join("p.easy");
-        let o = EasyWriteOptions { start_ms: start, device_class: "ENOBIO".into() };
+        let o = EasyWriteOptions { start_ms: start, device_class: "ENOBIO".into(), ..Default::default() };
         let s = write_easy(&path, &raw, &o).unwrap();
         prop_assert_eq!(s.max_rounding_uv, 0.0);
         let back = read(&path).unwrap();

@@ -41,8 +41,8 @@ pub trait Subject {
     /// A flash of stimulus `code` at sample `onset` (≥ `position()`); `attended` when it is the
     /// stimulus the person attends.
     fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError>;
-    /// The next `n` samples `(n_channels, n)`, µV.
-    fn render(&mut self, n: usize) -> Array2<f64>;
+    /// The next `n` samples `(n_channels, n)`, µV; an error when the source is gone.
+    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError>;
 }
 
 impl Subject for crate::subject::SimulatedSubject {
@@ -58,8 +58,8 @@ impl Subject for crate::subject::SimulatedSubject {
     fn show(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), SessionError> {
         self.flash(onset, attended)
     }
-    fn render(&mut self, n: usize) -> Array2<f64> {
-        crate::subject::SimulatedSubject::render(self, n)
+    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        Ok(crate::subject::SimulatedSubject::render(self, n))
     }
 }
 
@@ -323,6 +323,10 @@ impl<S: Subject> Session<S> {
         Ok(())
     }
 
+    pub fn subject(&self) -> &S {
+        &self.subject
+    }
+
     pub fn arm(&self) -> Option<&ArmSim> {
         self.arm.as_ref()
     }
@@ -485,7 +489,7 @@ impl<S: Subject> Session<S> {
 
     /// Renders one chunk, feeds the epocher, records, runs the arm; handles completed epochs.
     fn advance(&mut self, n: usize) -> Result<(), SessionError> {
-        let data = self.subject.render(n);
+        let data = self.subject.render(n)?;
         for (r, row) in self.raw.iter_mut().zip(data.rows()) {
             r.extend(row.iter());
         }

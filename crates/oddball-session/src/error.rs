@@ -19,6 +19,12 @@ pub enum SessionError {
     NotASpeller { path: String },
     #[error("{path} is not an oddball session file: no {missing}")]
     NotASession { path: String, missing: String },
+    #[error("NIC stream, byte {offset}: {reason}")]
+    NicProtocol { offset: u64, reason: String },
+    #[error("cannot connect to {addr}: {reason}")]
+    Connect { addr: String, reason: String },
+    #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]
+    StreamLost { addr: String, attempts: usize },
     #[error(transparent)]
     Signal(#[from] oddball_signal::SignalError),
     #[error(transparent)]

@@ -9,6 +9,7 @@
 
 pub mod engine;
 mod error;
+pub mod nic;
 pub mod online;
 pub mod paradigm;
 pub mod record;

@@ -105,8 +105,17 @@ pub struct SavedTrial {
     pub intended: Option<u32>,
     /// The decision recorded in the file (`None`: abstention or calibration).
     pub recorded: Option<u32>,
-    /// Indices into the recording's events of the trial's flashes, in order.
-    pub flashes: Vec<usize>,
+    /// The trial's flashes, in order.
+    pub flashes: Vec<SavedFlash>,
+}
+
+/// A flash as read back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SavedFlash {
+    pub onset: u64,
+    /// Bulb code 1..=4.
+    pub code: u32,
+    pub attended: bool,
 }
 
 /// A four-bulb session read back from a file.
@@ -116,16 +125,23 @@ pub struct SavedSession {
     pub trials: Vec<SavedTrial>,
 }
 
-/// Whether a recording is an oddball four-bulb session file.
+/// Whether a recording is an oddball four-bulb session file (BCI2000 or `.easy`).
 pub fn is_session(rec: &Recording) -> bool {
     rec.bci2000()
         .and_then(|b| b.parameters.get("Paradigm"))
         .and_then(|p| p.as_str())
         == Some("four-bulb")
+        || rec
+            .easy()
+            .and_then(|e| e.info_value(EASY_PARADIGM))
+            .is_some_and(|v| v == "four-bulb")
 }
 
-/// Reads the trials of a session file.
+/// Reads the trials of a session file (BCI2000 `.dat` or NIC `.easy`).
 pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
+    if rec.easy().is_some() {
+        return read_session_easy(rec);
+    }
     let path = rec.path.display().to_string();
     let missing = |what: &str| SessionError::NotASession {
         path: path.clone(),
@@ -172,9 +188,12 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
         }
         let flashes = events
             .iter()
-            .enumerate()
-            .filter(|(_, e)| (start..t).contains(&e.onset))
-            .map(|(i, _)| i)
+            .filter(|e| (start..t).contains(&e.onset))
+            .map(|e| SavedFlash {
+                onset: e.onset as u64,
+                code: e.code,
+                attended: e.target == Some(true),
+            })
             .collect();
         trials.push(SavedTrial {
             number: no as usize,
@@ -225,17 +244,26 @@ pub fn reevaluate(
     let raw = &rec.raw;
     model.check_layout(raw.ch_names(), raw.sfreq())?;
     let decision = model.decision.ok_or(SessionError::NotCalibrated)?;
-    let events = raw.events().as_slice();
-    let onsets: Vec<u64> = events.iter().map(|e| e.onset as u64).collect();
+    let online: Vec<&SavedTrial> = saved
+        .trials
+        .iter()
+        .filter(|t| t.phase == Phase::Online)
+        .collect();
+    let onsets: Vec<u64> = online
+        .iter()
+        .flat_map(|t| t.flashes.iter().map(|f| f.onset))
+        .collect();
     let epochs = offline_epochs(&model.preprocess, raw.sfreq(), raw.data().view(), &onsets)?;
     let (first, n_times) = model.preprocess.window(raw.sfreq());
     let mut out = Vec::new();
-    for t in saved.trials.iter().filter(|t| t.phase == Phase::Online) {
+    let mut i = 0;
+    for t in online {
         let mut shown = Vec::with_capacity(t.flashes.len());
-        for (k, &i) in t.flashes.iter().enumerate() {
-            let e = &events[i];
+        for (k, e) in t.flashes.iter().enumerate() {
             let ready = e.onset as i64 + first + n_times as i64 <= t.end as i64;
-            let (accepted, score) = match (&epochs[i], ready) {
+            let epoch = &epochs[i];
+            i += 1;
+            let (accepted, score) = match (epoch, ready) {
                 (Some(ep), true) => {
                     let score = if ep.accepted {
                         Some(model.pipeline.score_epoch(ep.data.view())?)
@@ -247,11 +275,11 @@ pub fn reevaluate(
                 _ => (None, None),
             };
             shown.push(ShownFlash {
-                onset: e.onset as u64,
+                onset: e.onset,
                 code: e.code,
                 trial: t.number,
                 round: k / 4,
-                attended: e.target == Some(true),
+                attended: e.attended,
                 score,
                 accepted,
             });
@@ -279,4 +307,142 @@ pub fn reevaluate(
         });
     }
     Ok(out)
+}
+
+/// `.info` key naming the paradigm of a session `.easy`.
+const EASY_PARADIGM: &str = "Oddball paradigm";
+/// `.info` key of the bulbs' commands.
+const EASY_BULBS: &str = "Oddball bulb commands";
+/// Trigger offset of attended flashes in a session `.easy` (NIC triggers carry one number).
+pub const EASY_ATTENDED_OFFSET: u32 = 10;
+
+/// Writes a session as NIC `.easy` + `.info`: samples in nV (the values a NIC stream
+/// delivers come back exactly), each flash's bulb code in the trigger column at its onset
+/// (plus [`EASY_ATTENDED_OFFSET`] when attended), and the trials as `.info` lines
+/// `Oddball trial N: phase start end intended decided`.
+pub fn save_session_easy(
+    path: impl AsRef<Path>,
+    log: &SessionLog,
+    paradigm: &FourBulbParams,
+    start_ms: u64,
+) -> Result<oddball_io::EasyWriteSummary, SessionError> {
+    let n = log.raw.ncols();
+    let events = Events::new(
+        log.flashes
+            .iter()
+            .filter(|f| (f.onset as usize) < n)
+            .map(|f| {
+                Event::new(
+                    f.onset as usize,
+                    f.code + if f.attended { EASY_ATTENDED_OFFSET } else { 0 },
+                )
+            })
+            .collect(),
+    );
+    let raw = Raw::new(log.raw.clone(), log.sfreq, log.ch_names.clone(), events)?;
+    let mut extra = vec![
+        (EASY_PARADIGM.to_string(), "four-bulb".to_string()),
+        (
+            EASY_BULBS.to_string(),
+            paradigm
+                .bulbs
+                .iter()
+                .map(|c| c.name())
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+    ];
+    for (i, t) in log.trials.iter().enumerate() {
+        extra.push((
+            format!("Oddball trial {}", i + 1),
+            format!(
+                "{} {} {} {} {}",
+                match t.phase {
+                    Phase::Calibration => "calibration",
+                    Phase::Online => "online",
+                },
+                t.start,
+                t.end,
+                t.intended.unwrap_or(0),
+                t.decided().unwrap_or(0)
+            ),
+        ));
+    }
+    let options = oddball_io::EasyWriteOptions {
+        start_ms,
+        extra_info: extra,
+        ..Default::default()
+    };
+    Ok(oddball_io::write_easy(path, &raw, &options)?)
+}
+
+fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
+    let path = rec.path.display().to_string();
+    let missing = |what: &str| SessionError::NotASession {
+        path: path.clone(),
+        missing: what.to_string(),
+    };
+    let info = rec.easy().ok_or_else(|| missing(".easy details"))?;
+    if info.info_value(EASY_PARADIGM) != Some("four-bulb") {
+        return Err(missing("`Oddball paradigm: four-bulb` in the .info"));
+    }
+    let parsed: Vec<Command> = info
+        .info_value(EASY_BULBS)
+        .ok_or_else(|| missing("`Oddball bulb commands` in the .info"))?
+        .split_whitespace()
+        .map(|n| n.parse::<Command>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| missing("four commands in `Oddball bulb commands`"))?;
+    let bulbs: [Command; 4] = parsed
+        .try_into()
+        .map_err(|_| missing("four commands in `Oddball bulb commands`"))?;
+    let events = rec.raw.events().as_slice();
+    let mut trials = Vec::new();
+    for number in 1.. {
+        let Some(v) = info.info_value(&format!("Oddball trial {number}")) else {
+            break;
+        };
+        let f: Vec<&str> = v.split_whitespace().collect();
+        let bad = || {
+            missing(&format!(
+                "a valid `Oddball trial {number}` line (got {v:?})"
+            ))
+        };
+        if f.len() != 5 {
+            return Err(bad());
+        }
+        let num = |k: usize| f[k].parse::<u64>().map_err(|_| bad());
+        let (start, end, intended, decided) = (num(1)?, num(2)?, num(3)?, num(4)?);
+        let phase = match f[0] {
+            "calibration" => Phase::Calibration,
+            "online" => Phase::Online,
+            _ => return Err(bad()),
+        };
+        let flashes = events
+            .iter()
+            .filter(|e| (start..end).contains(&(e.onset as u64)))
+            .map(|e| SavedFlash {
+                onset: e.onset as u64,
+                code: if e.code > EASY_ATTENDED_OFFSET {
+                    e.code - EASY_ATTENDED_OFFSET
+                } else {
+                    e.code
+                },
+                attended: e.code > EASY_ATTENDED_OFFSET,
+            })
+            .collect();
+        trials.push(SavedTrial {
+            number,
+            phase,
+            start,
+            end,
+            intended: (intended != 0).then_some(intended as u32),
+            recorded: (decided != 0).then_some(decided as u32),
+            flashes,
+        });
+    }
+    if trials.is_empty() {
+        return Err(missing("`Oddball trial 1` in the .info"));
+    }
+    Ok(SavedSession { bulbs, trials })
 }

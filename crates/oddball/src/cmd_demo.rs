@@ -17,9 +17,9 @@ use anyhow::{bail, Context, Result};
 use oddball_arm::{parse_commands, ArmConfig, ArmSim, Command, Vector2};
 use oddball_decode::decision::DecisionRule;
 use oddball_decode::metrics::Itr;
-use oddball_session::engine::{CalibrationReport, Session, SessionParams, TrialOutcome};
+use oddball_session::engine::{CalibrationReport, Session, SessionParams, Subject, TrialOutcome};
 use oddball_session::paradigm::FourBulbParams;
-use oddball_session::record::save_session;
+use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 use oddball_signal::Epochs;
@@ -121,6 +121,14 @@ pub struct DemoArgs {
     /// Comma-separated intended commands (up, down, left, right); the paper's letter G by default.
     #[arg(long, default_value = "up,left,down,right,up,left")]
     pub commands: String,
+    /// Where the EEG comes from: `sim` (the simulated subject in this process) or
+    /// `nic:HOST:PORT` (a NIC TCP data stream, e.g. from `oddball simulate --nic HOST:PORT`, whose
+    /// panel port is PORT + 1). Over NIC the session is also saved as `session.easy`.
+    #[arg(long, default_value = "sim", value_name = "SOURCE")]
+    pub source: String,
+    /// NIC stream framing.
+    #[arg(long, default_value = "binary", value_name = "binary|ascii")]
+    pub nic_mode: String,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/demo")]
     pub out: PathBuf,
@@ -290,22 +298,42 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 rule_name(&rule),
                 args.session.calibration_per_bulb
             );
-            let comparison = if args.session.dynamic_stopping {
-                // The same subject and calibration (same seed), online with fixed rounds.
-                let quiet = run_simulated(args, preset, fixed, &commands, None, false)?;
-                Some(scores(&quiet.rows, &fixed))
+            if let Some(addr) = args.source.strip_prefix("nic:") {
+                let subject = crate::cmd_simulate::connect_nic(addr, &args.nic_mode, preset)?;
+                println!(
+                    "reading EEG from the NIC stream at {addr} ({})",
+                    args.nic_mode
+                );
+                let run = run_subject(
+                    args,
+                    subject,
+                    rule,
+                    &commands,
+                    Some(&args.out.join("session.easy")),
+                    true,
+                )?;
+                (run, None, format!("{preset} over nic:{addr}"), None)
             } else {
-                None
-            };
-            let run = run_simulated(
-                args,
-                preset,
-                rule,
-                &commands,
-                Some(&args.out.join("session.dat")),
-                true,
-            )?;
-            (run, comparison, preset.to_string(), None)
+                if args.source != "sim" {
+                    bail!("--source {}: expected sim or nic:HOST:PORT", args.source);
+                }
+                let comparison = if args.session.dynamic_stopping {
+                    // The same subject and calibration (same seed), online with fixed rounds.
+                    let quiet = run_simulated(args, preset, fixed, &commands, None, false)?;
+                    Some(scores(&quiet.rows, &fixed))
+                } else {
+                    None
+                };
+                let run = run_simulated(
+                    args,
+                    preset,
+                    rule,
+                    &commands,
+                    Some(&args.out.join("session.dat")),
+                    true,
+                )?;
+                (run, comparison, preset.to_string(), None)
+            }
         }
     };
 
@@ -318,8 +346,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "erp.png".into(),
         "pen_trace.png".into(),
     ];
-    if run.session_file.is_some() {
-        files.push("session.dat".into());
+    if let Some(f) = run.session_file.as_ref().and_then(|p| p.file_name()) {
+        files.push(f.to_string_lossy().into_owned());
     }
     write_decisions_csv(&args.out.join("decisions.csv"), &run.rows)?;
     fs::write(args.out.join("model.json"), &run.model_json)
@@ -384,6 +412,16 @@ pub fn calibrated_session(
         .with_seed(opts.seed)
         .build()
         .context("building the simulated subject")?;
+    calibrated(opts, subject, rule, verbose)
+}
+
+/// A session with any subject (simulated, or a live stream), calibrated.
+pub fn calibrated<S: Subject>(
+    opts: &SessionOptions,
+    subject: S,
+    rule: DecisionRule,
+    verbose: bool,
+) -> Result<(Session<S>, CalibrationReport, Vector2<f64>)> {
     let mut params = SessionParams::paper(&opts.pipeline);
     params.seed = opts.seed;
     params.rule = rule;
@@ -461,8 +499,24 @@ fn run_simulated(
     save: Option<&Path>,
     verbose: bool,
 ) -> Result<Run> {
-    let (mut session, calibration, pen_start) =
-        calibrated_session(&args.session, preset, rule, verbose)?;
+    let subject = SubjectParams::preset(preset)
+        .with_seed(args.session.seed)
+        .build()
+        .context("building the simulated subject")?;
+    run_subject(args, subject, rule, commands, save, verbose)
+}
+
+/// Calibration, the commands and the saved session for any subject. A `.easy` save path
+/// writes NIC's format, anything else BCI2000.
+fn run_subject<S: Subject>(
+    args: &DemoArgs,
+    subject: S,
+    rule: DecisionRule,
+    commands: &[Command],
+    save: Option<&Path>,
+    verbose: bool,
+) -> Result<Run> {
+    let (mut session, calibration, pen_start) = calibrated(&args.session, subject, rule, verbose)?;
     let mut rows = Vec::new();
     for (index, &command) in commands.iter().enumerate() {
         let t = session
@@ -497,8 +551,15 @@ fn run_simulated(
     let (log, _, arm) = session.finish();
     let session_file = match save {
         Some(path) => {
-            save_session(path, &log, &paradigm)
-                .with_context(|| format!("writing {}", path.display()))?;
+            if path.extension().is_some_and(|e| e == "easy") {
+                save_session_easy(path, &log, &paradigm, 0)
+                    .map(|_| ())
+                    .with_context(|| format!("writing {}", path.display()))?;
+            } else {
+                save_session(path, &log, &paradigm)
+                    .map(|_| ())
+                    .with_context(|| format!("writing {}", path.display()))?;
+            }
             Some(path.to_path_buf())
         }
         None => None,

@@ -1,0 +1,170 @@
+//! A whole session over NIC's TCP protocol: a simulated Starstim serves the stream on loopback,
+//! the session reads it as it would read NIC, calibrates and draws the letter G.
+
+use std::net::TcpListener;
+use std::thread;
+
+use oddball_arm::{ArmConfig, ArmSim, Command};
+use oddball_session::engine::{Session, SessionParams};
+use oddball_session::nic::{serve_simulated, NicFormat, NicMode, NicSource, NicSubject, Reconnect};
+use oddball_session::record::{read_session, reevaluate, save_session_easy};
+use oddball_session::subject::{SubjectParams, SubjectPreset};
+use oddball_session::SessionError;
+
+fn listeners() -> (TcpListener, TcpListener) {
+    (
+        TcpListener::bind("127.0.0.1:0").unwrap(),
+        TcpListener::bind("127.0.0.1:0").unwrap(),
+    )
+}
+
+fn nic_session(
+    mode: NicMode,
+    seed: u64,
+) -> (
+    Session<NicSubject>,
+    thread::JoinHandle<Result<oddball_session::nic::ServeReport, SessionError>>,
+) {
+    let (data, panel) = listeners();
+    let (data_addr, panel_addr) = (data.local_addr().unwrap(), panel.local_addr().unwrap());
+    let format = NicFormat::starstim(mode);
+    let params = SubjectParams::preset(SubjectPreset::Typical).with_seed(seed);
+    let ch_names = params.ch_names.clone();
+    let sim = params.build().unwrap();
+    let server =
+        thread::spawn(move || serve_simulated(data, panel, sim, format, 1_700_000_000_000));
+    let source = NicSource::connect(data_addr, format, 500.0, Reconnect::default()).unwrap();
+    let panel = std::net::TcpStream::connect(panel_addr).unwrap();
+    let subject = NicSubject::new(source, Some(panel), 500.0, ch_names);
+    let mut p = SessionParams::paper("lda");
+    p.seed = seed;
+    let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
+    (Session::new(p, subject, Some(arm)).unwrap(), server)
+}
+
+#[test]
+fn a_session_over_nic_binary_draws_the_letter_g() {
+    let (mut s, server) = nic_session(NicMode::Binary, 1);
+    let cal = s.calibrate().unwrap();
+    assert!(cal.cv_auc > 0.85, "{cal:?}");
+    let mut right = 0;
+    for &c in &Command::LETTER_G {
+        let t = s.decide(Some(c)).unwrap();
+        right += usize::from(t.decided() == Some(s.params().paradigm.code_of(c)));
+    }
+    assert!(right >= 6, "{right}/6");
+    // Every flash came back in the stream's trigger column at its onset sample.
+    let triggers = s.subject().triggers.clone();
+    let paradigm = s.params().paradigm;
+    let (log, model, _) = s.finish();
+    let shown: Vec<(u64, i32)> = log
+        .flashes
+        .iter()
+        .filter(|f| (f.onset as usize) < log.raw.ncols())
+        .map(|f| (f.onset, f.code as i32))
+        .collect();
+    assert_eq!(triggers, shown);
+    let report = server.join().unwrap().unwrap();
+    assert_eq!(report.flashes, log.flashes.len());
+
+    // The session as NIC .easy + .info: read back, it re-evaluates to the same decisions.
+    let dir = std::env::temp_dir().join(format!("oddball-nic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("session.easy");
+    let summary = save_session_easy(&path, &log, &paradigm, 1_700_000_000_000).unwrap();
+    assert_eq!(summary.max_rounding_uv, 0.0, "NIC delivers whole nV");
+    let rec = oddball_io::read(&path).unwrap();
+    assert_eq!(rec.raw.data(), &log.raw);
+    let saved = read_session(&rec).unwrap();
+    let again = reevaluate(&rec, &saved, &model.unwrap()).unwrap();
+    let online: Vec<_> = log
+        .trials
+        .iter()
+        .filter(|t| t.phase == oddball_session::engine::Phase::Online)
+        .collect();
+    assert_eq!(again.len(), 6);
+    for (a, o) in again.iter().zip(online) {
+        assert_eq!((a.outcome, a.rounds), (o.outcome, o.rounds));
+        assert_eq!(a.posterior, o.posterior);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn ascii_mode_carries_the_same_stream() {
+    let (mut s, server) = nic_session(NicMode::Ascii, 2);
+    s.calibrate().unwrap();
+    let t = s.decide(Some(Command::Up)).unwrap();
+    assert!(t.decided().is_some());
+    let (log, _, _) = s.finish();
+    assert!(log.raw.ncols() > 200_000);
+    server.join().unwrap().unwrap();
+}
+
+#[test]
+fn a_server_that_vanishes_is_a_clear_error_and_keeps_what_arrived() {
+    use std::io::Write;
+    let data = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = data.local_addr().unwrap();
+    let format = NicFormat::starstim(NicMode::Binary);
+    let server = thread::spawn(move || {
+        let (mut c, _) = data.accept().unwrap();
+        let mut bytes = Vec::new();
+        for k in 0..1000 {
+            oddball_session::nic::encode(
+                &format,
+                &oddball_session::nic::NicSample {
+                    nv: vec![k * 10; 8],
+                    trigger: Some(0),
+                    timestamp_ms: Some(2 * i64::from(k)),
+                },
+                &mut bytes,
+            );
+        }
+        // A partial sample, then the server is gone (listener dropped with the thread).
+        c.write_all(&bytes).unwrap();
+        c.write_all(&[1, 2, 3]).unwrap();
+    });
+    let quick = Reconnect {
+        attempts: 2,
+        delay: std::time::Duration::from_millis(20),
+    };
+    let mut src = NicSource::connect(addr, format, 500.0, quick).unwrap();
+    let first = src.read(1000).unwrap();
+    assert_eq!(first.len(), 1000);
+    assert_eq!(first[999].nv[0], 9990);
+    server.join().unwrap();
+    let err = src.read(1).unwrap_err();
+    assert!(
+        matches!(err, SessionError::StreamLost { attempts: 2, .. }),
+        "{err}"
+    );
+}
+
+#[test]
+fn timestamp_gaps_count_lost_samples() {
+    use std::io::Write;
+    let data = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = data.local_addr().unwrap();
+    let format = NicFormat::starstim(NicMode::Binary);
+    let server = thread::spawn(move || {
+        let (mut c, _) = data.accept().unwrap();
+        let mut bytes = Vec::new();
+        for k in (0..100).chain(110..120) {
+            oddball_session::nic::encode(
+                &format,
+                &oddball_session::nic::NicSample {
+                    nv: vec![0; 8],
+                    trigger: Some(0),
+                    timestamp_ms: Some(2 * k),
+                },
+                &mut bytes,
+            );
+        }
+        c.write_all(&bytes).unwrap();
+    });
+    let mut src = NicSource::connect(addr, format, 500.0, Reconnect::default()).unwrap();
+    src.read(110).unwrap();
+    assert_eq!(src.lost_samples, 10);
+    server.join().unwrap();
+}
