@@ -43,6 +43,10 @@ pub trait Subject {
     fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError>;
     /// The next `n` samples `(n_channels, n)`, µV; an error when the source is gone.
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError>;
+    /// For live streams: samples lost, reconnections (`None` for simulated sources).
+    fn stream_health(&self) -> Option<String> {
+        None
+    }
 }
 
 impl Subject for crate::subject::SimulatedSubject {

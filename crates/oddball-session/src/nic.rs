@@ -447,6 +447,12 @@ impl Subject for NicSubject {
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
         self.try_render(n)
     }
+    fn stream_health(&self) -> Option<String> {
+        Some(format!(
+            "{} samples lost (timestamp gaps), {} reconnections",
+            self.source.lost_samples, self.source.reconnects
+        ))
+    }
 }
 
 /// What the simulated amplifier did.

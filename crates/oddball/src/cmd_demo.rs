@@ -126,9 +126,8 @@ pub struct DemoArgs {
     /// panel port is PORT + 1). Over NIC the session is also saved as `session.easy`.
     #[arg(long, default_value = "sim", value_name = "SOURCE")]
     pub source: String,
-    /// NIC stream framing.
-    #[arg(long, default_value = "binary", value_name = "binary|ascii")]
-    pub nic_mode: String,
+    #[command(flatten)]
+    pub nic: crate::cmd_simulate::NicWire,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/demo")]
     pub out: PathBuf,
@@ -299,10 +298,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 args.session.calibration_per_bulb
             );
             if let Some(addr) = args.source.strip_prefix("nic:") {
-                let subject = crate::cmd_simulate::connect_nic(addr, &args.nic_mode, preset)?;
+                let subject = crate::cmd_simulate::connect_nic(addr, &args.nic, preset)?;
                 println!(
-                    "reading EEG from the NIC stream at {addr} ({})",
-                    args.nic_mode
+                    "reading EEG from the NIC stream at {addr} ({}, {} channels)",
+                    args.nic.nic_mode, args.nic.nic_channels
                 );
                 let run = run_subject(
                     args,
@@ -541,6 +540,9 @@ fn run_subject<S: Subject>(
     }
     // Let the last movement finish.
     session.idle(1.5)?;
+    if let (Some(health), true) = (session.subject().stream_health(), verbose) {
+        println!("stream: {health}");
+    }
     let erp = session.calibration_epochs()?;
     let model_json = session
         .model()
