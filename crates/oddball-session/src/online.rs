@@ -47,6 +47,12 @@ pub struct OnlineEpocher {
     n_channels: usize,
     /// Filtered samples, per channel, starting at absolute sample `buf_start`.
     buf: Vec<Vec<f64>>,
+    /// Per buffered sample: some channel was NaN or infinite there (held at its last value).
+    bad: Vec<bool>,
+    /// Last finite value per channel (what a non-finite sample is replaced with).
+    hold: Vec<f64>,
+    /// Non-finite samples seen, per channel.
+    pub non_finite: Vec<u64>,
     buf_start: u64,
     received: u64,
     /// Samples kept behind the newest one even when no marker waits (late markers).
@@ -80,6 +86,9 @@ impl OnlineEpocher {
             n_times,
             n_channels,
             buf: vec![Vec::new(); n_channels],
+            bad: Vec::new(),
+            hold: vec![0.0; n_channels],
+            non_finite: vec![0; n_channels],
             buf_start: 0,
             received: 0,
             keep: (2.0 * sfreq).ceil() as u64 + n_times as u64,
@@ -135,10 +144,13 @@ impl OnlineEpocher {
                 reason: format!("the stream has {} channels", self.n_channels),
             });
         }
-        let filtered = self.filter.process(chunk)?;
+        let mut clean = chunk.to_owned();
+        let bad = sanitize(&mut clean, &mut self.hold, &mut self.non_finite);
+        let filtered = self.filter.process(clean.view())?;
         for (b, row) in self.buf.iter_mut().zip(filtered.rows()) {
             b.extend(row.iter());
         }
+        self.bad.extend(bad);
         self.received += chunk.ncols() as u64;
         let mut ready = Vec::new();
         while let Some(m) = self.pending.front() {
@@ -152,7 +164,8 @@ impl OnlineEpocher {
                 data.row_mut(c)
                     .assign(&ndarray::ArrayView1::from(&b[lo..lo + self.n_times]));
             }
-            let accepted = self.pre.accepts(data.view());
+            let accepted =
+                !self.bad[lo..lo + self.n_times].iter().any(|&b| b) && self.pre.accepts(data.view());
             ready.push(ReadyEpoch {
                 marker: m,
                 data,
@@ -174,9 +187,29 @@ impl OnlineEpocher {
             for b in &mut self.buf {
                 b.drain(..drop);
             }
+            self.bad.drain(..drop);
             self.buf_start += drop as u64;
         }
     }
+}
+
+/// Replaces non-finite samples with the channel's last finite value (`hold`, updated), counts
+/// them per channel, and returns per sample whether any channel was replaced. A NaN must never
+/// enter the recursive filter: it would poison its state for good.
+pub fn sanitize(data: &mut Array2<f64>, hold: &mut [f64], counts: &mut [u64]) -> Vec<bool> {
+    let mut bad = vec![false; data.ncols()];
+    for (c, mut row) in data.rows_mut().into_iter().enumerate() {
+        for (t, v) in row.iter_mut().enumerate() {
+            if v.is_finite() {
+                hold[c] = *v;
+            } else {
+                *v = hold[c];
+                counts[c] += 1;
+                bad[t] = true;
+            }
+        }
+    }
+    bad
 }
 
 /// The epochs of `onsets` cut from a whole recording `(n_channels, n_times)` the way
@@ -189,7 +222,13 @@ pub fn offline_epochs(
     onsets: &[u64],
 ) -> Result<Vec<Option<ReadyEpoch>>, SessionError> {
     let filter = pre.band.design(sfreq)?;
-    let filtered = filter.sosfilt(data, true);
+    let mut clean = data.to_owned();
+    let bad = sanitize(
+        &mut clean,
+        &mut vec![0.0; data.nrows()],
+        &mut vec![0; data.nrows()],
+    );
+    let filtered = filter.sosfilt(clean.view(), true);
     let (first, n_times) = pre.window(sfreq);
     Ok(onsets
         .iter()
@@ -207,7 +246,7 @@ pub fn offline_epochs(
                     code: 0,
                     tag,
                 },
-                accepted: pre.accepts(epoch.view()),
+                accepted: !bad[lo..lo + n_times].iter().any(|&b| b) && pre.accepts(epoch.view()),
                 data: epoch,
             })
         })
@@ -294,6 +333,52 @@ mod tests {
             matches!(err, SessionError::MarkerTooLate { onset: 100, .. }),
             "{err}"
         );
+    }
+
+    #[test]
+    fn nan_samples_reject_their_epochs_but_never_poison_the_filter() {
+        let pre = Preprocess::online();
+        let mut data = signal(2, 3000);
+        for t in 1000..1010 {
+            data[[0, t]] = f64::NAN;
+        }
+        data[[1, 1500]] = f64::INFINITY;
+        let mut ep = OnlineEpocher::new(&pre, 100.0, 2).unwrap();
+        let onsets = [500u64, 960, 1005, 1480, 2500];
+        for (tag, &onset) in onsets.iter().enumerate() {
+            ep.push_marker(Marker {
+                onset,
+                code: 1,
+                tag,
+            })
+            .unwrap();
+        }
+        let got = ep.push_samples(data.view()).unwrap();
+        let accepted: Vec<bool> = got.iter().map(|e| e.accepted).collect();
+        assert_eq!(accepted, [true, false, false, false, true]);
+        assert!(got.iter().all(|e| e.data.iter().all(|v| v.is_finite())));
+        assert_eq!(ep.non_finite, [10, 1]);
+        // The offline cut agrees, NaNs and all.
+        let off = offline_epochs(&pre, 100.0, data.view(), &onsets).unwrap();
+        for (g, o) in got.iter().zip(off.iter().flatten()) {
+            assert_eq!((&g.data, g.accepted), (&o.data, o.accepted));
+        }
+    }
+
+    #[test]
+    fn a_flat_channel_rejects_the_epoch() {
+        let pre = Preprocess::online();
+        let mut data = signal(2, 2000);
+        data.row_mut(1).fill(3.0);
+        let mut ep = OnlineEpocher::new(&pre, 100.0, 2).unwrap();
+        ep.push_marker(Marker {
+            onset: 1200,
+            code: 1,
+            tag: 0,
+        })
+        .unwrap();
+        let got = ep.push_samples(data.view()).unwrap();
+        assert!(!got[0].accepted);
     }
 
     #[test]
