@@ -104,14 +104,18 @@ pub fn stream_epochs(
     Ok(out)
 }
 
-/// The character (block) of each event, from the speller's flashes per character.
-fn character_of_events(rec: &Recording) -> Result<Vec<usize>, SessionError> {
-    let speller = rec
-        .speller
+/// The recording's speller layout, or the error saying it has none.
+fn speller_of(rec: &Recording) -> Result<&oddball_io::Speller, SessionError> {
+    rec.speller
         .as_ref()
         .ok_or_else(|| SessionError::NotASpeller {
             path: rec.path.display().to_string(),
-        })?;
+        })
+}
+
+/// The character (block) of each event, from the speller's flashes per character.
+fn character_of_events(rec: &Recording) -> Result<Vec<usize>, SessionError> {
+    let speller = speller_of(rec)?;
     let n = rec.raw.events().len();
     let per = speller.flashes_per_character.unwrap_or(n).max(1);
     Ok((0..n).map(|i| i / per).collect())
@@ -284,12 +288,7 @@ impl ReplaySource {
             scores: model.decision.ok_or(SessionError::NotCalibrated)?.scores,
             rule: params.rule,
         };
-        let speller = rec
-            .speller
-            .as_ref()
-            .ok_or_else(|| SessionError::NotASpeller {
-                path: rec.path.display().to_string(),
-            })?;
+        let speller = speller_of(rec)?;
         let events = rec.raw.events().as_slice();
         let chars = character_of_events(rec)?;
         let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;

@@ -234,29 +234,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
     write_common(&args.out, &prep, &report.steps, &expected)?;
     draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
-    #[derive(Serialize)]
-    struct Summary<'a> {
-        task: &'static str,
-        subject: &'a str,
-        pipeline: &'a str,
-        seed: u64,
-        calibration: &'a CalibrationReport,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        note: Option<&'static str>,
-        report: &'a TrackReport,
-    }
-    write_summary(
-        &args.out,
-        &Summary {
-            task: "track",
-            subject: &prep.subject,
-            pipeline: &args.session.pipeline,
-            seed: args.session.seed,
-            calibration: &prep.calibration,
-            note: matches!(prep.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
-            report: &report,
-        },
-    )?;
+    write_summary(&args.out, "track", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
 }
 
@@ -273,29 +251,7 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
         .map(|p| Vector2::new(p[0], p[1]))
         .collect();
     write_common(&args.out, &prep, &report.steps, &expected)?;
-    #[derive(Serialize)]
-    struct Summary<'a> {
-        task: &'static str,
-        subject: &'a str,
-        pipeline: &'a str,
-        seed: u64,
-        calibration: &'a CalibrationReport,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        note: Option<&'static str>,
-        report: &'a DrawReport,
-    }
-    write_summary(
-        &args.out,
-        &Summary {
-            task: "draw",
-            subject: &prep.subject,
-            pipeline: &args.session.pipeline,
-            seed: args.session.seed,
-            calibration: &prep.calibration,
-            note: matches!(prep.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
-            report: &report,
-        },
-    )?;
+    write_summary(&args.out, "draw", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
 }
 
@@ -338,8 +294,35 @@ fn write_common(
         .context("drawing pen_trace.png")
 }
 
-fn write_summary<T: Serialize>(out: &Path, summary: &T) -> Result<()> {
-    let json = serde_json::to_string_pretty(summary)?;
+/// summary.json: what ran, the calibration and the task's report.
+fn write_summary<T: Serialize>(
+    out: &Path,
+    task: &'static str,
+    opts: &SessionOptions,
+    prep: &Prepared,
+    report: &T,
+) -> Result<()> {
+    #[derive(Serialize)]
+    struct Summary<'a, T> {
+        task: &'static str,
+        subject: &'a str,
+        pipeline: &'a str,
+        seed: u64,
+        calibration: &'a CalibrationReport,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        note: Option<&'static str>,
+        report: &'a T,
+    }
+    let summary = Summary {
+        task,
+        subject: &prep.subject,
+        pipeline: &opts.pipeline,
+        seed: opts.seed,
+        calibration: &prep.calibration,
+        note: matches!(prep.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
+        report,
+    };
+    let json = serde_json::to_string_pretty(&summary)?;
     fs::write(out.join("summary.json"), json + "\n").context("writing summary.json")
 }
 
