@@ -276,6 +276,8 @@ pub struct NicSource {
     pub lost_samples: u64,
     /// Connections re-established after a drop.
     pub reconnects: usize,
+    /// Timestamps that went backwards (or repeated).
+    pub timestamp_regressions: u64,
 }
 
 impl NicSource {
@@ -297,6 +299,7 @@ impl NicSource {
             last_timestamp_ms: None,
             lost_samples: 0,
             reconnects: 0,
+            timestamp_regressions: 0,
         })
     }
 
@@ -322,6 +325,8 @@ impl NicSource {
                             let gap = ((t - last) as f64 / period).round() as i64 - 1;
                             if gap > 0 {
                                 self.lost_samples += gap as u64;
+                            } else if t <= last {
+                                self.timestamp_regressions += 1;
                             }
                         }
                         self.last_timestamp_ms = s.timestamp_ms.or(self.last_timestamp_ms);
@@ -449,8 +454,8 @@ impl Subject for NicSubject {
     }
     fn stream_health(&self) -> Option<String> {
         Some(format!(
-            "{} samples lost (timestamp gaps), {} reconnections",
-            self.source.lost_samples, self.source.reconnects
+            "{} samples lost (timestamp gaps), {} timestamps going backwards, {} reconnections",
+            self.source.lost_samples, self.source.timestamp_regressions, self.source.reconnects
         ))
     }
 }

@@ -53,6 +53,8 @@ pub struct OnlineEpocher {
     hold: Vec<f64>,
     /// Non-finite samples seen, per channel.
     pub non_finite: Vec<u64>,
+    /// Markers ignored because the same one was already waiting.
+    pub duplicate_markers: u64,
     buf_start: u64,
     received: u64,
     /// Samples kept behind the newest one even when no marker waits (late markers).
@@ -89,6 +91,7 @@ impl OnlineEpocher {
             bad: Vec::new(),
             hold: vec![0.0; n_channels],
             non_finite: vec![0; n_channels],
+            duplicate_markers: 0,
             buf_start: 0,
             received: 0,
             keep: (2.0 * sfreq).ceil() as u64 + n_times as u64,
@@ -112,14 +115,23 @@ impl OnlineEpocher {
     }
 
     /// Registers a marker. Refused when its epoch starts before the first buffered sample or
-    /// before the stream's start.
-    pub fn push_marker(&mut self, marker: Marker) -> Result<(), SessionError> {
+    /// before the stream's start. A marker already waiting with the same onset and code (a
+    /// marker delivered twice) is ignored: it returns `Ok(false)`.
+    pub fn push_marker(&mut self, marker: Marker) -> Result<bool, SessionError> {
         let start = marker.onset as i64 + self.first;
         if start < self.buf_start as i64 {
             return Err(SessionError::MarkerTooLate {
                 onset: marker.onset,
                 oldest_kept: self.buf_start,
             });
+        }
+        if self
+            .pending
+            .iter()
+            .any(|m| m.onset == marker.onset && m.code == marker.code)
+        {
+            self.duplicate_markers += 1;
+            return Ok(false);
         }
         // Keep pending markers ordered by onset.
         let at = self
@@ -128,7 +140,7 @@ impl OnlineEpocher {
             .position(|m| m.onset > marker.onset)
             .unwrap_or(self.pending.len());
         self.pending.insert(at, marker);
-        Ok(())
+        Ok(true)
     }
 
     /// Filters a chunk `(n_channels, n)` of raw µV and returns the epochs it completes, in onset
@@ -164,8 +176,8 @@ impl OnlineEpocher {
                 data.row_mut(c)
                     .assign(&ndarray::ArrayView1::from(&b[lo..lo + self.n_times]));
             }
-            let accepted =
-                !self.bad[lo..lo + self.n_times].iter().any(|&b| b) && self.pre.accepts(data.view());
+            let accepted = !self.bad[lo..lo + self.n_times].iter().any(|&b| b)
+                && self.pre.accepts(data.view());
             ready.push(ReadyEpoch {
                 marker: m,
                 data,
@@ -363,6 +375,23 @@ mod tests {
         for (g, o) in got.iter().zip(off.iter().flatten()) {
             assert_eq!((&g.data, g.accepted), (&o.data, o.accepted));
         }
+    }
+
+    #[test]
+    fn a_marker_delivered_twice_gives_one_epoch() {
+        let pre = Preprocess::online();
+        let data = signal(2, 1000);
+        let mut ep = OnlineEpocher::new(&pre, 100.0, 2).unwrap();
+        let m = Marker {
+            onset: 300,
+            code: 2,
+            tag: 0,
+        };
+        assert!(ep.push_marker(m).unwrap());
+        assert!(!ep.push_marker(Marker { tag: 1, ..m }).unwrap());
+        let got = ep.push_samples(data.view()).unwrap();
+        assert_eq!(got.len(), 1);
+        assert_eq!(ep.duplicate_markers, 1);
     }
 
     #[test]

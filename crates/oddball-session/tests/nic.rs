@@ -150,7 +150,8 @@ fn timestamp_gaps_count_lost_samples() {
     let server = thread::spawn(move || {
         let (mut c, _) = data.accept().unwrap();
         let mut bytes = Vec::new();
-        for k in (0..100).chain(110..120) {
+        // 10 samples missing after sample 99; then the clock jumps back once.
+        for k in (0..100).chain(110..120).chain(115..116) {
             oddball_session::nic::encode(
                 &format,
                 &oddball_session::nic::NicSample {
@@ -164,7 +165,8 @@ fn timestamp_gaps_count_lost_samples() {
         c.write_all(&bytes).unwrap();
     });
     let mut src = NicSource::connect(addr, format, 500.0, Reconnect::default()).unwrap();
-    src.read(110).unwrap();
+    src.read(111).unwrap();
     assert_eq!(src.lost_samples, 10);
+    assert_eq!(src.timestamp_regressions, 1);
     server.join().unwrap();
 }
