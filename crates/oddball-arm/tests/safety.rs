@@ -54,8 +54,8 @@ proptest! {
         let tol = sim.settings().board_tolerance_m;
         for s in sim.samples() {
             prop_assert!(board.excess_m(&s.p) <= tol, "pen {:?} off the board", s.p);
-            for j in 0..2 {
-                prop_assert!(s.u[j].abs() <= limits[j] + 1e-12, "joint {} torque {}", j + 1, s.u[j]);
+            for (j, limit) in limits.iter().enumerate() {
+                prop_assert!(s.u[j].abs() <= limit + 1e-12, "joint {} torque {}", j + 1, s.u[j]);
             }
             prop_assert!(s.q.iter().chain(s.qd.iter()).all(|v| v.is_finite()));
         }

@@ -26,6 +26,7 @@ pub mod pipeline;
 pub mod riemann;
 pub mod scaler;
 pub mod svm;
+pub mod tuning;
 pub mod wavelet;
 pub mod xdawn;
 

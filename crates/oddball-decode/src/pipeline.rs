@@ -4,8 +4,11 @@
 //!
 //! A pipeline is `[channel selection] → features → [StandardScaler] → [PCA] → classifier`, where
 //! the features are either a per-epoch map with nothing to learn (amplitudes; the paper's
-//! amplitude + Hilbert–Huang + wavelet map) or learned xDAWN covariances projected to the
-//! Riemannian tangent space. Every learned step is fitted on the training epochs only.
+//! amplitude + Hilbert–Huang + wavelet map) or learned xDAWN covariances, projected to the
+//! Riemannian tangent space or kept as matrices (flattened row-major, for MDM). Every learned step
+//! is fitted on the training epochs only. A fitted [`Pipeline`] keeps the [`PipelineParams`] it
+//! was fitted with, so a saved model carries its settings (e.g. those chosen by
+//! [`crate::tuning`]).
 
 use ndarray::parallel::prelude::*;
 use ndarray::{s, Array1, Array2, Array3, ArrayView2, ArrayView3, Axis};
@@ -14,14 +17,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::amplitude::{AmplitudeFeatures, PaperFeatures};
 use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
-use crate::ensemble::{ProbabilisticClassifier, SoftVote, SoftVoteParams};
+use crate::ensemble::{MemberParams, ProbabilisticClassifier, SoftVote, SoftVoteParams};
 use crate::knn::{Knn, KnnParams};
 use crate::lda::{Lda, LdaParams};
 use crate::logistic::{Logistic, LogisticParams};
 use crate::pca::{Pca, PcaParams};
-use crate::riemann::{TangentSpace, TangentSpaceParams};
+use crate::riemann::{Mdm, MdmParams, TangentSpace, TangentSpaceParams};
 use crate::scaler::{StandardScaler, StandardScalerParams};
-use crate::svm::{Calibration, Svm, SvmParams};
+use crate::svm::{Calibration, Gamma, Kernel, Svm, SvmParams};
 use crate::xdawn::{XdawnCovariances, XdawnCovariancesParams};
 use crate::DecodeError;
 
@@ -34,6 +37,57 @@ impl ProbabilisticClassifier for Lda {
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         Lda::decision_function(self, x)
     }
+}
+
+/// MDM on xDAWN covariance matrices flattened row-major into rows of `(n_epochs, n·n)` (the
+/// output of [`FeatureParams::XdawnCovariances`]); the score is
+/// `d²(C, M_non-target) − d²(C, M_target)` (larger = closer to the target mean).
+impl ProbabilisticClassifier for Mdm {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Ok(ProbabilisticClassifier::decision_function(self, x)?.mapv(crate::linalg::sigmoid))
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        let n = self.n_channels();
+        if x.ncols() != n * n {
+            return Err(DecodeError::ShapeMismatch {
+                what: "MDM input (flattened matrices)".into(),
+                expected: format!("{} columns ({n}×{n} matrices)", n * n),
+                got: x.ncols().to_string(),
+            });
+        }
+        // Matrices are independent: spread them over rayon's threads.
+        let scores = x
+            .axis_iter(Axis(0))
+            .into_par_iter()
+            .map(|row| {
+                let m = row
+                    .to_shape((n, n))
+                    .map_err(|e| DecodeError::ShapeMismatch {
+                        what: "MDM input row".into(),
+                        expected: format!("{n}×{n}"),
+                        got: e.to_string(),
+                    })?;
+                self.decision_one(m.view())
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        Ok(Array1::from(scores))
+    }
+}
+
+/// Flattened `(n_epochs, n·n)` rows back to matrices `(n_epochs, n, n)`.
+fn unflatten_square(x: ArrayView2<f64>) -> Result<Array3<f64>> {
+    let (rows, cols) = x.dim();
+    let n = (cols as f64).sqrt().round() as usize;
+    if n == 0 || n * n != cols {
+        return Err(DecodeError::ShapeMismatch {
+            what: "MDM training input (flattened matrices)".into(),
+            expected: "n·n columns for some n ≥ 1".into(),
+            got: cols.to_string(),
+        });
+    }
+    Ok(Array3::from_shape_fn((rows, n, n), |(e, i, j)| {
+        x[[e, i * n + j]]
+    }))
 }
 
 impl ProbabilisticClassifier for Logistic {
@@ -59,6 +113,12 @@ pub enum FeatureParams {
         xdawn: XdawnCovariancesParams,
         tangent: TangentSpaceParams,
     },
+    /// Every `step`-th sample, then xDAWN covariances `(n, n)` flattened row-major (`n·n`
+    /// features) — the input of [`ClassifierParams::Mdm`].
+    XdawnCovariances {
+        step: usize,
+        xdawn: XdawnCovariancesParams,
+    },
 }
 
 /// Fitted features.
@@ -67,6 +127,14 @@ pub enum Features {
     Amplitude(AmplitudeFeatures),
     Paper(PaperFeatures),
     XdawnTangent(Box<XdawnTangent>),
+    XdawnCovariances(Box<XdawnCovFeatures>),
+}
+
+/// Fitted xDAWN covariances on epochs decimated by `step`, flattened row-major.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct XdawnCovFeatures {
+    pub step: usize,
+    pub xdawn: XdawnCovariances,
 }
 
 /// Fitted xDAWN covariances and tangent space, on epochs decimated by `step`.
@@ -81,23 +149,42 @@ fn every_nth(epochs: ArrayView3<f64>, step: usize) -> Array3<f64> {
     epochs.slice(s![.., .., ..;step]).to_owned()
 }
 
+fn check_step(step: usize) -> Result<()> {
+    if step == 0 {
+        return Err(DecodeError::InvalidParameter {
+            name: "step",
+            value: "0".into(),
+            reason: "the decimation step must be at least 1".into(),
+        });
+    }
+    Ok(())
+}
+
 impl FeatureParams {
+    /// Whether the map learns nothing from the training data (so features of any epoch can be
+    /// computed once, whatever the training split).
+    pub fn is_stateless(&self) -> bool {
+        matches!(self, FeatureParams::Amplitude(_) | FeatureParams::Paper(_))
+    }
+
     fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Features> {
         Ok(match self {
             FeatureParams::Amplitude(a) => Features::Amplitude(*a),
             FeatureParams::Paper(p) => Features::Paper(*p),
+            FeatureParams::XdawnCovariances { step, xdawn } => {
+                check_step(*step)?;
+                let x = every_nth(epochs, *step);
+                Features::XdawnCovariances(Box::new(XdawnCovFeatures {
+                    step: *step,
+                    xdawn: xdawn.fit(x.view(), y)?,
+                }))
+            }
             FeatureParams::XdawnTangent {
                 step,
                 xdawn,
                 tangent,
             } => {
-                if *step == 0 {
-                    return Err(DecodeError::InvalidParameter {
-                        name: "step",
-                        value: "0".into(),
-                        reason: "the decimation step must be at least 1".into(),
-                    });
-                }
+                check_step(*step)?;
                 let x = every_nth(epochs, *step);
                 let xdawn = xdawn.fit(x.view(), y)?;
                 let covs = xdawn.transform(x.view())?;
@@ -133,6 +220,20 @@ impl Features {
                     })?;
                 Ok(out)
             }
+            Features::XdawnCovariances(f) => {
+                let x = every_nth(epochs, f.step);
+                let n = f.xdawn.size();
+                let mut out = Array2::zeros((x.dim().0, n * n));
+                out.axis_iter_mut(Axis(0))
+                    .into_par_iter()
+                    .zip(x.axis_iter(Axis(0)).into_par_iter())
+                    .try_for_each(|(mut row, epoch)| -> Result<()> {
+                        let cov = f.xdawn.transform_epoch(epoch)?;
+                        row.iter_mut().zip(cov.iter()).for_each(|(o, &v)| *o = v);
+                        Ok(())
+                    })?;
+                Ok(out)
+            }
         }
     }
 }
@@ -146,6 +247,9 @@ pub enum ClassifierParams {
     Knn(KnnParams),
     /// Soft vote of members' P(target) (the paper's multi-classifier).
     Vote(SoftVoteParams),
+    /// Minimum distance to (Riemannian) mean on flattened SPD matrices
+    /// ([`FeatureParams::XdawnCovariances`]).
+    Mdm(MdmParams),
 }
 
 /// A fitted classifier.
@@ -156,9 +260,61 @@ pub enum Classifier {
     Svm(Svm),
     Knn(Knn),
     Vote(SoftVote),
+    Mdm(Mdm),
+}
+
+/// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
+/// variance is 0), as [`crate::svm`] resolves it.
+fn gamma_scale(x: ArrayView2<f64>) -> f64 {
+    let n = x.len() as f64;
+    let mean = x.sum() / n;
+    let var = x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+    if var > 0.0 {
+        1.0 / (x.ncols() as f64 * var)
+    } else {
+        1.0
+    }
 }
 
 impl ClassifierParams {
+    /// The same settings with every RBF SVM's `γ = 'scale'` replaced by `factor ×` the scale
+    /// γ of the training features `x` (unchanged when `factor` is 1).
+    fn with_gamma_factor(&self, x: ArrayView2<f64>, factor: f64) -> Result<Self> {
+        if !(factor.is_finite() && factor > 0.0) {
+            return Err(DecodeError::InvalidParameter {
+                name: "svm_gamma_scale",
+                value: factor.to_string(),
+                reason: "must be finite and > 0".into(),
+            });
+        }
+        if factor == 1.0 || x.is_empty() {
+            return Ok(self.clone());
+        }
+        let gamma = factor * gamma_scale(x);
+        let resolve = |p: &SvmParams| SvmParams {
+            kernel: match p.kernel {
+                Kernel::Rbf(Gamma::Scale) => Kernel::Rbf(Gamma::Value(gamma)),
+                k => k,
+            },
+            ..*p
+        };
+        Ok(match self {
+            ClassifierParams::Svm(p) => ClassifierParams::Svm(resolve(p)),
+            ClassifierParams::Vote(v) => ClassifierParams::Vote(SoftVoteParams {
+                members: v
+                    .members
+                    .iter()
+                    .map(|m| match m {
+                        MemberParams::Svm(p) => MemberParams::Svm(resolve(p)),
+                        other => *other,
+                    })
+                    .collect(),
+                weights: v.weights.clone(),
+            }),
+            other => other.clone(),
+        })
+    }
+
     fn fit(&self, x: ArrayView2<f64>, y: &[bool]) -> Result<Classifier> {
         Ok(match self {
             ClassifierParams::Lda(p) => Classifier::Lda(p.fit(x, y)?),
@@ -166,6 +322,7 @@ impl ClassifierParams {
             ClassifierParams::Svm(p) => Classifier::Svm(p.fit(x, y)?),
             ClassifierParams::Knn(p) => Classifier::Knn(p.fit(x, y)?),
             ClassifierParams::Vote(p) => Classifier::Vote(p.fit(x, y)?),
+            ClassifierParams::Mdm(p) => Classifier::Mdm(p.fit(unflatten_square(x)?.view(), y)?),
         })
     }
 }
@@ -178,6 +335,7 @@ impl Classifier {
             Classifier::Svm(m) => m,
             Classifier::Knn(m) => m,
             Classifier::Vote(m) => m,
+            Classifier::Mdm(m) => m,
         }
     }
 }
@@ -192,16 +350,26 @@ pub struct PipelineParams {
     pub scaler: Option<StandardScalerParams>,
     pub pca: Option<PcaParams>,
     pub classifier: ClassifierParams,
+    /// Multiplies the RBF SVMs' `γ = 'scale'`: 1 is scikit-learn's `'scale'`; otherwise the
+    /// γ is resolved once on the training features (the Platt-calibration folds inside share it).
+    #[serde(default = "one")]
+    pub svm_gamma_scale: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// The names [`PipelineParams::preset`] knows.
-pub const PRESETS: [&str; 5] = ["lda", "riemann", "paper", "paper-svm", "paper-knn"];
+pub const PRESETS: [&str; 6] = ["lda", "riemann", "mdm", "paper", "paper-svm", "paper-knn"];
 
 impl PipelineParams {
     /// A named preset for epochs sampled at `sfreq` Hz:
     /// * `lda`: shrinkage LDA on bin-averaged amplitudes (bins of round(sfreq/25) samples);
     /// * `riemann`: every round(sfreq/64)-th sample → XdawnCovariances(4 filters, OAS) →
     ///   tangent space → logistic regression (pyRiemann's ERP pipeline);
+    /// * `mdm`: the same XdawnCovariances → minimum distance to (Riemannian) mean (pyRiemann's
+    ///   `MDM`), scored `d²(C, M_non-target) − d²(C, M_target)`;
     /// * `paper`: the paper's amplitude + HHT + wavelet features → StandardScaler → PCA (95 %
     ///   variance) → soft vote of an RBF SVM and a 3-NN;
     /// * `paper-svm`, `paper-knn`: the same features with one of the two members alone.
@@ -214,8 +382,10 @@ impl PipelineParams {
                 scaler: Some(StandardScalerParams::default()),
                 pca: Some(PcaParams::variance_fraction(0.95)),
                 classifier,
+                svm_gamma_scale: 1.0,
             })
         };
+        let xdawn_step = ((sfreq / 64.0).round() as usize).max(1);
         match name {
             "lda" => Ok(Self {
                 name: name.to_string(),
@@ -224,18 +394,32 @@ impl PipelineParams {
                 scaler: None,
                 pca: None,
                 classifier: ClassifierParams::Lda(LdaParams::default()),
+                svm_gamma_scale: 1.0,
             }),
             "riemann" => Ok(Self {
                 name: name.to_string(),
                 channel_selection: None,
                 features: FeatureParams::XdawnTangent {
-                    step: ((sfreq / 64.0).round() as usize).max(1),
+                    step: xdawn_step,
                     xdawn: XdawnCovariancesParams::default(),
                     tangent: TangentSpaceParams::default(),
                 },
                 scaler: None,
                 pca: None,
                 classifier: ClassifierParams::Logistic(LogisticParams::default()),
+                svm_gamma_scale: 1.0,
+            }),
+            "mdm" => Ok(Self {
+                name: name.to_string(),
+                channel_selection: None,
+                features: FeatureParams::XdawnCovariances {
+                    step: xdawn_step,
+                    xdawn: XdawnCovariancesParams::default(),
+                },
+                scaler: None,
+                pca: None,
+                classifier: ClassifierParams::Mdm(MdmParams::default()),
+                svm_gamma_scale: 1.0,
             }),
             "paper" => paper_front(ClassifierParams::Vote(SoftVoteParams::paper())),
             // Alone, the SVM's decision value is the score: no probability calibration needed.
@@ -277,6 +461,32 @@ impl PipelineParams {
                 n_nontargets: n_epochs - n_targets,
             });
         }
+        let (Front { channels, features }, x) = self.fit_front(epochs, y)?;
+        let Head {
+            scaler,
+            pca,
+            classifier,
+        } = self.fit_head(x, y)?;
+        Ok(Pipeline {
+            name: self.name.clone(),
+            n_channels,
+            n_times,
+            channels,
+            features,
+            scaler,
+            pca,
+            classifier,
+            params: Some(self.clone()),
+        })
+    }
+
+    /// Fits the channel selection and the features on `epochs`; returns them with the features
+    /// of `epochs`.
+    pub(crate) fn fit_front(
+        &self,
+        epochs: ArrayView3<f64>,
+        y: &[bool],
+    ) -> Result<(Front, Array2<f64>)> {
         let channels = self
             .channel_selection
             .map(|p| p.fit(epochs, y))
@@ -290,7 +500,18 @@ impl PipelineParams {
             None => epochs.view(),
         };
         let features = self.features.fit(epochs, y)?;
-        let mut x = features.transform(epochs)?;
+        let x = features.transform(epochs)?;
+        Ok((Front { channels, features }, x))
+    }
+
+    /// Whether `other` has the same channel selection and features (so one fitted front
+    /// serves both).
+    pub(crate) fn same_front(&self, other: &Self) -> bool {
+        self.channel_selection == other.channel_selection && self.features == other.features
+    }
+
+    /// Fits the steps after the features (scaler, PCA, classifier) on feature rows `x`.
+    pub(crate) fn fit_head(&self, mut x: Array2<f64>, y: &[bool]) -> Result<Head> {
         let scaler = match &self.scaler {
             Some(p) => {
                 let s = p.fit(x.view())?;
@@ -307,17 +528,70 @@ impl PipelineParams {
             }
             None => None,
         };
-        let classifier = self.classifier.fit(x.view(), y)?;
-        Ok(Pipeline {
-            name: self.name.clone(),
-            n_channels,
-            n_times,
-            channels,
-            features,
+        let classifier = self
+            .classifier
+            .with_gamma_factor(x.view(), self.svm_gamma_scale)?
+            .fit(x.view(), y)?;
+        Ok(Head {
             scaler,
             pca,
             classifier,
         })
+    }
+
+    /// Features of `epochs` when the front learns nothing (no channel selection, a stateless
+    /// feature map): the same rows whatever the training split. `None` otherwise.
+    pub(crate) fn stateless_features(
+        &self,
+        epochs: ArrayView3<f64>,
+    ) -> Option<Result<Array2<f64>>> {
+        if self.channel_selection.is_some() || !self.features.is_stateless() {
+            return None;
+        }
+        Some(
+            self.features
+                .fit(epochs, &[])
+                .and_then(|f| f.transform(epochs)),
+        )
+    }
+}
+
+/// The fitted channel selection and features.
+#[derive(Debug)]
+pub(crate) struct Front {
+    channels: Option<ChannelSelection>,
+    features: Features,
+}
+
+impl Front {
+    /// Features `(n_epochs, n_features)` of `epochs`.
+    pub(crate) fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
+        match &self.channels {
+            Some(c) => self.features.transform(c.transform(epochs)?.view()),
+            None => self.features.transform(epochs),
+        }
+    }
+}
+
+/// The fitted steps after the features.
+#[derive(Debug)]
+pub(crate) struct Head {
+    scaler: Option<StandardScaler>,
+    pca: Option<Pca>,
+    classifier: Classifier,
+}
+
+impl Head {
+    /// Scores of feature rows `x`.
+    pub(crate) fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        let mut x = x.to_owned();
+        if let Some(s) = &self.scaler {
+            x = s.transform(x.view())?;
+        }
+        if let Some(p) = &self.pca {
+            x = p.transform(x.view())?;
+        }
+        self.classifier.inner().decision_function(x.view())
     }
 }
 
@@ -332,11 +606,19 @@ pub struct Pipeline {
     scaler: Option<StandardScaler>,
     pca: Option<Pca>,
     classifier: Classifier,
+    /// The settings it was fitted with (absent in models saved before they were kept).
+    #[serde(default)]
+    params: Option<PipelineParams>,
 }
 
 impl Pipeline {
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The settings it was fitted with, if the model recorded them.
+    pub fn params(&self) -> Option<&PipelineParams> {
+        self.params.as_ref()
     }
 
     /// Channels and samples per epoch it was fitted on.
@@ -412,6 +694,9 @@ impl Pipeline {
 /// Version of the saved-model format; a file of another version is refused at load.
 pub const MODEL_FORMAT_VERSION: u32 = 1;
 
+/// A channel whose band-passed epoch spans less than this (µV) is flat: no electrode signal.
+pub const FLAT_UV: f64 = 1e-3;
+
 /// How continuous EEG becomes the epochs a model scores.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Preprocess {
@@ -469,8 +754,9 @@ impl Preprocess {
         (first, (last - first + 1).max(0) as usize)
     }
 
-    /// Whether an epoch `(n_channels, n_times)` passes the peak-to-peak rejection (and is
-    /// finite: a NaN or infinity always rejects).
+    /// Whether an epoch `(n_channels, n_times)` passes the peak-to-peak rejection, holds no NaN
+    /// or infinity, and has no flat channel (peak-to-peak under [`FLAT_UV`]: a disconnected
+    /// electrode).
     pub fn accepts(&self, epoch: ndarray::ArrayView2<f64>) -> bool {
         epoch.rows().into_iter().all(|row| {
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -481,7 +767,7 @@ impl Preprocess {
                 lo = lo.min(v);
                 hi = hi.max(v);
             }
-            self.reject_peak_to_peak_uv.is_none_or(|t| hi - lo <= t)
+            hi - lo >= FLAT_UV && self.reject_peak_to_peak_uv.is_none_or(|t| hi - lo <= t)
         })
     }
 }
@@ -499,6 +785,10 @@ pub struct Model {
     /// How scores become choices in a session (absent for models trained offline).
     #[serde(default)]
     pub decision: Option<crate::decision::DecisionModel>,
+    /// How the pipeline's settings were chosen by cross-validation on the training data
+    /// (`oddball train --tune`); absent when the preset's defaults were used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tuning: Option<crate::tuning::TuningReport>,
 }
 
 impl Model {
@@ -515,6 +805,7 @@ impl Model {
             ch_names,
             pipeline,
             decision: None,
+            tuning: None,
         }
     }
 
@@ -589,7 +880,7 @@ mod tests {
     fn presets_learn_a_separable_p300_and_round_trip_through_json() {
         let (xtr, ytr) = synthetic(200, 1);
         let (xte, yte) = synthetic(100, 2);
-        for name in ["lda", "riemann", "paper-svm"] {
+        for name in ["lda", "riemann", "mdm", "paper-svm"] {
             let p = PipelineParams::preset(name, 64.0).unwrap();
             let m = p.fit(xtr.view(), &ytr).unwrap();
             let scores = m.decision_function(xte.view()).unwrap();
@@ -605,6 +896,70 @@ mod tests {
                 .unwrap();
             assert!((one - scores[3]).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn mdm_scores_are_distance_differences_to_the_class_means() {
+        let (xtr, ytr) = synthetic(200, 4);
+        let (xte, _) = synthetic(20, 5);
+        let m = PipelineParams::preset("mdm", 64.0)
+            .unwrap()
+            .fit(xtr.view(), &ytr)
+            .unwrap();
+        let Classifier::Mdm(mdm) = m.classifier() else {
+            panic!("mdm ends in an MDM classifier")
+        };
+        // Features are the xDAWN covariances, flattened row-major: 4 filters × 2 classes → 16×16
+        // super-trial covariances (4 channels: 4 filters per class).
+        let x = m.features(xte.view()).unwrap();
+        let n = mdm.n_channels();
+        assert_eq!((n, x.ncols()), (16, 256));
+        let covs = x.to_shape((20, n, n)).unwrap().to_owned();
+        let d = mdm.distances(covs.view()).unwrap();
+        let s = m.decision_function(xte.view()).unwrap();
+        for e in 0..20 {
+            let want = d[[e, 0]].powi(2) - d[[e, 1]].powi(2);
+            assert!(
+                (s[e] - want).abs() < 1e-9 * (1.0 + want.abs()),
+                "{} vs {want}",
+                s[e]
+            );
+        }
+        let p = m.predict_proba(xte.view()).unwrap();
+        assert!(p
+            .iter()
+            .zip(s.iter())
+            .all(|(p, s)| (*p > 0.5) == (*s > 0.0)));
+        // The fitted pipeline keeps its settings.
+        assert_eq!(
+            m.params(),
+            Some(&PipelineParams::preset("mdm", 64.0).unwrap())
+        );
+    }
+
+    #[test]
+    fn svm_gamma_factor_scales_the_resolved_gamma() {
+        let (x, y) = synthetic(120, 6);
+        let gamma = |factor: f64| {
+            let mut p = PipelineParams::preset("paper-svm", 64.0).unwrap();
+            p.svm_gamma_scale = factor;
+            match p.fit(x.view(), &y).unwrap().classifier() {
+                Classifier::Svm(s) => s.gamma().unwrap(),
+                _ => unreachable!(),
+            }
+        };
+        let (g1, g05) = (gamma(1.0), gamma(0.5));
+        assert!((g05 - 0.5 * g1).abs() < 1e-12 * g1, "{g05} vs {g1}");
+        let mut p = PipelineParams::preset("paper-svm", 64.0).unwrap();
+        p.svm_gamma_scale = 0.0;
+        assert!(p.fit(x.view(), &y).is_err());
+        // Settings saved without the field read as the plain 'scale'.
+        let text = serde_json::to_string(&p)
+            .unwrap()
+            .replace(",\"svm_gamma_scale\":0.0", "");
+        assert!(!text.contains("svm_gamma_scale"));
+        let back: PipelineParams = serde_json::from_str(&text).unwrap();
+        assert_eq!(back.svm_gamma_scale, 1.0);
     }
 
     #[test]

@@ -119,3 +119,220 @@ fn riemann_on_the_oddball_split_and_cross_validation() {
     let auc: f64 = out.split("AUC ").nth(1).unwrap()[..5].parse().unwrap();
     assert!(auc > 0.8, "4-fold CV on eeg3_1: AUC {auc}");
 }
+
+fn read_json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A copy of `src` written as float32 BCI2000, its target flags flipped when `flip` is set.
+fn rewrite(src: &std::path::Path, dst: &std::path::Path, flip: bool) {
+    use oddball_signal::{Event, Events};
+    let mut rec = oddball_io::read(src).unwrap();
+    let events: Vec<Event> = rec
+        .raw
+        .events()
+        .iter()
+        .map(|e| Event {
+            target: e.target.map(|t| t != flip),
+            ..e.clone()
+        })
+        .collect();
+    rec.raw.set_events(Events::new(events)).unwrap();
+    let states = oddball_io::stimulus_states(rec.raw.events(), rec.raw.n_times(), 8);
+    oddball_io::write_bci2000(
+        dst,
+        &rec.raw,
+        &states,
+        &oddball_io::Bci2000WriteOptions::default(),
+    )
+    .unwrap();
+}
+
+#[test]
+fn tuning_never_sees_the_test_file_flipped_test_labels_give_the_same_choice() {
+    let Some(d) = data_dir() else { return };
+    let tmp = std::env::temp_dir().join(format!("oddball-tune-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let (same, flipped) = (tmp.join("same.dat"), tmp.join("flipped.dat"));
+    rewrite(&d.join("eeg2_2.dat"), &same, false);
+    rewrite(&d.join("eeg2_2.dat"), &flipped, true);
+    let run = |test: &std::path::Path, json: &std::path::Path| {
+        let plot = tmp.join("acc.png");
+        let (ok, out, err) = oddball(&[
+            "evaluate",
+            "--train",
+            d.join("eeg2_1.dat").to_str().unwrap(),
+            "--test",
+            test.to_str().unwrap(),
+            "--pipeline",
+            "mdm",
+            "--tune",
+            "--folds",
+            "3",
+            "--plot",
+            plot.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+        // No progress bar (nor anything else) on stderr when it is not a terminal.
+        assert!(err.is_empty(), "stderr: {err}");
+        assert!(!plot.exists(), "no plot for a non-speller test file");
+        assert!(out.contains("no accuracy-vs-repetitions plot"), "{out}");
+        assert_eq!(out.matches("CV AUC").count(), 3, "{out}");
+        assert!(out.contains("folds stratified by label"), "{out}");
+        read_json(json)
+    };
+    let a = run(&same, &tmp.join("a.json"));
+    let b = run(&flipped, &tmp.join("b.json"));
+    let tuning = field(&a[0], "tuning");
+    assert_eq!(field(tuning, "n_folds"), 3);
+    assert_eq!(field(tuning, "candidates").as_array().unwrap().len(), 3);
+    // The choice and every cross-validated score are the same whatever the test labels …
+    assert_eq!(tuning, field(&b[0], "tuning"));
+    // … while the test scores do see them: the AUC flips.
+    let (auc_a, auc_b) = (
+        field(&a[0], "auc").as_f64().unwrap(),
+        field(&b[0], "auc").as_f64().unwrap(),
+    );
+    assert!(auc_a > 0.9, "mdm on eeg2 1->2: AUC {auc_a}");
+    assert!((auc_a + auc_b - 1.0).abs() < 1e-12, "{auc_a} + {auc_b}");
+    let _ = std::fs::remove_dir_all(tmp);
+}
+
+#[test]
+fn train_tune_saves_the_choice_and_evaluate_plots_accuracy_by_repetitions() {
+    let Some(d) = data_dir() else { return };
+    let tmp = std::env::temp_dir().join(format!("oddball-tune-lda-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let (train, test) = (d.join("eeg3_1.dat"), d.join("eeg3_2.dat"));
+    let model = tmp.join("model.json");
+    let (ok, out, err) = oddball(&[
+        "train",
+        train.to_str().unwrap(),
+        "--pipeline",
+        "lda",
+        "--tune",
+        "--folds",
+        "4",
+        "-o",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.is_empty(), "stderr: {err}");
+    assert!(
+        out.contains("4-fold CV on the training data (folds keep speller characters whole)"),
+        "{out}"
+    );
+    let m = read_json(&model);
+    let tuning = field(&m, "tuning");
+    let chosen = field(tuning, "chosen").as_str().unwrap();
+    assert!(out.contains(&format!("chosen: {chosen}")), "{out}");
+    assert_eq!(field(tuning, "grouped"), true);
+    // The saved pipeline carries the chosen bin width.
+    let bin = field(
+        field(
+            field(field(field(&m, "pipeline"), "params"), "features"),
+            "Amplitude",
+        ),
+        "reduction",
+    )["BinMean"]["bin"]
+        .as_u64()
+        .unwrap();
+    assert!(
+        chosen.starts_with(&format!("bin {bin} samples")),
+        "{chosen}"
+    );
+
+    // evaluate --tune makes the same choice, and scores like the saved model.
+    let (json, plot) = (tmp.join("eval.json"), tmp.join("acc.svg"));
+    let (ok, out, err) = oddball(&[
+        "evaluate",
+        "--train",
+        train.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--pipeline",
+        "lda",
+        "--tune",
+        "--folds",
+        "4",
+        "--plot",
+        plot.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.is_empty(), "stderr: {err}");
+    let e = read_json(&json);
+    assert_eq!(field(&e[0], "tuning"), tuning, "{out}");
+    assert_eq!(field(&e[0], "speller_choices"), 36);
+    let acc = field(&e[0], "speller_accuracy").as_array().unwrap();
+    assert_eq!(acc.len(), 15);
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    assert!(svg.contains("chance (1/36"), "the chance level is marked");
+    assert!(
+        svg.lines().any(|l| l.trim() == "lda"),
+        "one line per preset, in the legend"
+    );
+    let json2 = tmp.join("loaded.json");
+    let (ok, _, err) = oddball(&[
+        "evaluate",
+        "--model",
+        model.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--json",
+        json2.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let l = read_json(&json2);
+    assert_eq!(field(&l[0], "auc"), field(&e[0], "auc"));
+    assert_eq!(field(&l[0], "tuning"), tuning);
+
+    // Without test files the tuning is nested inside each cross-validation fold.
+    let (ok, out, err) = oddball(&[
+        "evaluate",
+        "--train",
+        train.to_str().unwrap(),
+        "--pipeline",
+        "lda",
+        "--tune",
+        "--folds",
+        "4",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let cv = read_json(&json);
+    let per_fold = field(&cv[0], "tuning_per_fold").as_array().unwrap();
+    assert_eq!(per_fold.len(), 4, "{out}");
+    assert!(per_fold.iter().all(|t| field(t, "n_folds") == 3));
+    assert!(field(&cv[0], "auc").as_f64().unwrap() > 0.8, "{out}");
+    let _ = std::fs::remove_dir_all(tmp);
+}
+
+#[test]
+fn mdm_preset_spells_the_speller_split() {
+    let Some(d) = data_dir() else { return };
+    let json = std::env::temp_dir().join(format!("oddball-mdm-{}.json", std::process::id()));
+    let (ok, out, err) = oddball(&[
+        "evaluate",
+        "--train",
+        d.join("eeg3_1.dat").to_str().unwrap(),
+        "--test",
+        d.join("eeg3_2.dat").to_str().unwrap(),
+        "--pipeline",
+        "mdm",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let v = read_json(&json);
+    assert_eq!(field(&v[0], "speller_text"), "6MK?", "{out}");
+    let auc = field(&v[0], "auc").as_f64().unwrap();
+    assert!(auc > 0.88, "XdawnCovariances + MDM on eeg3 1->2: AUC {auc}");
+    let reps = field(&v[0], "reps_for_all_correct").as_u64().unwrap();
+    assert!(reps <= 4, "{out}");
+    let _ = std::fs::remove_file(json);
+}

@@ -1,0 +1,560 @@
+//! Choosing a pipeline's hyper-parameters by cross-validation on the training data only.
+//!
+//! * [`preset_grid`]: a small grid of settings around each preset (its defaults included):
+//!   - `lda`: the amplitude bin width, round(sfreq/32), round(sfreq/25) (the default) and
+//!     round(sfreq/20) samples;
+//!   - `riemann`: xDAWN filters per class {2, 4, 6} × logistic-regression `C` {0.1, 1, 10};
+//!   - `mdm`: xDAWN filters per class {2, 4, 6};
+//!   - `paper`, `paper-svm`: the RBF SVM's `C` {1, 10} × γ {1, 0.5} × scikit-learn's `'scale'`;
+//!   - `paper-knn`: neighbours k {3, 5, 9}.
+//! * [`cv_folds`]: k folds that keep each group (a speller character: its flashes overlap in time
+//!   and share one attended symbol) in one fold, contiguous runs of groups per fold; without
+//!   groups, scikit-learn's `StratifiedKFold(k)` without shuffling ([`crate::svm::stratified_folds`]:
+//!   each class dealt to folds in contiguous blocks, so neighbouring, overlapping epochs mostly
+//!   stay together). `k` is lowered to the number of groups (or to the smaller class's size).
+//! * [`grid_search`]: mean epoch ROC-AUC over the folds for each candidate; the best mean wins
+//!   (ties to the earlier candidate). Every fitted step (channel selection, xDAWN, tangent space,
+//!   scaler, PCA, classifier) is fitted on the training part of each fold only. Candidates that
+//!   share their front (channel selection + features) share its fit in each fold, and a front that
+//!   learns nothing (amplitude or paper features) is computed once for all epochs; both give the
+//!   same scores as fitting each candidate's whole pipeline per fold (a test checks this).
+//!
+//! The functions only ever see the data they are given: the caller passes the training epochs,
+//! and held-out test data can't influence the choice.
+
+use ndarray::{ArrayView3, Axis};
+use serde::{Deserialize, Serialize};
+
+use crate::amplitude::AmplitudeFeatures;
+use crate::ensemble::MemberParams;
+use crate::knn::KnnParams;
+use crate::metrics::roc_auc;
+use crate::pipeline::{ClassifierParams, FeatureParams, PipelineParams};
+use crate::svm::SvmParams;
+use crate::DecodeError;
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+/// One point of a grid: pipeline settings and a short label naming what differs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    pub label: String,
+    pub params: PipelineParams,
+}
+
+/// The grid [`PipelineParams::preset`]`(name, sfreq)` is tuned over (see the module doc); the
+/// preset's own settings are one of the candidates.
+pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
+    let base = PipelineParams::preset(name, sfreq)?;
+    let mut out = Vec::new();
+    match name {
+        "lda" => {
+            let mut bins: Vec<usize> = [32.0, 25.0, 20.0]
+                .iter()
+                .map(|f| ((sfreq / f).round() as usize).max(1))
+                .collect();
+            bins.dedup();
+            for bin in bins {
+                let mut p = base.clone();
+                p.features = FeatureParams::Amplitude(AmplitudeFeatures::bin_mean(bin)?);
+                out.push(Candidate {
+                    label: format!("bin {bin} samples ({:.0} ms)", 1000.0 * bin as f64 / sfreq),
+                    params: p,
+                });
+            }
+        }
+        "riemann" | "mdm" => {
+            let cs: &[f64] = if name == "riemann" {
+                &[0.1, 1.0, 10.0]
+            } else {
+                &[1.0]
+            };
+            for nfilter in [2, 4, 6] {
+                for &c in cs {
+                    let mut p = base.clone();
+                    match &mut p.features {
+                        FeatureParams::XdawnTangent { xdawn, .. }
+                        | FeatureParams::XdawnCovariances { xdawn, .. } => xdawn.nfilter = nfilter,
+                        _ => unreachable!("the {name} preset has xDAWN features"),
+                    }
+                    let label = if let ClassifierParams::Logistic(l) = &mut p.classifier {
+                        l.c = c;
+                        format!("nfilter {nfilter}, C {c}")
+                    } else {
+                        format!("nfilter {nfilter}")
+                    };
+                    out.push(Candidate { label, params: p });
+                }
+            }
+        }
+        "paper" | "paper-svm" => {
+            for c in [1.0, 10.0] {
+                for factor in [1.0, 0.5] {
+                    let mut p = base.clone();
+                    let set = |s: &mut SvmParams| s.c = c;
+                    match &mut p.classifier {
+                        ClassifierParams::Svm(s) => set(s),
+                        ClassifierParams::Vote(v) => {
+                            for m in &mut v.members {
+                                if let MemberParams::Svm(s) = m {
+                                    set(s);
+                                }
+                            }
+                        }
+                        _ => unreachable!("the {name} preset has an SVM"),
+                    }
+                    p.svm_gamma_scale = factor;
+                    out.push(Candidate {
+                        label: format!("C {c}, gamma {factor}×scale"),
+                        params: p,
+                    });
+                }
+            }
+        }
+        "paper-knn" => {
+            for k in [3, 5, 9] {
+                let mut p = base.clone();
+                p.classifier = ClassifierParams::Knn(KnnParams { k });
+                out.push(Candidate {
+                    label: format!("k {k}"),
+                    params: p,
+                });
+            }
+        }
+        other => {
+            return Err(DecodeError::InvalidParameter {
+                name: "pipeline",
+                value: other.to_string(),
+                reason: "no tuning grid for this preset".into(),
+            })
+        }
+    }
+    Ok(out)
+}
+
+/// Cross-validation folds: the test fold of every epoch.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Folds {
+    fold_of: Vec<usize>,
+    n_folds: usize,
+    grouped: bool,
+}
+
+impl Folds {
+    /// Number of folds (the `k` asked for, or fewer when there are fewer groups).
+    pub fn n_folds(&self) -> usize {
+        self.n_folds
+    }
+
+    /// Test fold of each epoch.
+    pub fn fold_of(&self) -> &[usize] {
+        &self.fold_of
+    }
+
+    /// Whether the folds keep groups together (rather than being stratified by label).
+    pub fn grouped(&self) -> bool {
+        self.grouped
+    }
+
+    /// (training indices, test indices) of fold `f`, each in increasing order.
+    pub fn split(&self, f: usize) -> (Vec<usize>, Vec<usize>) {
+        (0..self.fold_of.len()).partition(|&i| self.fold_of[i] != f)
+    }
+}
+
+/// `k` folds of epochs labelled `y`: groups (e.g. speller characters; `groups[i]` is epoch `i`'s)
+/// kept whole, `min(k, n_groups)` folds of contiguous runs of groups (in order of first
+/// appearance); without groups, stratified by label (`min(k, smaller class)` folds). Every fold
+/// must leave both classes in its training and its test part.
+pub fn cv_folds(y: &[bool], groups: Option<&[usize]>, k: usize) -> Result<Folds> {
+    if k < 2 {
+        return Err(DecodeError::InvalidParameter {
+            name: "folds",
+            value: k.to_string(),
+            reason: "cross-validation needs at least 2 folds".into(),
+        });
+    }
+    let n_targets = y.iter().filter(|&&t| t).count();
+    let n_nontargets = y.len() - n_targets;
+    if n_targets < 2 || n_nontargets < 2 {
+        return Err(DecodeError::NeedBothClasses {
+            n_targets,
+            n_nontargets,
+        });
+    }
+    let folds = match groups {
+        Some(g) => {
+            if g.len() != y.len() {
+                return Err(DecodeError::LabelCount {
+                    n_samples: g.len(),
+                    n_labels: y.len(),
+                });
+            }
+            let mut order: Vec<usize> = Vec::new();
+            let index: Vec<usize> = g
+                .iter()
+                .map(|id| match order.iter().position(|o| o == id) {
+                    Some(p) => p,
+                    None => {
+                        order.push(*id);
+                        order.len() - 1
+                    }
+                })
+                .collect();
+            let n_groups = order.len();
+            let n_folds = k.min(n_groups);
+            if n_folds < 2 {
+                return Err(DecodeError::TooFewSamples {
+                    what: format!(
+                        "cross-validation kept by group needs at least 2 groups, got {n_groups}"
+                    ),
+                });
+            }
+            Folds {
+                fold_of: index.iter().map(|&gi| gi * n_folds / n_groups).collect(),
+                n_folds,
+                grouped: true,
+            }
+        }
+        None => {
+            let n_folds = k.min(n_targets).min(n_nontargets);
+            Folds {
+                fold_of: crate::svm::stratified_folds(y, n_folds)?,
+                n_folds,
+                grouped: false,
+            }
+        }
+    };
+    for f in 0..folds.n_folds {
+        let (tr, te) = folds.split(f);
+        for (part, idx) in [("training", &tr), ("test", &te)] {
+            let t = idx.iter().filter(|&&i| y[i]).count();
+            if t == 0 || t == idx.len() {
+                return Err(DecodeError::TooFewSamples {
+                    what: format!(
+                        "the {part} part of fold {} of {} has {t} targets among {} epochs: \
+                         it needs both classes",
+                        f + 1,
+                        folds.n_folds,
+                        idx.len()
+                    ),
+                });
+            }
+        }
+    }
+    Ok(folds)
+}
+
+/// Cross-validated scores of a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GridSearch {
+    /// Index of the candidate with the best mean AUC (the earliest on ties).
+    pub best: usize,
+    /// Mean epoch ROC-AUC over the folds, per candidate.
+    pub mean_auc: Vec<f64>,
+    /// Epoch ROC-AUC of each fold, per candidate.
+    pub fold_auc: Vec<Vec<f64>>,
+    pub n_folds: usize,
+    /// Whether folds kept groups together.
+    pub grouped: bool,
+}
+
+/// Scores each candidate by `k`-fold cross-validation ([`cv_folds`]) on `epochs`
+/// `(n_epochs, n_channels, n_times)` labelled `y`, groups optional; see the module doc.
+pub fn grid_search(
+    candidates: &[PipelineParams],
+    epochs: ArrayView3<f64>,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+) -> Result<GridSearch> {
+    grid_search_with(candidates, epochs, y, groups, k, &mut || {})
+}
+
+/// [`grid_search`], calling `on_fit` after each (candidate, fold) fit — for a progress bar.
+pub fn grid_search_with(
+    candidates: &[PipelineParams],
+    epochs: ArrayView3<f64>,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<GridSearch> {
+    if candidates.is_empty() {
+        return Err(DecodeError::InvalidParameter {
+            name: "candidates",
+            value: "[]".into(),
+            reason: "a grid search needs at least one candidate".into(),
+        });
+    }
+    if y.len() != epochs.dim().0 {
+        return Err(DecodeError::LabelCount {
+            n_samples: epochs.dim().0,
+            n_labels: y.len(),
+        });
+    }
+    let folds = cv_folds(y, groups, k)?;
+    let n = candidates.len();
+    let mut fold_auc = vec![vec![0.0; folds.n_folds]; n];
+    let mut done = vec![false; n];
+    for i in 0..n {
+        if done[i] {
+            continue;
+        }
+        let members: Vec<usize> = (i..n)
+            .filter(|&j| !done[j] && candidates[i].same_front(&candidates[j]))
+            .collect();
+        let shared = candidates[i].stateless_features(epochs).transpose()?;
+        for (f, (tr, te)) in (0..folds.n_folds).map(|f| folds.split(f)).enumerate() {
+            let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
+            let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
+            let (xtr, xte) = match &shared {
+                Some(x) => (x.select(Axis(0), &tr), x.select(Axis(0), &te)),
+                None => {
+                    let etr = epochs.select(Axis(0), &tr);
+                    let (front, xtr) = candidates[i].fit_front(etr.view(), &ytr)?;
+                    let xte = front.transform(epochs.select(Axis(0), &te).view())?;
+                    (xtr, xte)
+                }
+            };
+            for &j in &members {
+                let head = candidates[j].fit_head(xtr.clone(), &ytr)?;
+                let scores = head.decision_function(xte.view())?;
+                fold_auc[j][f] = roc_auc(&scores.to_vec(), &yte)?;
+                on_fit();
+            }
+        }
+        for &j in &members {
+            done[j] = true;
+        }
+    }
+    let mean_auc: Vec<f64> = fold_auc
+        .iter()
+        .map(|a| a.iter().sum::<f64>() / a.len() as f64)
+        .collect();
+    let best = (0..n).fold(0, |b, j| if mean_auc[j] > mean_auc[b] { j } else { b });
+    Ok(GridSearch {
+        best,
+        mean_auc,
+        fold_auc,
+        n_folds: folds.n_folds,
+        grouped: folds.grouped,
+    })
+}
+
+/// A candidate's cross-validated score, as reported and saved with a tuned model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    pub label: String,
+    /// Mean epoch ROC-AUC over the folds.
+    pub cv_auc: f64,
+    pub fold_auc: Vec<f64>,
+}
+
+/// How a pipeline's settings were chosen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TuningReport {
+    /// Label of the chosen candidate.
+    pub chosen: String,
+    /// Every candidate, in grid order.
+    pub candidates: Vec<CandidateScore>,
+    pub n_folds: usize,
+    /// Whether the folds kept groups (speller characters) together; otherwise they were
+    /// stratified by label.
+    pub grouped: bool,
+}
+
+/// Grid search over `candidates` ([`grid_search_with`]); returns the chosen settings and the
+/// report.
+pub fn tune(
+    candidates: &[Candidate],
+    epochs: ArrayView3<f64>,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<(PipelineParams, TuningReport)> {
+    let params: Vec<PipelineParams> = candidates.iter().map(|c| c.params.clone()).collect();
+    let g = grid_search_with(&params, epochs, y, groups, k, on_fit)?;
+    let report = TuningReport {
+        chosen: candidates[g.best].label.clone(),
+        candidates: candidates
+            .iter()
+            .zip(g.mean_auc.iter().zip(&g.fold_auc))
+            .map(|(c, (&m, f))| CandidateScore {
+                label: c.label.clone(),
+                cv_auc: m,
+                fold_auc: f.clone(),
+            })
+            .collect(),
+        n_folds: g.n_folds,
+        grouped: g.grouped,
+    };
+    Ok((params[g.best].clone(), report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::PRESETS;
+    use ndarray::Array3;
+
+    /// Synthetic epochs at 64 Hz: targets (every 6th) carry a bump at 300 ms; groups of 24.
+    fn synthetic(n_epochs: usize, seed: u64) -> (Array3<f64>, Vec<bool>, Vec<usize>) {
+        let (n_ch, n_t, sfreq) = (4, 64, 64.0);
+        let mut state = seed;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let y: Vec<bool> = (0..n_epochs).map(|i| i % 6 == 1).collect();
+        let x = Array3::from_shape_fn((n_epochs, n_ch, n_t), |(e, c, t)| {
+            let tt = t as f64 / sfreq;
+            let bump = if y[e] {
+                3.0 * (c as f64 + 1.0) * (-((tt - 0.3) / 0.05).powi(2)).exp()
+            } else {
+                0.0
+            };
+            bump + 4.0 * noise() + (2.0 * std::f64::consts::PI * 10.0 * tt + c as f64).sin()
+        });
+        let groups = (0..n_epochs).map(|i| i / 24).collect();
+        (x, y, groups)
+    }
+
+    #[test]
+    fn grouped_folds_keep_groups_whole_and_hold_both_classes() {
+        let (_, y, groups) = synthetic(24 * 7, 1);
+        let f = cv_folds(&y, Some(&groups), 5).unwrap();
+        assert!(f.grouped() && f.n_folds() == 5);
+        for g in 0..7 {
+            let folds: Vec<usize> = (0..y.len())
+                .filter(|&i| groups[i] == g)
+                .map(|i| f.fold_of()[i])
+                .collect();
+            assert!(folds.iter().all(|&x| x == folds[0]), "group {g} split");
+        }
+        // Contiguous runs of groups, every fold used.
+        let per_group: Vec<usize> = (0..7).map(|g| f.fold_of()[g * 24]).collect();
+        assert!(per_group.windows(2).all(|w| w[0] <= w[1]));
+        assert_eq!(per_group.last(), Some(&4));
+        // k is lowered to the number of groups.
+        let g3: Vec<usize> = (0..72).map(|i| i / 24).collect();
+        assert_eq!(cv_folds(&y[..72], Some(&g3), 5).unwrap().n_folds(), 3);
+        // One group cannot be cross-validated.
+        assert!(cv_folds(&y[..24], Some(&[0; 24]), 5).is_err());
+        // A fold without targets is refused with the reason.
+        let mut y2 = y.clone();
+        y2[..24].iter_mut().for_each(|t| *t = false);
+        let err = cv_folds(&y2, Some(&groups), 7).unwrap_err();
+        assert!(err.to_string().contains("both classes"), "{err}");
+    }
+
+    #[test]
+    fn stratified_folds_without_groups() {
+        let (_, y, _) = synthetic(60, 1);
+        let f = cv_folds(&y, None, 4).unwrap();
+        assert!(!f.grouped());
+        for k in 0..4 {
+            let (_, te) = f.split(k);
+            let t = te.iter().filter(|&&i| y[i]).count();
+            assert!((2..=3).contains(&t), "fold {k}: {t} targets");
+        }
+        // 10 targets: 20 folds are lowered to 10.
+        assert_eq!(cv_folds(&y, None, 20).unwrap().n_folds(), 10);
+        assert!(cv_folds(&y, None, 1).is_err());
+    }
+
+    #[test]
+    fn every_preset_has_a_grid_holding_its_defaults() {
+        for name in PRESETS {
+            let grid = preset_grid(name, 256.0).unwrap();
+            assert!(grid.len() >= 3, "{name}: {} candidates", grid.len());
+            let default = PipelineParams::preset(name, 256.0).unwrap();
+            assert!(
+                grid.iter().any(|c| c.params == default),
+                "{name}: the preset's own settings are a candidate"
+            );
+            let mut labels: Vec<&str> = grid.iter().map(|c| c.label.as_str()).collect();
+            labels.sort_unstable();
+            labels.dedup();
+            assert_eq!(labels.len(), grid.len(), "{name}: labels are distinct");
+        }
+        let lda = preset_grid("lda", 256.0).unwrap();
+        assert_eq!(lda[0].label, "bin 8 samples (31 ms)");
+        assert!(preset_grid("nope", 256.0).is_err());
+    }
+
+    #[test]
+    fn the_informative_candidate_wins() {
+        let (x, y, groups) = synthetic(24 * 6, 2);
+        let base = PipelineParams::preset("lda", 64.0).unwrap();
+        // Only the first sample of each channel: no sight of the 300 ms bump.
+        let mut blind = base.clone();
+        blind.features = FeatureParams::Amplitude(AmplitudeFeatures::decimate(64).unwrap());
+        let g = grid_search(&[blind, base], x.view(), &y, Some(&groups), 3).unwrap();
+        assert_eq!(g.best, 1, "{:?}", g.mean_auc);
+        assert!(
+            g.mean_auc[0] < 0.7 && g.mean_auc[1] > 0.9,
+            "{:?}",
+            g.mean_auc
+        );
+        assert_eq!(g.fold_auc[1].len(), 3);
+    }
+
+    /// Shared fronts and features computed once give the same scores as fitting each
+    /// candidate's whole pipeline on each fold's training part.
+    #[test]
+    fn shared_fits_equal_whole_pipeline_fits() {
+        let (x, y, groups) = synthetic(24 * 5, 3);
+        let mut cands: Vec<PipelineParams> = preset_grid("riemann", 64.0)
+            .unwrap()
+            .into_iter()
+            .filter(|c| c.label.starts_with("nfilter 2"))
+            .map(|c| c.params)
+            .collect();
+        cands.extend(
+            preset_grid("lda", 64.0)
+                .unwrap()
+                .into_iter()
+                .map(|c| c.params),
+        );
+        cands.push(PipelineParams::preset("mdm", 64.0).unwrap());
+        let mut fits = 0;
+        let g =
+            grid_search_with(&cands, x.view(), &y, Some(&groups), 3, &mut || fits += 1).unwrap();
+        assert_eq!(fits, cands.len() * 3);
+        let folds = cv_folds(&y, Some(&groups), 3).unwrap();
+        for (j, p) in cands.iter().enumerate() {
+            for f in 0..3 {
+                let (tr, te) = folds.split(f);
+                let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+                let yte: Vec<bool> = te.iter().map(|&i| y[i]).collect();
+                let m = p.fit(x.select(Axis(0), &tr).view(), &ytr).unwrap();
+                let s = m.decision_function(x.select(Axis(0), &te).view()).unwrap();
+                let auc = roc_auc(&s.to_vec(), &yte).unwrap();
+                assert_eq!(g.fold_auc[j][f], auc, "candidate {j}, fold {f}");
+            }
+        }
+    }
+
+    #[test]
+    fn tune_reports_every_candidate_and_returns_the_chosen_settings() {
+        let (x, y, groups) = synthetic(24 * 4, 4);
+        let grid = preset_grid("mdm", 64.0).unwrap();
+        let (chosen, report) = tune(&grid, x.view(), &y, Some(&groups), 4, &mut || {}).unwrap();
+        assert_eq!(report.candidates.len(), 3);
+        assert_eq!(report.n_folds, 4);
+        assert!(report.grouped);
+        let best = grid.iter().position(|c| c.label == report.chosen).unwrap();
+        assert_eq!(grid[best].params, chosen);
+        assert!(report
+            .candidates
+            .iter()
+            .all(|c| c.cv_auc <= report.candidates[best].cv_auc));
+        let back: TuningReport =
+            serde_json::from_str(&serde_json::to_string(&report).unwrap()).unwrap();
+        assert_eq!(back, report);
+    }
+}
