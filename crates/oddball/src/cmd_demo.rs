@@ -4,9 +4,10 @@
 //!
 //! Writes a report folder: `decisions.csv`, `summary.json`, `pen_trace.png`, `erp.png` (the
 //! calibration epochs), `model.json`, and for simulated subjects the raw session
-//! `session.dat` (BCI2000, float32) that `oddball evaluate --model model.json --test
-//! session.dat` re-evaluates to the same decisions. Every file depends only on the options
-//! (same seed, same bytes); wall-clock times are printed, never written.
+//! `session.dat` (BCI2000, float32; `session.easy` when the EEG came over NIC's TCP stream) that
+//! `oddball evaluate --model model.json --test session.dat` re-evaluates to the same decisions.
+//! In this process, every file depends only on the options (same seed, same bytes); wall-clock
+//! times are printed, never written.
 
 use std::fmt::Write as _;
 use std::fs;
@@ -53,7 +54,7 @@ pub struct SessionOptions {
     /// Most rounds per decision with dynamic stopping.
     #[arg(long, default_value_t = 5)]
     pub max_rounds: usize,
-    /// Pipeline preset: lda, riemann, paper, paper-svm, paper-knn.
+    /// Pipeline preset: lda, riemann, mdm, paper, paper-svm, paper-knn.
     #[arg(long, default_value = "lda")]
     pub pipeline: String,
     /// Calibration decisions per bulb (simulated subjects).
@@ -123,7 +124,8 @@ pub struct DemoArgs {
     pub commands: String,
     /// Where the EEG comes from: `sim` (the simulated subject in this process) or
     /// `nic:HOST:PORT` (a NIC TCP data stream, e.g. from `oddball simulate --nic HOST:PORT`, whose
-    /// panel port is PORT + 1). Over NIC the session is also saved as `session.easy`.
+    /// panel port is PORT + 1). Over NIC the session is saved as `session.easy` (NIC's format)
+    /// instead of `session.dat`.
     #[arg(long, default_value = "sim", value_name = "SOURCE")]
     pub source: String,
     #[command(flatten)]
