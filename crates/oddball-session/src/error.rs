@@ -23,6 +23,8 @@ pub enum SessionError {
     NicProtocol { offset: u64, reason: String },
     #[error("cannot connect to {addr}: {reason}")]
     Connect { addr: String, reason: String },
+    #[error("the stream from {addr} sent nothing for {seconds} s: stopped")]
+    StreamStalled { addr: String, seconds: f64 },
     #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]
     StreamLost { addr: String, attempts: usize },
     #[error(transparent)]

@@ -245,11 +245,16 @@ fn parse_ascii(f: &NicFormat, body: &[u8], offset: u64) -> Result<NicSample, Ses
     })
 }
 
-/// How a [`NicSource`] treats a dropped connection.
+/// How a [`NicSource`] treats a dropped or silent connection.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Reconnect {
+    /// Connection attempts after a drop.
     pub attempts: usize,
     pub delay: Duration,
+    /// A connection that sends nothing for this long is a stalled stream: the read stops with
+    /// [`SessionError::StreamStalled`] (a shorter pause just waits: the session and the arm,
+    /// which run on the stream's clock, hold until samples come again). `None`: wait forever.
+    pub stall_timeout: Option<Duration>,
 }
 
 impl Default for Reconnect {
@@ -257,6 +262,7 @@ impl Default for Reconnect {
         Self {
             attempts: 5,
             delay: Duration::from_millis(200),
+            stall_timeout: Some(Duration::from_secs(10)),
         }
     }
 }
@@ -288,6 +294,7 @@ impl NicSource {
         reconnect: Reconnect,
     ) -> Result<Self, SessionError> {
         let stream = connect_with_retries(addr, &reconnect)?;
+        stream.set_read_timeout(reconnect.stall_timeout).ok();
         Ok(Self {
             addr,
             stream,
@@ -315,6 +322,20 @@ impl NicSource {
                 Ok(0) => None,
                 Ok(k) => Some(k),
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    return Err(SessionError::StreamStalled {
+                        addr: self.addr.to_string(),
+                        seconds: self
+                            .reconnect
+                            .stall_timeout
+                            .map_or(0.0, |d| d.as_secs_f64()),
+                    });
+                }
                 Err(_) => None,
             };
             match got {

@@ -128,6 +128,7 @@ fn a_server_that_vanishes_is_a_clear_error_and_keeps_what_arrived() {
     let quick = Reconnect {
         attempts: 2,
         delay: std::time::Duration::from_millis(20),
+        ..Reconnect::default()
     };
     let mut src = NicSource::connect(addr, format, 500.0, quick).unwrap();
     let first = src.read(1000).unwrap();
@@ -169,4 +170,63 @@ fn timestamp_gaps_count_lost_samples() {
     assert_eq!(src.lost_samples, 10);
     assert_eq!(src.timestamp_regressions, 1);
     server.join().unwrap();
+}
+
+/// A stream that pauses for 2 s: with a longer stall timeout the read waits and resumes with
+/// every sample; with a shorter one it stops cleanly with `StreamStalled`.
+#[test]
+fn a_two_second_pause_waits_or_stops_cleanly() {
+    use std::io::Write;
+    use std::time::{Duration, Instant};
+    let format = NicFormat::starstim(NicMode::Binary);
+    let serve = |data: TcpListener| {
+        thread::spawn(move || {
+            let (mut c, _) = data.accept().unwrap();
+            for part in 0..2 {
+                let mut bytes = Vec::new();
+                for k in 0..500 {
+                    oddball_session::nic::encode(
+                        &format,
+                        &oddball_session::nic::NicSample {
+                            nv: vec![part * 1000 + k; 8],
+                            trigger: Some(0),
+                            timestamp_ms: Some(2 * i64::from(part * 500 + k)),
+                        },
+                        &mut bytes,
+                    );
+                }
+                if c.write_all(&bytes).is_err() {
+                    return;
+                }
+                if part == 0 {
+                    thread::sleep(Duration::from_secs(2));
+                }
+            }
+            thread::sleep(Duration::from_millis(200));
+        })
+    };
+    for (timeout_s, resumes) in [(4.0, true), (0.5, false)] {
+        let data = TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = data.local_addr().unwrap();
+        let server = serve(data);
+        let r = Reconnect {
+            stall_timeout: Some(Duration::from_secs_f64(timeout_s)),
+            ..Reconnect::default()
+        };
+        let mut src = NicSource::connect(addr, format, 500.0, r).unwrap();
+        let first = src.read(500).unwrap();
+        assert_eq!(first.len(), 500);
+        let t0 = Instant::now();
+        let rest = src.read(500);
+        if resumes {
+            let rest = rest.unwrap();
+            assert!(t0.elapsed() >= Duration::from_millis(1500));
+            assert_eq!(rest[0].nv[0], 1000);
+            assert_eq!(src.lost_samples, 0, "a pause is not a loss");
+        } else {
+            let err = rest.unwrap_err();
+            assert!(matches!(err, SessionError::StreamStalled { .. }), "{err}");
+        }
+        server.join().unwrap();
+    }
 }
