@@ -117,3 +117,50 @@ fn deciding_before_calibration_is_an_error() {
     let mut s = session(SubjectPreset::Easy, 1, FIXED);
     assert!(s.decide(Some(Command::Up)).is_err());
 }
+
+/// An amplifier whose true rate is 2 % above the nominal rate it reports.
+struct Fast(SimulatedSubject);
+
+impl oddball_session::engine::Subject for Fast {
+    fn sfreq(&self) -> f64 {
+        500.0
+    }
+    fn ch_names(&self) -> &[String] {
+        self.0.ch_names()
+    }
+    fn position(&self) -> u64 {
+        self.0.position()
+    }
+    fn show(
+        &mut self,
+        onset: u64,
+        _code: u32,
+        attended: bool,
+    ) -> Result<(), oddball_session::SessionError> {
+        self.0.flash(onset, attended)
+    }
+    fn render(&mut self, n: usize) -> Result<ndarray::Array2<f64>, oddball_session::SessionError> {
+        Ok(self.0.render(n))
+    }
+}
+
+#[test]
+fn a_sample_rate_two_percent_off_nominal_still_draws_the_g() {
+    let mut params = SubjectParams::preset(SubjectPreset::Typical).with_seed(4);
+    params.sfreq = 510.0;
+    let subject = Fast(params.build().unwrap());
+    let mut p = SessionParams::paper("lda");
+    p.seed = 4;
+    let mut s = Session::new(p, subject, None).unwrap();
+    let cal = s.calibrate().unwrap();
+    assert!(cal.cv_auc > 0.85, "{cal:?}");
+    let mut right = 0;
+    for &c in &Command::LETTER_G {
+        let t = s.decide(Some(c)).unwrap();
+        right += usize::from(t.decided() == Some(s.params().paradigm.code_of(c)));
+    }
+    assert!(
+        right >= 6,
+        "{right}/6 with a 510 Hz amplifier read as 500 Hz"
+    );
+}
