@@ -26,6 +26,8 @@ pub mod pipeline;
 pub mod riemann;
 pub mod scaler;
 pub mod svm;
+#[cfg(test)]
+mod testutil;
 pub mod tuning;
 pub mod wavelet;
 pub mod xdawn;

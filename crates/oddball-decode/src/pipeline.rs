@@ -853,27 +853,9 @@ impl Model {
 mod tests {
     use super::*;
 
-    /// Synthetic epochs: targets carry a positive bump at 300 ms on the later channels.
+    /// Synthetic epochs: targets (every 5th) carry a positive bump at 300 ms on the later channels.
     fn synthetic(n_epochs: usize, seed: u64) -> (Array3<f64>, Vec<bool>) {
-        let (n_ch, n_t, sfreq) = (4, 64, 64.0);
-        let mut state = seed;
-        let mut noise = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
-        let y: Vec<bool> = (0..n_epochs).map(|i| i % 5 == 0).collect();
-        let x = Array3::from_shape_fn((n_epochs, n_ch, n_t), |(e, c, t)| {
-            let tt = t as f64 / sfreq;
-            let bump = if y[e] {
-                4.0 * (c as f64 + 1.0) * (-((tt - 0.3) / 0.05).powi(2)).exp()
-            } else {
-                0.0
-            };
-            bump + 3.0 * noise() + (2.0 * std::f64::consts::PI * 10.0 * tt + c as f64).sin()
-        });
-        (x, y)
+        crate::testutil::synthetic_p300(n_epochs, seed, 5, 0, 4.0, 3.0)
     }
 
     #[test]
