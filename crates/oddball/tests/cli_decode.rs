@@ -59,19 +59,7 @@ fn speller_forward_split_spells_6mk_and_a_saved_model_scores_the_same() {
         model.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    let json2 = tmp.join("loaded.json");
-    let (ok, _, err) = oddball(&[
-        "evaluate",
-        "--model",
-        model.to_str().unwrap(),
-        "--test",
-        test.to_str().unwrap(),
-        "--json",
-        json2.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
-    let v2: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json2).unwrap()).unwrap();
+    let v2 = evaluate_saved_model(&model, &test, &tmp.join("loaded.json"));
     assert_eq!(field(&v2[0], "auc"), field(r, "auc"));
     assert_eq!(
         field(&v2[0], "speller_accuracy"),
@@ -122,6 +110,25 @@ fn riemann_on_the_oddball_split_and_cross_validation() {
 
 fn read_json(path: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// `oddball evaluate --model MODEL --test TEST --json JSON`, its JSON.
+fn evaluate_saved_model(
+    model: &std::path::Path,
+    test: &std::path::Path,
+    json: &std::path::Path,
+) -> serde_json::Value {
+    let (ok, _, err) = oddball(&[
+        "evaluate",
+        "--model",
+        model.to_str().unwrap(),
+        "--test",
+        test.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    read_json(json)
 }
 
 /// A copy of `src` written as float32 BCI2000, its target flags flipped when `flip` is set.
@@ -275,18 +282,7 @@ fn train_tune_saves_the_choice_and_evaluate_plots_accuracy_by_repetitions() {
         svg.lines().any(|l| l.trim() == "lda"),
         "one line per preset, in the legend"
     );
-    let json2 = tmp.join("loaded.json");
-    let (ok, _, err) = oddball(&[
-        "evaluate",
-        "--model",
-        model.to_str().unwrap(),
-        "--test",
-        test.to_str().unwrap(),
-        "--json",
-        json2.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
-    let l = read_json(&json2);
+    let l = evaluate_saved_model(&model, &test, &tmp.join("loaded.json"));
     assert_eq!(field(&l[0], "auc"), field(&e[0], "auc"));
     assert_eq!(field(&l[0], "tuning"), tuning);
 
