@@ -116,7 +116,7 @@ use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
 use crate::error::read_file;
-use crate::tempfile::TempFile;
+use crate::tempfile::{check_writable, TempFile};
 use crate::units::{split_number_unit, volt_factor_to_uv};
 use crate::{Details, Format, IoError, Recording};
 
@@ -1130,29 +1130,12 @@ pub fn write_easy(
     // Samples: finite and within int32 nV; the largest rounding is reported.
     let data = raw.data();
     let nv = |x: f64| (x * 1000.0).round();
-    let mut max_rounding = 0.0f64;
-    for (c, row) in data.rows().into_iter().enumerate() {
-        for (t, &x) in row.iter().enumerate() {
-            let reason = if !x.is_finite() {
-                Some("not a finite number")
-            } else if nv(x).abs() > f64::from(i32::MAX) {
-                Some("beyond ±2147483647 nV, the int32 range of .easy samples")
-            } else {
-                None
-            };
-            if let Some(reason) = reason {
-                return Err(IoError::UnwritableSample {
-                    path: path.to_path_buf(),
-                    channel: raw.ch_names()[c].clone(),
-                    channel_index: c,
-                    sample: t,
-                    value: x,
-                    reason,
-                });
-            }
-            max_rounding = max_rounding.max((nv(x) / 1000.0 - x).abs());
-        }
-    }
+    let max_rounding = check_writable(
+        path,
+        raw,
+        "beyond ±2147483647 nV, the int32 range of .easy samples",
+        |x| (nv(x).abs() <= f64::from(i32::MAX)).then(|| nv(x) / 1000.0),
+    )?;
 
     // Triggers: each event's code at its onset only (the later of two at one sample wins).
     let mut trig = vec![0u32; n_times];

@@ -1,8 +1,11 @@
-//! Writing files so that a failure never leaves a half-written file under the final name.
+//! What the writers share: a temporary file renamed into place (a failure never leaves a
+//! half-written file under the final name), and the check that every sample can be stored.
 
 use std::fs::{File, OpenOptions};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+use oddball_signal::Raw;
 
 use crate::IoError;
 
@@ -63,4 +66,40 @@ impl Drop for TempFile {
             let _ = std::fs::remove_file(&self.path);
         }
     }
+}
+
+/// Checks that every sample of `raw` survives a writer whose stored-and-read-back value is
+/// `round_trip(x)` (`None`: out of the format's range, said by `range_reason`). Returns the
+/// largest `|round_trip(x) − x|`; the first non-finite or out-of-range sample is an error naming
+/// its channel and sample.
+pub(crate) fn check_writable(
+    path: &Path,
+    raw: &Raw,
+    range_reason: &'static str,
+    round_trip: impl Fn(f64) -> Option<f64>,
+) -> Result<f64, IoError> {
+    let mut max_rounding = 0.0f64;
+    for (c, row) in raw.data().rows().into_iter().enumerate() {
+        for (t, &x) in row.iter().enumerate() {
+            let back = if x.is_finite() { round_trip(x) } else { None };
+            match back {
+                Some(b) => max_rounding = max_rounding.max((b - x).abs()),
+                None => {
+                    return Err(IoError::UnwritableSample {
+                        path: path.to_path_buf(),
+                        channel: raw.ch_names()[c].clone(),
+                        channel_index: c,
+                        sample: t,
+                        value: x,
+                        reason: if x.is_finite() {
+                            range_reason
+                        } else {
+                            "not a finite number"
+                        },
+                    })
+                }
+            }
+        }
+    }
+    Ok(max_rounding)
 }

@@ -33,7 +33,7 @@ use oddball_signal::{Events, Raw};
 
 use super::params::parse_parameter_line;
 use crate::error::StateProblem;
-use crate::tempfile::TempFile;
+use crate::tempfile::{check_writable, TempFile};
 use crate::IoError;
 
 /// One state (a BCI2000 state-vector variable): one value per sample.
@@ -253,29 +253,10 @@ pub fn write_bci2000(
 
     // Samples: finite and within float32; the largest rounding is reported.
     let data = raw.data();
-    let mut max_rounding = 0.0f64;
-    for (c, row) in data.rows().into_iter().enumerate() {
-        for (t, &x) in row.iter().enumerate() {
-            let reason = if !x.is_finite() {
-                Some("not a finite number")
-            } else if !(x as f32).is_finite() {
-                Some("beyond the float32 range")
-            } else {
-                None
-            };
-            if let Some(reason) = reason {
-                return Err(IoError::UnwritableSample {
-                    path: path.to_path_buf(),
-                    channel: raw.ch_names()[c].clone(),
-                    channel_index: c,
-                    sample: t,
-                    value: x,
-                    reason,
-                });
-            }
-            max_rounding = max_rounding.max((f64::from(x as f32) - x).abs());
-        }
-    }
+    let max_rounding = check_writable(path, raw, "beyond the float32 range", |x| {
+        let f = x as f32;
+        f.is_finite().then(|| f64::from(f))
+    })?;
 
     // Parameters.
     let extras = check_extra_parameters(path, &options.extra_parameters)?;
