@@ -159,7 +159,8 @@ pub fn read_csv_auto(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     parse_csv(&bytes, path, &CsvOptions::detect(&header))
 }
 
-fn csv_err(
+/// A text-file error (CSV, `.easy`, `.info`): file, line, column, field, expected, found.
+pub(crate) fn csv_err(
     path: &Path,
     line: usize,
     column: usize,

@@ -115,6 +115,7 @@ use ndarray::Array2;
 use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
+use crate::csv::csv_err;
 use crate::error::read_file;
 use crate::tempfile::{check_writable, TempFile};
 use crate::units::{split_number_unit, volt_factor_to_uv};
@@ -301,24 +302,6 @@ pub fn info_path_for(easy: &Path) -> PathBuf {
     easy.with_extension("info")
 }
 
-fn easy_err(
-    path: &Path,
-    line: usize,
-    column: usize,
-    field: impl Into<String>,
-    expected: impl Into<String>,
-    found: impl Into<String>,
-) -> IoError {
-    IoError::Csv {
-        path: path.to_path_buf(),
-        line,
-        column,
-        field: field.into(),
-        expected: expected.into(),
-        found: found.into(),
-    }
-}
-
 fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoError> {
     let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
     std::str::from_utf8(raw).map_err(|e| {
@@ -328,7 +311,7 @@ fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoE
             .filter(|&&b| b == b'\t')
             .count()
             + 1;
-        easy_err(
+        csv_err(
             path,
             line,
             col,
@@ -431,8 +414,7 @@ fn parse_info(bytes: &[u8], path: &Path) -> Result<ParsedInfo, IoError> {
             + (value_raw.chars().count() - value_raw.trim_start().chars().count());
         out.entries.push((key.to_string(), value.to_string()));
         let norm = normalize_key(key);
-        let bad =
-            |expected: &str| easy_err(path, line_no, value_col, key, expected, shorten(value));
+        let bad = |expected: &str| csv_err(path, line_no, value_col, key, expected, shorten(value));
         let count = || -> Result<usize, IoError> {
             value
                 .split_whitespace()
@@ -508,7 +490,7 @@ fn parse_info(bytes: &[u8], path: &Path) -> Result<ParsedInfo, IoError> {
                     continue;
                 };
                 if k == 0 {
-                    return Err(easy_err(
+                    return Err(csv_err(
                         path,
                         line_no,
                         1,
@@ -542,7 +524,7 @@ fn resolve_layout(
     let found = format!("{n_cols} cells");
     let fixed = |c: usize, why: String| {
         EasyLayout::for_columns(n_cols, c).ok_or_else(|| {
-            easy_err(
+            csv_err(
                 path,
                 line,
                 1,
@@ -574,7 +556,7 @@ fn resolve_layout(
                     accelerometer: acc,
                     add_sensor: add,
                 }),
-                None => Err(easy_err(
+                None => Err(csv_err(
                     path,
                     line,
                     1,
@@ -594,7 +576,7 @@ fn resolve_layout(
         .iter()
         .find_map(|&c| EasyLayout::for_columns(n_cols, c))
         .ok_or_else(|| {
-            easy_err(
+            csv_err(
                 path,
                 line,
                 1,
@@ -746,7 +728,7 @@ pub fn parse_easy(
             continue;
         }
         if is_last && !ends_with_newline && options.require_final_newline {
-            return Err(easy_err(
+            return Err(csv_err(
                 path,
                 line_no,
                 text.split('\t').count(),
@@ -785,7 +767,7 @@ pub fn parse_easy(
         for (j, cell) in text.split('\t').enumerate() {
             n_cells += 1;
             if j >= n_cols {
-                return Err(easy_err(
+                return Err(csv_err(
                     path,
                     line_no,
                     j + 1,
@@ -796,7 +778,7 @@ pub fn parse_easy(
             }
             let cell = cell.trim();
             let bad = |expected: &str| {
-                easy_err(
+                csv_err(
                     path,
                     line_no,
                     j + 1,
@@ -866,7 +848,7 @@ pub fn parse_easy(
             }
         }
         if n_cells < n_cols {
-            return Err(easy_err(
+            return Err(csv_err(
                 path,
                 line_no,
                 n_cells + 1,
@@ -877,7 +859,7 @@ pub fn parse_easy(
         }
     }
     let Some(layout) = layout else {
-        return Err(easy_err(
+        return Err(csv_err(
             path,
             1,
             1,
@@ -894,7 +876,7 @@ pub fn parse_easy(
 
     if let (true, Some((info, info_path))) = (options.check_record_count, info_ref) {
         if let Some(n) = info.n_records.filter(|n| n.value != n_times) {
-            return Err(easy_err(
+            return Err(csv_err(
                 path,
                 last_line + 1,
                 1,
@@ -923,7 +905,7 @@ pub fn parse_easy(
         let why = "(no EasyOptions::sfreq and no \"EEG sampling rate\" in a .info, so the rate \
                    comes from the timestamps)";
         return Err(match not_increasing {
-            Some((line, col, before, now)) => easy_err(
+            Some((line, col, before, now)) => csv_err(
                 path,
                 line,
                 col,
@@ -931,7 +913,7 @@ pub fn parse_easy(
                 format!("a timestamp after the previous line's {before} {why}"),
                 now.to_string(),
             ),
-            None => easy_err(
+            None => csv_err(
                 path,
                 last_line,
                 ts_col,
@@ -998,7 +980,7 @@ fn channel_names(
     if let Some((info, info_path)) = info {
         for (k, name, line) in &info.names {
             if *k > layout.n_eeg {
-                return Err(easy_err(
+                return Err(csv_err(
                     info_path,
                     *line,
                     1,
@@ -1093,12 +1075,8 @@ pub fn write_easy(
         path: path.to_path_buf(),
         what,
     };
+    crate::tempfile::check_not_empty(path, raw, ".easy")?;
     let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
-    if n_ch == 0 || n_times == 0 {
-        return Err(unsupported(format!(
-            "writing an empty recording ({n_ch} channels, {n_times} samples) to .easy"
-        )));
-    }
     for (c, name) in raw.ch_names().iter().enumerate() {
         if let Some(problem) = text_problem(name) {
             return Err(unsupported(format!(

@@ -864,12 +864,8 @@ pub fn write_edf_plus_with(
         path: path.to_path_buf(),
         what,
     };
+    crate::tempfile::check_not_empty(path, raw, "EDF+")?;
     let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
-    if n_ch == 0 || n_times == 0 {
-        return Err(unsupported(format!(
-            "writing an empty recording ({n_ch} channels, {n_times} samples)"
-        )));
-    }
     let sfreq = raw.sfreq();
     let (duration, spr) = (1..=60u32)
         .find_map(|d| {

@@ -103,3 +103,17 @@ pub(crate) fn check_writable(
     }
     Ok(max_rounding)
 }
+
+/// Refuses an empty recording (no channel or no sample): no format can be read back from it.
+pub(crate) fn check_not_empty(path: &Path, raw: &Raw, format: &str) -> Result<(), IoError> {
+    let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
+    if n_ch == 0 || n_times == 0 {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            what: format!(
+                "writing an empty recording ({n_ch} channels, {n_times} samples) to {format}"
+            ),
+        });
+    }
+    Ok(())
+}

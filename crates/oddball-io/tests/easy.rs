@@ -7,7 +7,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{fixture, golden, TempDir};
+use common::{fixture, golden, Rng, TempDir};
 use ndarray::Array2;
 use oddball_io::easy::{estimate_sfreq, info_path_for, parse_easy, timestamp_ms};
 use oddball_io::{
@@ -927,31 +927,15 @@ fn writer_refusals_name_channel_and_sample_and_leave_no_file() {
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
 }
 
-/// xorshift64*: seeded, so failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
-
 fn mutate(rng: &mut Rng, base: &[u8]) -> Vec<u8> {
     const BITS: &[&[u8]] = &[
+        b"0",
+        b"255",
+        b"99999999999",
         b"\t",
         b"\n",
         b"\r\n",
-        b"0",
         b"-",
-        b"255",
-        b"99999999999",
         b"1e308",
         b"nan",
         b"\xff",
@@ -960,29 +944,7 @@ fn mutate(rng: &mut Rng, base: &[u8]) -> Vec<u8> {
         b"Total number of channels: 3\n",
         b" ",
     ];
-    let mut b = base.to_vec();
-    for _ in 0..1 + rng.below(4) {
-        let len = b.len();
-        match rng.below(4) {
-            0 if len > 0 => {
-                let i = rng.below(len);
-                b[i] = rng.next() as u8;
-            }
-            1 => b.truncate(rng.below(len + 1)),
-            2 => {
-                let i = rng.below(len + 1);
-                let s = BITS[rng.below(BITS.len())];
-                b.splice(i..i, s.iter().copied());
-            }
-            _ if len > 0 => {
-                let i = rng.below(len);
-                let j = (i + 1 + rng.below(16)).min(len);
-                b.drain(i..j);
-            }
-            _ => {}
-        }
-    }
-    b
+    common::mutate(rng, base, BITS)
 }
 
 #[test]

@@ -7,27 +7,11 @@ mod common;
 
 use std::path::Path;
 
-use common::{fixture, TempDir};
+use common::{fixture, Rng, TempDir};
 use oddball_io::{
     bci2000::parse_bci2000, csv::parse_csv, edf::parse_edf, read, Bci2000Options, CsvOptions,
     EdfOptions, IoError,
 };
-
-/// xorshift64*: a small seeded generator, so failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 const INTERESTING: &[&[u8]] = &[
     b"0",
@@ -51,42 +35,7 @@ const INTERESTING: &[&[u8]] = &[
 ];
 
 fn mutate(rng: &mut Rng, base: &[u8]) -> Vec<u8> {
-    let mut b = base.to_vec();
-    for _ in 0..1 + rng.below(4) {
-        let len = b.len();
-        match rng.below(6) {
-            0 if len > 0 => {
-                let i = rng.below(len);
-                b[i] = rng.next() as u8;
-            }
-            1 => b.truncate(rng.below(len + 1)),
-            2 => {
-                let i = rng.below(len + 1);
-                let s = INTERESTING[rng.below(INTERESTING.len())];
-                b.splice(i..i, s.iter().copied());
-            }
-            3 if len > 0 => {
-                let i = rng.below(len);
-                let j = (i + 1 + rng.below(16)).min(len);
-                b.drain(i..j);
-            }
-            4 if len > 0 => {
-                // Overwrite a stretch with a digit string (hits numeric header fields).
-                let i = rng.below(len);
-                let s = INTERESTING[rng.below(3)];
-                for (k, &c) in s.iter().enumerate() {
-                    if i + k < len {
-                        b[i + k] = c;
-                    }
-                }
-            }
-            _ => {
-                let i = rng.below(len + 1);
-                b.insert(i, rng.next() as u8);
-            }
-        }
-    }
-    b
+    common::mutate(rng, base, INTERESTING)
 }
 
 /// A small BCI2000 v1.1 file: 2 int16 channels, 3 states, 40 samples, speller parameters.

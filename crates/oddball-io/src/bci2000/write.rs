@@ -176,12 +176,8 @@ pub fn write_bci2000(
         path: path.to_path_buf(),
         what,
     };
+    crate::tempfile::check_not_empty(path, raw, "BCI2000")?;
     let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
-    if n_ch == 0 || n_times == 0 {
-        return Err(unsupported(format!(
-            "writing an empty recording ({n_ch} channels, {n_times} samples) to BCI2000"
-        )));
-    }
     let sfreq = raw.sfreq();
     if sfreq > 1e6 {
         return Err(unsupported(format!(
