@@ -399,41 +399,18 @@ impl<S: Subject> Session<S> {
         }
         let y = &cal.labels;
         let sfreq = self.subject.sfreq();
-        let params = PipelineParams::preset(&self.params.pipeline, sfreq)?;
-        // Out-of-fold scores, folds by trial so overlapping epochs never straddle a split.
-        let k = self.params.cv_folds;
-        let mut oof = vec![0.0; n];
-        for fold in 0..k {
-            let test: Vec<usize> = (0..n)
-                .filter(|&i| (cal.trials[i] - first_trial) % k == fold)
-                .collect();
-            let train: Vec<usize> = (0..n)
-                .filter(|&i| (cal.trials[i] - first_trial) % k != fold)
-                .collect();
-            if test.is_empty() {
-                continue;
-            }
-            let xtr = x.select(Axis(0), &train);
-            let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
-            let m = params.fit(xtr.view(), &ytr)?;
-            let s = m.decision_function(x.select(Axis(0), &test).view())?;
-            for (&i, &v) in test.iter().zip(s.iter()) {
-                oof[i] = v;
-            }
-        }
-        let cv_auc = roc_auc(&oof, y)?;
-        let scores = ScoreModelParams::default().fit(&oof, y)?;
-        let pipeline = params.fit(x.view(), y)?;
-        let mut model = Model::new(
+        let groups: Vec<usize> = cal.trials.iter().map(|&t| t - first_trial).collect();
+        let (model, cv_auc, d_prime) = fit_session_model(
+            &self.params.pipeline,
             self.params.preprocess,
+            self.params.rule,
+            self.params.cv_folds,
             sfreq,
-            self.subject.ch_names().to_vec(),
-            pipeline,
-        );
-        model.decision = Some(DecisionModel {
-            scores,
-            rule: self.params.rule,
-        });
+            self.subject.ch_names(),
+            &x,
+            y,
+            &groups,
+        )?;
         self.model = Some(model);
         Ok(CalibrationReport {
             n_trials: self.trials.len() - first_trial,
@@ -441,7 +418,7 @@ impl<S: Subject> Session<S> {
             n_targets: y.iter().filter(|&&t| t).count(),
             n_rejected: cal.rejected,
             cv_auc,
-            d_prime: scores.d_prime(),
+            d_prime,
             fit_seconds: t0.elapsed().as_secs_f64(),
         })
     }
@@ -653,6 +630,50 @@ impl<S: Subject> Session<S> {
         }
         Ok(())
     }
+}
+
+/// Fits the preset on labelled epochs `x` and its score model on out-of-fold scores: fold `g % k`
+/// holds the epochs of group `g` (a trial or a spelled character), so overlapping epochs of one
+/// group never straddle a split. Returns the model with its decision rule, the cross-validated
+/// AUC and the scores' d′.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fit_session_model(
+    pipeline: &str,
+    preprocess: oddball_decode::pipeline::Preprocess,
+    rule: DecisionRule,
+    folds: usize,
+    sfreq: f64,
+    ch_names: &[String],
+    x: &Array3<f64>,
+    y: &[bool],
+    groups: &[usize],
+) -> Result<(Model, f64, f64), SessionError> {
+    let params = PipelineParams::preset(pipeline, sfreq)?;
+    let k = folds.max(2);
+    let mut oof = vec![0.0; y.len()];
+    for fold in 0..k {
+        let (test, train): (Vec<usize>, Vec<usize>) =
+            (0..y.len()).partition(|&i| groups[i] % k == fold);
+        if test.is_empty() || train.is_empty() {
+            continue;
+        }
+        let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
+        let m = params.fit(x.select(Axis(0), &train).view(), &ytr)?;
+        let s = m.decision_function(x.select(Axis(0), &test).view())?;
+        for (&i, &v) in test.iter().zip(s.iter()) {
+            oof[i] = v;
+        }
+    }
+    let cv_auc = roc_auc(&oof, y)?;
+    let scores = ScoreModelParams::default().fit(&oof, y)?;
+    let mut model = Model::new(
+        preprocess,
+        sfreq,
+        ch_names.to_vec(),
+        params.fit(x.view(), y)?,
+    );
+    model.decision = Some(DecisionModel { scores, rule });
+    Ok((model, cv_auc, scores.d_prime()))
 }
 
 /// The scores of a trial's complete rounds, in order, stopping at the first incomplete one:

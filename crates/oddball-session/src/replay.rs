@@ -18,16 +18,15 @@
 
 use ndarray::{Array3, Axis};
 use oddball_arm::Command;
-use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
-use oddball_decode::metrics::roc_auc;
-use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::decision::{DecisionModel, DecisionRule, Verdict};
+use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_io::Recording;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{CalibrationReport, TrialOutcome};
+use crate::engine::{fit_session_model, CalibrationReport, TrialOutcome};
 use crate::online::{Marker, OnlineEpocher, ReadyEpoch};
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
@@ -159,40 +158,18 @@ pub fn calibrate(
         x.index_axis_mut(Axis(0), j).assign(&e.data);
     }
     let y: Vec<bool> = kept.iter().map(|&(_, t)| t).collect();
-    let sfreq = rec.raw.sfreq();
-    let pp = PipelineParams::preset(&params.pipeline, sfreq)?;
-    let k = params.cv_folds.max(2);
-    let mut oof = vec![0.0; kept.len()];
-    for fold in 0..k {
-        let test: Vec<usize> = (0..kept.len())
-            .filter(|&j| chars[kept[j].0] % k == fold)
-            .collect();
-        let train: Vec<usize> = (0..kept.len())
-            .filter(|&j| chars[kept[j].0] % k != fold)
-            .collect();
-        if test.is_empty() || train.is_empty() {
-            continue;
-        }
-        let ytr: Vec<bool> = train.iter().map(|&j| y[j]).collect();
-        let m = pp.fit(x.select(Axis(0), &train).view(), &ytr)?;
-        let s = m.decision_function(x.select(Axis(0), &test).view())?;
-        for (&j, &v) in test.iter().zip(s.iter()) {
-            oof[j] = v;
-        }
-    }
-    let cv_auc = roc_auc(&oof, &y)?;
-    let scores = ScoreModelParams::default().fit(&oof, &y)?;
-    let pipeline = pp.fit(x.view(), &y)?;
-    let mut model = Model::new(
+    let groups: Vec<usize> = kept.iter().map(|&(i, _)| chars[i]).collect();
+    let (model, cv_auc, d_prime) = fit_session_model(
+        &params.pipeline,
         params.preprocess,
-        sfreq,
-        rec.raw.ch_names().to_vec(),
-        pipeline,
-    );
-    model.decision = Some(DecisionModel {
-        scores,
-        rule: params.rule,
-    });
+        params.rule,
+        params.cv_folds,
+        rec.raw.sfreq(),
+        rec.raw.ch_names(),
+        &x,
+        &y,
+        &groups,
+    )?;
     Ok((
         model,
         CalibrationReport {
@@ -201,7 +178,7 @@ pub fn calibrate(
             n_targets: y.iter().filter(|&&t| t).count(),
             n_rejected: rejected,
             cv_auc,
-            d_prime: scores.d_prime(),
+            d_prime,
             fit_seconds: t0.elapsed().as_secs_f64(),
         },
     ))

@@ -718,29 +718,22 @@ fn sibling_calibration(file: &Path) -> Result<PathBuf> {
 /// Corners: the pen after each executed command (at the next decision, or at the end)
 /// against where the executed commands put the reference.
 fn pen_report(run: &Run) -> PenReport {
-    let h = ArmConfig::default().reference.step_m;
+    let h = run.arm.settings().step_m;
     let mut expected = vec![run.pen_start];
     let mut measured = Vec::new();
     let mut errors = Vec::new();
-    let mut pending = false;
     let mut intended_ok = true;
     let end_pen = [run.arm.pen()[0], run.arm.pen()[1]];
     for (k, row) in run.rows.iter().enumerate() {
         let executed = row.decided.filter(|_| row.arm_refusal.is_none());
         intended_ok &= executed.is_some() && row.decided == row.intended;
         if let Some(c) = executed {
-            let last = *expected.last().expect("non-empty");
-            expected.push(c.apply(&last, h));
-            pending = true;
-        }
-        // The pen when the next decision comes (or at the end) shows where this one left it.
-        let next_pen = run.rows.get(k + 1).and_then(|r| r.pen_m).unwrap_or(end_pen);
-        if pending {
-            let target = *expected.last().expect("non-empty");
-            let p = Vector2::new(next_pen[0], next_pen[1]);
-            measured.push(next_pen);
-            errors.push((p - target).norm());
-            pending = false;
+            let target = c.apply(expected.last().expect("non-empty"), h);
+            expected.push(target);
+            // The pen when the next decision comes (or at the end) shows where this one left it.
+            let pen = run.rows.get(k + 1).and_then(|r| r.pen_m).unwrap_or(end_pen);
+            measured.push(pen);
+            errors.push((Vector2::new(pen[0], pen[1]) - target).norm());
         }
     }
     PenReport {
