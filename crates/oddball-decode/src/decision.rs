@@ -316,7 +316,15 @@ impl DecisionModel {
                     *e += self.scores.llr(*s);
                 }
             }
-            let v = self.rule.check(r + 1, &evidence);
+            let v = match self.rule.check(r + 1, &evidence) {
+                // No epoch scored at all (none drawn, all rejected): a choice would be blind.
+                Verdict::Choose { posterior, .. }
+                    if rounds[..=r].iter().flatten().all(Option::is_none) =>
+                {
+                    Verdict::Abstain { posterior }
+                }
+                v => v,
+            };
             if v != Verdict::Continue {
                 return (v, r + 1);
             }
@@ -328,6 +336,24 @@ impl DecisionModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_scored_epoch_abstains_under_any_rule() {
+        let scores = ScoreModelParams::default()
+            .fit(&[2.0, 4.0, 0.0, -2.0], &[true, true, false, false])
+            .unwrap();
+        for rule in [DecisionRule::Fixed { rounds: 2 }, DecisionRule::dynamic(2)] {
+            let m = DecisionModel { scores, rule };
+            let (v, used) = m.decide(&[vec![None; 4], vec![None; 4]]);
+            assert!(matches!(v, Verdict::Abstain { .. }), "{rule:?}: {v:?}");
+            assert_eq!(used, 2);
+            // One scored epoch is evidence: the fixed rule chooses.
+            let (v, _) = m.decide(&[vec![Some(4.0), None, None, None], vec![None; 4]]);
+            if matches!(rule, DecisionRule::Fixed { .. }) {
+                assert!(matches!(v, Verdict::Choose { index: 0, .. }), "{v:?}");
+            }
+        }
+    }
 
     #[test]
     fn score_model_matches_a_hand_computation() {

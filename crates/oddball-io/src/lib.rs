@@ -12,8 +12,9 @@
 //! | `.csv` | [`csv`]: time / channel / marker columns ([`CsvOptions::detect`]) | non-zero marker |
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
+//! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
-//! All four readers are written from scratch in this crate (each module says why). They share
+//! All five readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
@@ -27,6 +28,7 @@ mod error;
 pub mod speller;
 mod tempfile;
 mod units;
+pub mod xdf;
 
 use std::path::{Path, PathBuf};
 
@@ -49,6 +51,11 @@ pub use edf::{
 };
 pub use error::{IoError, StateProblem};
 pub use speller::Speller;
+pub use xdf::{
+    parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,
+    XdfFile, XdfFormat, XdfInfo, XdfMarker, XdfOptions, XdfStream, XdfStreamData, XdfStreamInfo,
+    XdfValues, XdfWriteOptions, XdfWriteSummary, XdfWriter,
+};
 
 /// The file format a recording was read from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -62,6 +69,8 @@ pub enum Format {
     BdfPlus,
     /// Neuroelectrics NIC `.easy` (with its `.info`).
     Easy,
+    /// Lab Streaming Layer XDF.
+    Xdf,
 }
 
 /// The format-specific contents of a recording.
@@ -71,6 +80,7 @@ pub enum Details {
     Csv(CsvInfo),
     Edf(Box<EdfInfo>),
     Easy(EasyInfo),
+    Xdf(Box<XdfInfo>),
 }
 
 /// A recording read from a file.
@@ -118,11 +128,20 @@ impl Recording {
             _ => None,
         }
     }
+
+    /// Streams, markers, timestamps and truncation, for XDF files.
+    pub fn xdf(&self) -> Option<&XdfInfo> {
+        match &self.details {
+            Details::Xdf(x) => Some(x),
+            _ => None,
+        }
+    }
 }
 
 /// Reads a recording, choosing the reader by extension (case-insensitive): `.dat` → BCI2000,
 /// `.csv` → CSV with [`CsvOptions::detect`], `.edf`/`.bdf` → EDF/BDF (the header decides which),
-/// `.easy` → NIC with the `.info` beside it ([`read_easy`]).
+/// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]); a file
+/// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
     let ext = path
@@ -134,6 +153,12 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         Some("csv") => read_csv_auto(path),
         Some("edf") | Some("bdf") => read_edf(path),
         Some("easy") => read_easy(path),
+        Some("xdf") => read_xdf(path),
+        Some("xdfz") => Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            what: "gzip-compressed XDF (.xdfz); decompress it to .xdf first".into(),
+        }),
+        _ if xdf::has_magic(path) => read_xdf(path),
         _ => Err(IoError::UnknownFormat {
             path: path.to_path_buf(),
             extension: path.extension().map(|e| e.to_string_lossy().into_owned()),

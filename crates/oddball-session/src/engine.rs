@@ -47,6 +47,46 @@ pub trait Subject {
     fn stream_health(&self) -> Option<String> {
         None
     }
+    /// Samples ahead of the stream at which flashes are announced with [`Subject::show`]: a
+    /// live panel needs its schedule before it draws (0: when the stream reaches the onset's
+    /// chunk).
+    fn lead(&self) -> u64 {
+        0
+    }
+    /// Flashes whose real onset has been measured since the last call (a panel stamps the frame
+    /// that drew each one). The engine moves their markers there before their epochs complete;
+    /// a flash reported as never drawn loses its epoch. Simulated subjects draw on schedule.
+    fn drawn(&mut self) -> Vec<Drawn> {
+        Vec::new()
+    }
+    /// A trial begins at sample `start` (its countdown); the person is cued to attend
+    /// `intended` (`None`: nothing).
+    fn trial_started(
+        &mut self,
+        _start: u64,
+        _phase: Phase,
+        _intended: Option<u32>,
+    ) -> Result<(), SessionError> {
+        Ok(())
+    }
+    /// A trial ended (a calibration trial's last epoch arrived, or an online decision was made
+    /// and its command issued). Flashes announced for it but not yet drawn are void.
+    fn trial_ended(&mut self, _trial: &TrialRecord) -> Result<(), SessionError> {
+        Ok(())
+    }
+    /// After every chunk while the arm runs: its state at sample `position`.
+    fn arm_state(&mut self, _position: u64, _arm: &ArmSim) -> Result<(), SessionError> {
+        Ok(())
+    }
+}
+
+/// A flash's measured onset: the one announced at sample `planned` with stimulus `code` was
+/// drawn at sample `onset` (`None`: never drawn).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Drawn {
+    pub planned: u64,
+    pub code: u32,
+    pub onset: Option<u64>,
 }
 
 impl Subject for crate::subject::SimulatedSubject {
@@ -331,6 +371,10 @@ impl<S: Subject> Session<S> {
         &self.subject
     }
 
+    pub fn subject_mut(&mut self) -> &mut S {
+        &mut self.subject
+    }
+
     pub fn arm(&self) -> Option<&ArmSim> {
         self.arm.as_ref()
     }
@@ -474,9 +518,13 @@ impl<S: Subject> Session<S> {
         for (r, row) in self.raw.iter_mut().zip(data.rows()) {
             r.extend(row.iter());
         }
+        for d in self.subject.drawn() {
+            self.retime(d)?;
+        }
         let ready = self.epocher.push_samples(data.view())?;
         if let (Some(arm), true) = (&mut self.arm, self.arm_running) {
             arm.run_for(n as f64 / self.subject.sfreq())?;
+            self.subject.arm_state(self.subject.position(), arm)?;
         }
         if let Some((t0, p0)) = self.realtime {
             let due = (self.subject.position() - p0) as f64 / self.subject.sfreq();
@@ -510,6 +558,31 @@ impl<S: Subject> Session<S> {
         Ok(())
     }
 
+    /// Moves a flash's marker to its measured onset, or voids its epoch when it was never drawn.
+    fn retime(&mut self, d: Drawn) -> Result<(), SessionError> {
+        let Some(k) = self
+            .flashes
+            .iter()
+            .rposition(|f| f.onset == d.planned && f.code == d.code && f.accepted.is_none())
+        else {
+            return Ok(());
+        };
+        match d.onset {
+            Some(onset) if onset != d.planned => {
+                if self.epocher.retime(k, onset)? {
+                    self.flashes[k].onset = onset;
+                }
+            }
+            Some(_) => {}
+            None => {
+                if self.epocher.cancel(k) {
+                    self.flashes[k].accepted = Some(false);
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Runs one trial to its end; returns its index.
     fn run_trial(&mut self, phase: Phase, intended: Option<u32>) -> Result<usize, SessionError> {
         let p = self.params.paradigm;
@@ -533,6 +606,7 @@ impl<S: Subject> Session<S> {
             arm_refusal: None,
             pen_m: None,
         });
+        self.subject.trial_started(start, phase, intended)?;
         let planned: Vec<(u64, u32, usize)> = schedule
             .flashes
             .iter()
@@ -542,7 +616,7 @@ impl<S: Subject> Session<S> {
         let mut next = 0;
         loop {
             let pos = self.subject.position();
-            let end = pos + self.params.chunk as u64;
+            let end = pos + self.params.chunk as u64 + self.subject.lead();
             while next < planned.len() && planned[next].0 < end {
                 let (onset, code, round) = planned[next];
                 let attended = intended == Some(code);
@@ -588,6 +662,7 @@ impl<S: Subject> Session<S> {
             }
         }
         self.trials[trial].end = self.subject.position();
+        self.subject.trial_ended(&self.trials[trial])?;
         Ok(trial)
     }
 

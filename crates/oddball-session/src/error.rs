@@ -27,6 +27,8 @@ pub enum SessionError {
     StreamStalled { addr: String, seconds: f64 },
     #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]
     StreamLost { addr: String, attempts: usize },
+    #[error("live source: {0}")]
+    Source(String),
     #[error(transparent)]
     Signal(#[from] oddball_signal::SignalError),
     #[error(transparent)]

@@ -143,6 +143,42 @@ impl OnlineEpocher {
         Ok(true)
     }
 
+    /// Moves the waiting marker tagged `tag` to `onset` (a flash drawn later or earlier than
+    /// planned). `Ok(false)` when no marker with that tag waits; refused like
+    /// [`OnlineEpocher::push_marker`] when its epoch would start before the buffer.
+    pub fn retime(&mut self, tag: usize, onset: u64) -> Result<bool, SessionError> {
+        let Some(i) = self.pending.iter().position(|m| m.tag == tag) else {
+            return Ok(false);
+        };
+        if (onset as i64 + self.first) < self.buf_start as i64 {
+            return Err(SessionError::MarkerTooLate {
+                onset,
+                oldest_kept: self.buf_start,
+            });
+        }
+        let mut m = self.pending.remove(i).expect("index found");
+        m.onset = onset;
+        let at = self
+            .pending
+            .iter()
+            .position(|p| p.onset > onset)
+            .unwrap_or(self.pending.len());
+        self.pending.insert(at, m);
+        Ok(true)
+    }
+
+    /// Drops the waiting marker tagged `tag` (a flash that was never drawn); `false` when none
+    /// waits.
+    pub fn cancel(&mut self, tag: usize) -> bool {
+        match self.pending.iter().position(|m| m.tag == tag) {
+            Some(i) => {
+                self.pending.remove(i);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// Filters a chunk `(n_channels, n)` of raw µV and returns the epochs it completes, in onset
     /// order.
     pub fn push_samples(

@@ -11,6 +11,7 @@ mod cmd_arm;
 mod cmd_decode;
 mod cmd_demo;
 mod cmd_inspect;
+mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
 mod plot;
@@ -32,6 +33,8 @@ enum Command {
     Demo(cmd_demo::DemoArgs),
     /// Tasks: steer the pen to targets (track) or draw text (draw), with study metrics.
     Task(cmd_task::TaskArgs),
+    /// A live session: EEG from a live stream, the stimulus panel in a browser, recorded as it runs.
+    Online(Box<cmd_online::OnlineArgs>),
     /// Serve the simulated subject as a live amplifier stream (NIC's TCP protocol).
     Simulate(cmd_simulate::SimulateArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
@@ -49,6 +52,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Demo(args) => cmd_demo::run(&args),
         Command::Task(args) => cmd_task::run(&args),
+        Command::Online(args) => cmd_online::run(&args),
         Command::Simulate(args) => cmd_simulate::run(&args),
         Command::Inspect(args) => cmd_inspect::run(&args),
         Command::Train(args) => cmd_decode::run_train(&args),

@@ -1,0 +1,26 @@
+use thiserror::Error;
+
+/// Errors of live operation.
+#[derive(Debug, Error)]
+pub enum LiveError {
+    #[error("invalid {name} = {value}: {reason}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        reason: String,
+    },
+    #[error("no LSL stream matching {query} within {timeout_s} s")]
+    StreamNotFound { query: String, timeout_s: f64 },
+    #[error("the stream {name} sent nothing for {seconds} s: stopped")]
+    StreamStalled { name: String, seconds: f64 },
+    #[error("cannot serve the panel on {addr}: {reason}")]
+    Bind { addr: String, reason: String },
+    #[error("the stream {name} is gone (its outlet closed and cannot be recovered)")]
+    StreamLost { name: String },
+    #[error("LSL: {0}")]
+    Lsl(String),
+    #[error(transparent)]
+    Session(#[from] oddball_session::SessionError),
+    #[error(transparent)]
+    Io(#[from] oddball_io::IoError),
+}

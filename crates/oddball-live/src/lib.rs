@@ -1,0 +1,18 @@
+//! Live operation of the oddball BCI: a session against a live EEG stream with a stimulus panel
+//! a person looks at, recorded to disk as it runs.
+//!
+//! * [`panel`]: the stimulus panel, a web page served by the binary, live over a WebSocket.
+//! * [`live`]: the live session's subject: a live EEG source, the panel, the marker stream and
+//!   the recording on one clock; the simulated subject as a live source.
+//! * [`record`]: the recording, XDF flushed per block.
+//! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
+//!   decisions out) and the simulated subject as a live LSL amplifier.
+
+mod error;
+pub mod live;
+#[cfg(feature = "lsl")]
+pub mod lsl;
+pub mod panel;
+pub mod record;
+
+pub use error::LiveError;

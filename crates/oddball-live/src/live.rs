@@ -1,0 +1,575 @@
+//! A live session's [`Subject`]: a live EEG source, the panel a person looks at, the marker
+//! stream, and the recording, on one clock.
+//!
+//! The session engine announces each flash [`Subject::lead`] ahead (half a second) so the page
+//! has it before it must draw it. The page stamps the frame that drew it; that stamp, mapped to
+//! the EEG's sample clock, becomes the flash's marker (and is sent on the marker stream and
+//! recorded). A flash the page never drew within [`UNDRAWN_AFTER_MS`] of its planned onset (no
+//! page, a page that disconnected or stalled) loses its epoch: a decision never rests on
+//! flashes nobody saw, and with none at all the session abstains and the arm holds still.
+//! Without a panel ([`Stamping::Schedule`]) flashes count as drawn on schedule.
+
+use std::time::{Duration, Instant};
+
+use ndarray::Array2;
+use oddball_arm::ArmSim;
+use oddball_session::engine::{Drawn, Phase, Subject, TrialOutcome, TrialRecord};
+use oddball_session::paradigm::FourBulbParams;
+use oddball_session::{SessionError, SimulatedSubject};
+
+use crate::panel::{Clock, DrawnReport, PanelServer, ServerMsg};
+use crate::record::Recorder;
+use crate::LiveError;
+
+/// A flash not stamped by the page this long after its planned onset was not drawn.
+pub const UNDRAWN_AFTER_MS: f64 = 200.0;
+/// How far ahead flashes are announced to the page, seconds.
+pub const ANNOUNCE_AHEAD_S: f64 = 0.5;
+
+/// A live EEG stream.
+pub trait EegSource: Send {
+    fn sfreq(&self) -> f64;
+    fn ch_names(&self) -> &[String];
+    /// Blocks until `n` more samples can be taken (errors when the stream is gone or stalls).
+    fn wait(&mut self, n: usize) -> Result<(), LiveError>;
+    /// The next `n` samples `(n_channels, n)`, µV (after [`EegSource::wait`]).
+    fn take(&mut self, n: usize) -> Result<Array2<f64>, LiveError>;
+    /// Session-clock time (ms) of sample `i` (extrapolated at the nominal rate beyond the
+    /// samples received).
+    fn time_of(&self, sample: u64) -> f64;
+    /// The person saw a flash at sample `onset` (a simulated source renders the response; a
+    /// real one ignores it). `false` when it came too late to be rendered.
+    fn saw(&mut self, _onset: u64, _attended: bool) -> bool {
+        true
+    }
+    /// Samples lost, reconnections, stalls; `None` for simulated sources.
+    fn health(&self) -> Option<String> {
+        None
+    }
+}
+
+/// The nearest sample to session-clock time `ms` given `source`'s clock.
+pub fn sample_at(source: &dyn EegSource, ms: f64) -> u64 {
+    let t0 = source.time_of(0);
+    (((ms - t0) * source.sfreq() / 1e3).round()).max(0.0) as u64
+}
+
+/// Where the markers of flashes, cues and decisions go besides the recording (an LSL outlet).
+pub trait MarkerSink: Send {
+    /// `text` happened at session-clock time `ms`.
+    fn marker(&mut self, text: &str, ms: f64);
+}
+
+/// The simulated subject as a live source, paced by the wall clock: sample `i` is acquired at
+/// `start_ms + i / sfreq` and delivered `latency_ms` later (an amplifier's buffering), which is
+/// what lets a flash stamped by the page reach the simulated brain before its samples render.
+#[derive(Debug)]
+pub struct SimSource {
+    sim: SimulatedSubject,
+    clock: Clock,
+    start_ms: f64,
+    latency_ms: f64,
+    paced: bool,
+    /// Samples that arrived too late to carry their flash's response.
+    pub late_flashes: u64,
+}
+
+impl SimSource {
+    pub fn new(sim: SimulatedSubject, clock: Clock, latency_ms: f64) -> Self {
+        Self {
+            start_ms: clock.now_ms(),
+            sim,
+            clock,
+            latency_ms,
+            paced: true,
+            late_flashes: 0,
+        }
+    }
+
+    /// As fast as it can (tests, and replaying a session's timing without waiting).
+    pub fn unpaced(sim: SimulatedSubject, clock: Clock) -> Self {
+        Self {
+            paced: false,
+            ..Self::new(sim, clock, 0.0)
+        }
+    }
+}
+
+impl EegSource for SimSource {
+    fn sfreq(&self) -> f64 {
+        self.sim.sfreq()
+    }
+    fn ch_names(&self) -> &[String] {
+        self.sim.ch_names()
+    }
+    fn wait(&mut self, n: usize) -> Result<(), LiveError> {
+        if !self.paced {
+            return Ok(());
+        }
+        let due = self.time_of(self.sim.position() + n as u64) + self.latency_ms;
+        let at = self.clock.instant(due);
+        let now = Instant::now();
+        if at > now {
+            std::thread::sleep(at - now);
+        }
+        Ok(())
+    }
+    fn take(&mut self, n: usize) -> Result<Array2<f64>, LiveError> {
+        Ok(self.sim.render(n))
+    }
+    fn time_of(&self, sample: u64) -> f64 {
+        self.start_ms + sample as f64 * 1e3 / self.sim.sfreq()
+    }
+    fn saw(&mut self, onset: u64, attended: bool) -> bool {
+        if onset < self.sim.position() || self.sim.flash(onset, attended).is_err() {
+            self.late_flashes += 1;
+            return false;
+        }
+        true
+    }
+}
+
+/// How flash onsets are known.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stamping {
+    /// The page stamps each drawn flash.
+    Panel,
+    /// No page: flashes count as drawn on schedule.
+    Schedule,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Announced {
+    id: u64,
+    planned: u64,
+    code: u32,
+    attended: bool,
+    at_ms: f64,
+}
+
+/// Flash timing as measured: on-times and onset errors (ms), and the flashes lost.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FlashTiming {
+    pub on_ms: Vec<f64>,
+    /// Drawn onset − planned onset.
+    pub onset_error_ms: Vec<f64>,
+    /// Stamp arrival − drawn onset (page → server delay of the on report).
+    pub report_delay_ms: Vec<f64>,
+    pub undrawn: usize,
+    /// Stamps that came after their flash had been declared undrawn.
+    pub late_stamps: usize,
+}
+
+/// Summary statistics of a list of numbers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Summary {
+    pub n: usize,
+    pub mean: f64,
+    pub sd: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Summary {
+    pub fn of(x: &[f64]) -> Option<Self> {
+        if x.is_empty() {
+            return None;
+        }
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+        Some(Self {
+            n: x.len(),
+            mean,
+            sd,
+            min: x.iter().copied().fold(f64::INFINITY, f64::min),
+            max: x.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        })
+    }
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:.2} ± {:.2} ms [{:.2}, {:.2}], n = {}",
+            self.mean, self.sd, self.min, self.max, self.n
+        )
+    }
+}
+
+impl FlashTiming {
+    pub fn report(&self) -> String {
+        let s = |x: &[f64]| Summary::of(x).map_or("–".to_string(), |s| s.to_string());
+        format!(
+            "flash on-time {}\nonset − schedule {}\nstamp delay {}\nundrawn {}, late stamps {}",
+            s(&self.on_ms),
+            s(&self.onset_error_ms),
+            s(&self.report_delay_ms),
+            self.undrawn,
+            self.late_stamps
+        )
+    }
+}
+
+/// The live [`Subject`].
+pub struct LiveSubject<S: EegSource> {
+    source: S,
+    panel: Option<PanelServer>,
+    stamping: Stamping,
+    markers: Option<Box<dyn MarkerSink>>,
+    recorder: Option<Recorder>,
+    paradigm: FourBulbParams,
+    clock: Clock,
+    position: u64,
+    n_trials: usize,
+    announced: Vec<Announced>,
+    /// Flashes on screen: id and on frame (ms).
+    lit: Vec<(u64, f64)>,
+    next_id: u64,
+    drawn: Vec<Drawn>,
+    pub timing: FlashTiming,
+    /// When the last block of samples was handed to the engine.
+    last_block: Instant,
+    /// Processing latency per online decision: from the block that completed it to the command
+    /// (the trial's end), ms.
+    pub decision_latency_ms: Vec<f64>,
+    last_arm_ms: f64,
+    error: Option<LiveError>,
+}
+
+impl<S: EegSource> std::fmt::Debug for LiveSubject<S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LiveSubject")
+            .field("position", &self.position)
+            .field("stamping", &self.stamping)
+            .field("panel", &self.panel)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<S: EegSource> LiveSubject<S> {
+    pub fn new(source: S, paradigm: FourBulbParams, clock: Clock) -> Self {
+        Self {
+            source,
+            panel: None,
+            stamping: Stamping::Schedule,
+            markers: None,
+            recorder: None,
+            paradigm,
+            clock,
+            position: 0,
+            n_trials: 0,
+            announced: Vec::new(),
+            lit: Vec::new(),
+            next_id: 1,
+            drawn: Vec::new(),
+            timing: FlashTiming::default(),
+            last_block: Instant::now(),
+            decision_latency_ms: Vec::new(),
+            last_arm_ms: f64::NEG_INFINITY,
+            error: None,
+        }
+    }
+
+    /// Flashes are drawn (and stamped) by this panel's page.
+    pub fn with_panel(mut self, panel: PanelServer) -> Self {
+        self.panel = Some(panel);
+        self.stamping = Stamping::Panel;
+        self
+    }
+
+    pub fn with_markers(mut self, sink: Box<dyn MarkerSink>) -> Self {
+        self.markers = Some(sink);
+        self
+    }
+
+    pub fn with_recorder(mut self, recorder: Recorder) -> Self {
+        self.recorder = Some(recorder);
+        self
+    }
+
+    pub fn source(&self) -> &S {
+        &self.source
+    }
+    pub fn panel(&self) -> Option<&PanelServer> {
+        self.panel.as_ref()
+    }
+    pub fn clock(&self) -> Clock {
+        self.clock
+    }
+
+    /// Closes the recording (footers written) and returns the panel, if any.
+    pub fn finish(mut self) -> Result<Option<PanelServer>, LiveError> {
+        if let Some(r) = self.recorder.take() {
+            r.finish()?;
+        }
+        Ok(self.panel.take())
+    }
+
+    fn marker(&mut self, text: &str, ms: f64) -> Result<(), LiveError> {
+        if let Some(m) = &mut self.markers {
+            m.marker(text, ms);
+        }
+        if let Some(r) = &mut self.recorder {
+            r.marker(text, ms)?;
+        }
+        Ok(())
+    }
+
+    /// A flash seen at sample `onset`: the simulated brain, the marker stream, the recording.
+    fn seen(&mut self, a: Announced, onset: u64, on_ms: f64) -> Result<(), LiveError> {
+        self.source.saw(onset, a.attended);
+        self.marker(&format!("flash {}", a.code), on_ms)?;
+        self.drawn.push(Drawn {
+            planned: a.planned,
+            code: a.code,
+            onset: Some(onset),
+        });
+        Ok(())
+    }
+
+    /// Takes the page's stamps; declares flashes past their deadline undrawn.
+    fn collect_stamps(&mut self) -> Result<(), LiveError> {
+        let Some(panel) = &self.panel else {
+            return Ok(());
+        };
+        let reports = panel.take_drawn();
+        for r in reports {
+            match r {
+                DrawnReport::On {
+                    id,
+                    on_ms,
+                    received_ms,
+                    ..
+                } => {
+                    let Some(k) = self.announced.iter().position(|a| a.id == id) else {
+                        self.timing.late_stamps += 1;
+                        continue;
+                    };
+                    let a = self.announced.remove(k);
+                    self.lit.push((id, on_ms));
+                    self.timing.onset_error_ms.push(on_ms - a.at_ms);
+                    self.timing.report_delay_ms.push(received_ms - on_ms);
+                    let onset = sample_at(&self.source, on_ms);
+                    self.seen(a, onset, on_ms)?;
+                }
+                DrawnReport::Off { id, off_ms } => {
+                    if let Some(k) = self.lit.iter().position(|&(i, _)| i == id) {
+                        let (_, on_ms) = self.lit.swap_remove(k);
+                        self.timing.on_ms.push(off_ms - on_ms);
+                    }
+                }
+            }
+        }
+        // Flashes on screen whose off frame never came (a page that went away) are forgotten.
+        if self.lit.len() > 64 {
+            self.lit.drain(..32);
+        }
+        let now = self.clock.now_ms();
+        let (gone, kept): (Vec<Announced>, Vec<Announced>) = self
+            .announced
+            .iter()
+            .partition(|a| now > a.at_ms + UNDRAWN_AFTER_MS);
+        self.announced = kept;
+        for a in gone {
+            self.timing.undrawn += 1;
+            self.drawn.push(Drawn {
+                planned: a.planned,
+                code: a.code,
+                onset: None,
+            });
+        }
+        Ok(())
+    }
+
+    fn status(&self) -> String {
+        let mut s = self.timing.report();
+        if let Some(h) = self.source.health() {
+            s.push('\n');
+            s.push_str(&h);
+        }
+        if let Some(l) = Summary::of(&self.decision_latency_ms) {
+            s.push_str(&format!("\ndecision latency {l}"));
+        }
+        s
+    }
+
+    /// Keeps a live error for [`LiveSubject::take_error`]; the engine gets its text.
+    fn lift<T>(&mut self, r: Result<T, LiveError>) -> Result<T, SessionError> {
+        r.map_err(|e| {
+            let text = e.to_string();
+            self.error = Some(e);
+            SessionError::Source(text)
+        })
+    }
+
+    /// The live error behind the last failed call, if any (the engine only sees its text).
+    pub fn take_error(&mut self) -> Option<LiveError> {
+        self.error.take()
+    }
+}
+
+impl<S: EegSource> Subject for LiveSubject<S> {
+    fn sfreq(&self) -> f64 {
+        self.source.sfreq()
+    }
+    fn ch_names(&self) -> &[String] {
+        self.source.ch_names()
+    }
+    fn position(&self) -> u64 {
+        self.position
+    }
+    fn lead(&self) -> u64 {
+        match self.stamping {
+            Stamping::Panel => (ANNOUNCE_AHEAD_S * self.source.sfreq()).round() as u64,
+            Stamping::Schedule => 0,
+        }
+    }
+    fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError> {
+        let a = Announced {
+            id: self.next_id,
+            planned: onset,
+            code,
+            attended,
+            at_ms: self.source.time_of(onset),
+        };
+        self.next_id += 1;
+        match (&self.panel, self.stamping) {
+            (Some(panel), Stamping::Panel) => {
+                panel.send(&ServerMsg::Flash {
+                    id: a.id,
+                    code,
+                    at_ms: a.at_ms,
+                    dur_ms: self.paradigm.flash_s * 1e3,
+                });
+                self.announced.push(a);
+                Ok(())
+            }
+            _ => {
+                let r = self.seen(a, onset, a.at_ms);
+                self.lift(r)
+            }
+        }
+    }
+    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        let r = self.source.wait(n);
+        self.lift(r)?;
+        let r = self.collect_stamps();
+        self.lift(r)?;
+        let r = self.source.take(n);
+        let data = self.lift(r)?;
+        if let Some(rec) = &mut self.recorder {
+            let t0 = self.source.time_of(self.position);
+            let r = rec.eeg(t0, self.source.sfreq(), data.view());
+            self.lift(r)?;
+        }
+        self.position += n as u64;
+        self.last_block = Instant::now();
+        Ok(data)
+    }
+    fn drawn(&mut self) -> Vec<Drawn> {
+        std::mem::take(&mut self.drawn)
+    }
+    fn stream_health(&self) -> Option<String> {
+        self.source.health()
+    }
+    fn trial_started(
+        &mut self,
+        start: u64,
+        phase: Phase,
+        intended: Option<u32>,
+    ) -> Result<(), SessionError> {
+        let at_ms = self.source.time_of(start);
+        let trial = self.n_trials;
+        self.n_trials += 1;
+        if let Some(p) = &self.panel {
+            p.send(&ServerMsg::Trial {
+                trial,
+                phase: match phase {
+                    Phase::Calibration => "calibration".into(),
+                    Phase::Online => "online".into(),
+                },
+                cue: intended,
+                at_ms,
+                countdown_s: self.paradigm.countdown_s,
+            });
+        }
+        let r = self.marker(&format!("cue {}", intended.unwrap_or(0)), at_ms);
+        self.lift(r)
+    }
+    fn trial_ended(&mut self, t: &TrialRecord) -> Result<(), SessionError> {
+        let now = self.clock.now_ms();
+        // Flashes announced for this trial and not drawn yet are void.
+        for a in std::mem::take(&mut self.announced) {
+            self.drawn.push(Drawn {
+                planned: a.planned,
+                code: a.code,
+                onset: None,
+            });
+        }
+        if let Some(p) = &self.panel {
+            p.send(&ServerMsg::Cancel { after_ms: now });
+        }
+        if t.phase == Phase::Online {
+            self.decision_latency_ms
+                .push(self.last_block.elapsed().as_secs_f64() * 1e3);
+            let code = t.decided();
+            if let Some(p) = &self.panel {
+                p.send(&ServerMsg::Decision {
+                    trial: self.n_trials - 1,
+                    code,
+                    intended: t.intended,
+                    posterior: t.posterior.clone(),
+                    rounds: t.rounds,
+                    refused: t.arm_refusal.clone(),
+                });
+            }
+            let text = match t.outcome {
+                TrialOutcome::Chosen { code } => format!("decision {code}"),
+                _ => "abstain".to_string(),
+            };
+            let at = self.source.time_of(t.end);
+            let r = self.marker(&text, at);
+            self.lift(r)?;
+            if let Some(rec) = &mut self.recorder {
+                let json = serde_json::to_string(t).expect("trial records serialise");
+                let r = rec.decision(&json, at);
+                self.lift(r)?;
+            }
+        }
+        if let Some(p) = &self.panel {
+            p.send(&ServerMsg::Diag {
+                text: self.status(),
+            });
+        }
+        Ok(())
+    }
+    fn arm_state(&mut self, position: u64, arm: &ArmSim) -> Result<(), SessionError> {
+        let t_ms = self.source.time_of(position);
+        let q = arm.state().q;
+        let elbow = arm.plant().elbow_position(&q);
+        let pen = arm.pen();
+        if let Some(rec) = &mut self.recorder {
+            let r = rec.arm(t_ms, [pen[0], pen[1], q[0], q[1]]);
+            self.lift(r)?;
+        }
+        // The page needs no more than ~30 frames a second of arm.
+        if t_ms - self.last_arm_ms >= 33.0 {
+            self.last_arm_ms = t_ms;
+            if let Some(p) = &self.panel {
+                p.send(&ServerMsg::Arm {
+                    t_ms,
+                    elbow_m: [elbow[0], elbow[1]],
+                    pen_m: [pen[0], pen[1]],
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Waits for a page for at most `timeout`, printing nothing: `true` when one is connected.
+pub fn wait_for_page(panel: &PanelServer, timeout: Duration) -> bool {
+    panel.wait_for_page(timeout)
+}

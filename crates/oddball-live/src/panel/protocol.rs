@@ -1,0 +1,224 @@
+//! The panel's WebSocket messages, JSON with a `"t"` tag.
+//!
+//! Times are milliseconds on the server's session clock ([`crate::panel::Clock`]); the page
+//! keeps its own clock offset from ping/pong pairs and converts both ways. Client messages are
+//! small: anything over [`MAX_CLIENT_MESSAGE`] bytes, not UTF-8, not JSON or of an unknown kind
+//! is rejected with a [`ProtocolError`] naming what was wrong (and counted by the server; the
+//! connection stays up).
+
+use serde::{Deserialize, Serialize};
+
+/// Largest client message accepted, bytes.
+pub const MAX_CLIENT_MESSAGE: usize = 1024;
+
+/// Static facts the page needs to draw: sent on connect.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PanelConfig {
+    /// Bulb codes in panel order with their labels (`up`, `right`, …).
+    pub bulbs: Vec<(u32, String)>,
+    pub flash_ms: f64,
+    pub countdown_s: f64,
+    /// The board, metres: x_min, x_max, z_min, z_max.
+    pub board_m: [f64; 4],
+    /// The arm's base, metres.
+    pub base_m: [f64; 2],
+    /// The task: targets to reach (metres), and the planned shape (a polyline, metres).
+    pub targets_m: Vec<[f64; 2]>,
+    pub plan_m: Vec<[f64; 2]>,
+    /// What runs: e.g. "sim typical seed 1, lda".
+    pub title: String,
+}
+
+/// Server → page.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "t", rename_all = "snake_case")]
+pub enum ServerMsg {
+    Config(PanelConfig),
+    /// A trial's countdown starts at `at_ms`; the person is cued to attend `cue` (`None`:
+    /// nothing; calibration and copy tasks show it).
+    Trial {
+        trial: usize,
+        phase: String,
+        cue: Option<u32>,
+        at_ms: f64,
+        countdown_s: f64,
+    },
+    /// Draw bulb `code` from `at_ms` for `dur_ms`; `id` comes back in [`ClientMsg::On`] and [`ClientMsg::Off`].
+    Flash {
+        id: u64,
+        code: u32,
+        at_ms: f64,
+        dur_ms: f64,
+    },
+    /// Flashes announced for the trial that ended but not yet drawn are void.
+    Cancel {
+        after_ms: f64,
+    },
+    /// A decision: `code` chosen (`None`: abstained) after `rounds` rounds.
+    Decision {
+        trial: usize,
+        code: Option<u32>,
+        intended: Option<u32>,
+        posterior: Vec<f64>,
+        rounds: usize,
+        refused: Option<String>,
+    },
+    /// The arm at `t_ms`: elbow and pen, metres.
+    Arm {
+        t_ms: f64,
+        elbow_m: [f64; 2],
+        pen_m: [f64; 2],
+    },
+    /// Server-side timing figures for the diagnostics panel.
+    Diag {
+        text: String,
+    },
+    Pong {
+        id: u64,
+        page_ms: f64,
+        server_ms: f64,
+    },
+    /// The session is over.
+    End {
+        summary: String,
+    },
+}
+
+/// Page → server.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "t", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClientMsg {
+    /// Clock sync: the page's `performance.now()` when sent.
+    Ping { id: u64, page_ms: f64 },
+    /// Flash `id` was put on screen in the frame stamped `on_ms` (server clock), sent at once.
+    On { id: u64, code: u32, on_ms: f64 },
+    /// Flash `id` was taken off in the frame stamped `off_ms`.
+    Off { id: u64, off_ms: f64 },
+    /// The page's refresh interval as measured (ms) and its user agent.
+    Hello { frame_ms: f64, agent: String },
+}
+
+/// Why a client message was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProtocolError {
+    #[error("message of {len} bytes exceeds the {max}-byte limit")]
+    TooLarge { len: usize, max: usize },
+    #[error("binary messages are not part of the protocol")]
+    Binary,
+    #[error("malformed message at line {line}, column {column}: {reason}")]
+    Malformed {
+        line: usize,
+        column: usize,
+        reason: String,
+    },
+    #[error("field {field} = {value}: {reason}")]
+    BadValue {
+        field: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// Parses and checks one client text message.
+pub fn parse_client(text: &str) -> Result<ClientMsg, ProtocolError> {
+    if text.len() > MAX_CLIENT_MESSAGE {
+        return Err(ProtocolError::TooLarge {
+            len: text.len(),
+            max: MAX_CLIENT_MESSAGE,
+        });
+    }
+    let msg: ClientMsg = serde_json::from_str(text).map_err(|e| ProtocolError::Malformed {
+        line: e.line(),
+        column: e.column(),
+        reason: e.to_string(),
+    })?;
+    let finite = |field: &'static str, v: f64| {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(ProtocolError::BadValue {
+                field,
+                value: v.to_string(),
+                reason: "not a finite number",
+            })
+        }
+    };
+    match &msg {
+        ClientMsg::Ping { page_ms, .. } => finite("page_ms", *page_ms)?,
+        ClientMsg::On { code, on_ms, .. } => {
+            finite("on_ms", *on_ms)?;
+            if !(1..=64).contains(code) {
+                return Err(ProtocolError::BadValue {
+                    field: "code",
+                    value: code.to_string(),
+                    reason: "not a stimulus code",
+                });
+            }
+        }
+        ClientMsg::Off { off_ms, .. } => finite("off_ms", *off_ms)?,
+        ClientMsg::Hello { frame_ms, .. } => finite("frame_ms", *frame_ms)?,
+    }
+    Ok(msg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn good_messages_parse() {
+        assert_eq!(
+            parse_client(r#"{"t":"ping","id":3,"page_ms":12.5}"#).unwrap(),
+            ClientMsg::Ping {
+                id: 3,
+                page_ms: 12.5
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"t":"on","id":7,"code":2,"on_ms":1000.0}"#).unwrap(),
+            ClientMsg::On {
+                id: 7,
+                code: 2,
+                on_ms: 1000.0
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"t":"off","id":7,"off_ms":1100.2}"#).unwrap(),
+            ClientMsg::Off {
+                id: 7,
+                off_ms: 1100.2
+            }
+        );
+    }
+
+    #[test]
+    fn bad_messages_say_what_is_wrong() {
+        let big = format!(
+            r#"{{"t":"hello","frame_ms":16,"agent":"{}"}}"#,
+            "x".repeat(2000)
+        );
+        assert!(matches!(
+            parse_client(&big),
+            Err(ProtocolError::TooLarge { max: 1024, .. })
+        ));
+        for bad in [
+            "",
+            "{",
+            "null",
+            r#"{"t":"launch","id":1}"#,
+            r#"{"t":"ping","id":-1,"page_ms":0}"#,
+            r#"{"t":"ping","id":1,"page_ms":0,"extra":1}"#,
+            r#"{"t":"on","id":1,"code":2}"#,
+        ] {
+            assert!(
+                matches!(parse_client(bad), Err(ProtocolError::Malformed { .. })),
+                "{bad}"
+            );
+        }
+        let e = parse_client(r#"{"t":"on","id":1,"code":0,"on_ms":5}"#).unwrap_err();
+        assert!(e.to_string().contains("code = 0"), "{e}");
+        // serde_json refuses NaN literals, and 1e999 overflows to infinity: both refused.
+        assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":NaN}"#).is_err());
+        assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":1e999}"#).is_err());
+    }
+}

@@ -1,0 +1,405 @@
+//! The panel's HTTP/WebSocket server (axum on a one-worker tokio runtime, on its own thread).
+
+use std::net::{SocketAddr, TcpListener};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::http::header;
+use axum::response::{Html, IntoResponse, Response};
+use axum::routing::get;
+use axum::Router;
+use tokio::sync::{broadcast, watch};
+
+use super::protocol::{parse_client, ClientMsg, PanelConfig, ServerMsg, MAX_CLIENT_MESSAGE};
+use super::{INDEX_HTML, PANEL_JS};
+use crate::LiveError;
+
+/// The session clock: milliseconds since it was made, monotonic.
+#[derive(Debug, Clone, Copy)]
+pub struct Clock {
+    zero: Instant,
+}
+
+impl Clock {
+    pub fn new() -> Self {
+        Self {
+            zero: Instant::now(),
+        }
+    }
+    pub fn now_ms(&self) -> f64 {
+        self.zero.elapsed().as_secs_f64() * 1e3
+    }
+    /// The instant of clock time `ms`.
+    pub fn instant(&self, ms: f64) -> Instant {
+        self.zero + Duration::from_secs_f64(ms.max(0.0) / 1e3)
+    }
+}
+
+impl Default for Clock {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A flash the page drew: its on frame (reported at once) or its off frame, on the server
+/// clock, and when the report arrived.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DrawnReport {
+    On {
+        id: u64,
+        code: u32,
+        on_ms: f64,
+        received_ms: f64,
+    },
+    Off {
+        id: u64,
+        off_ms: f64,
+    },
+}
+
+/// What the server saw of its clients.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PanelStats {
+    pub connected: usize,
+    pub connections: usize,
+    pub disconnects: usize,
+    /// Client messages refused (malformed, oversized, binary), with the last reason.
+    pub rejected: usize,
+    pub last_rejection: Option<String>,
+    /// The page's refresh interval as it measured it, ms, and its user agent.
+    pub frame_ms: Option<f64>,
+    pub agent: Option<String>,
+}
+
+#[derive(Debug)]
+struct Shared {
+    clock: Clock,
+    tx: broadcast::Sender<Arc<str>>,
+    /// What a page that connects late needs: config, the current trial, decisions, arm trail.
+    backlog: Mutex<Backlog>,
+    drawn: Mutex<Vec<DrawnReport>>,
+    stats: Mutex<PanelStats>,
+}
+
+#[derive(Debug, Default)]
+struct Backlog {
+    config: Option<Arc<str>>,
+    trial: Option<Arc<str>>,
+    decisions: Vec<Arc<str>>,
+    arm: Vec<Arc<str>>,
+    end: Option<Arc<str>>,
+}
+
+/// Largest arm trail kept for late pages (thinned by half when full).
+const ARM_BACKLOG: usize = 4000;
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panicked client task cannot leave these plain records half-written in a harmful way.
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// The running panel server; stops when dropped.
+#[derive(Debug)]
+pub struct PanelServer {
+    addr: SocketAddr,
+    shared: Arc<Shared>,
+    shutdown: watch::Sender<bool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl PanelServer {
+    /// Binds `addr` (refused unless loopback, or `allow_remote`) and serves the page.
+    pub fn start(
+        addr: SocketAddr,
+        allow_remote: bool,
+        config: PanelConfig,
+        clock: Clock,
+    ) -> Result<Self, LiveError> {
+        if !allow_remote && !addr.ip().is_loopback() {
+            return Err(LiveError::InvalidParameter {
+                name: "serve",
+                value: addr.to_string(),
+                reason: "not a loopback address: the panel would be reachable from the network \
+                         (allow it explicitly to do so)"
+                    .into(),
+            });
+        }
+        let listener = TcpListener::bind(addr).map_err(|e| LiveError::Bind {
+            addr: addr.to_string(),
+            reason: e.to_string(),
+        })?;
+        let addr = listener.local_addr().map_err(|e| LiveError::Bind {
+            addr: addr.to_string(),
+            reason: e.to_string(),
+        })?;
+        listener
+            .set_nonblocking(true)
+            .map_err(|e| LiveError::Bind {
+                addr: addr.to_string(),
+                reason: e.to_string(),
+            })?;
+        let (tx, _) = broadcast::channel(4096);
+        let shared = Arc::new(Shared {
+            clock,
+            tx,
+            backlog: Mutex::new(Backlog::default()),
+            drawn: Mutex::new(Vec::new()),
+            stats: Mutex::new(PanelStats::default()),
+        });
+        let (shutdown, shutdown_rx) = watch::channel(false);
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .thread_name("oddball-panel")
+            .enable_all()
+            .build()
+            .map_err(|e| LiveError::Bind {
+                addr: addr.to_string(),
+                reason: format!("cannot start the server runtime: {e}"),
+            })?;
+        let app = Router::new()
+            .route("/", get(index))
+            .route("/panel.js", get(script))
+            .route("/favicon.ico", get(no_icon))
+            .route("/ws", get(ws_upgrade))
+            .with_state((shared.clone(), shutdown_rx.clone()));
+        let thread = std::thread::Builder::new()
+            .name("oddball-panel-server".into())
+            .spawn(move || {
+                runtime.block_on(async move {
+                    let Ok(listener) = tokio::net::TcpListener::from_std(listener) else {
+                        return;
+                    };
+                    let mut stop = shutdown_rx;
+                    let _ = axum::serve(listener, app)
+                        .with_graceful_shutdown(async move {
+                            let _ = stop.wait_for(|s| *s).await;
+                        })
+                        .await;
+                });
+                runtime.shutdown_timeout(Duration::from_millis(500));
+            })
+            .map_err(|e| LiveError::Bind {
+                addr: addr.to_string(),
+                reason: format!("cannot start the server thread: {e}"),
+            })?;
+        let server = Self {
+            addr,
+            shared,
+            shutdown,
+            thread: Some(thread),
+        };
+        server.send(&ServerMsg::Config(config));
+        Ok(server)
+    }
+
+    /// The address actually bound (port 0 picks one).
+    pub fn local_addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    pub fn clock(&self) -> Clock {
+        self.shared.clock
+    }
+
+    /// Sends `msg` to every page (never blocks; a page too slow to keep up skips messages).
+    pub fn send(&self, msg: &ServerMsg) {
+        let text: Arc<str> = serde_json::to_string(msg)
+            .expect("server messages serialise")
+            .into();
+        {
+            let mut b = lock(&self.shared.backlog);
+            match msg {
+                ServerMsg::Config(_) => b.config = Some(text.clone()),
+                ServerMsg::Trial { .. } => b.trial = Some(text.clone()),
+                ServerMsg::Decision { .. } => b.decisions.push(text.clone()),
+                ServerMsg::Arm { .. } => {
+                    if b.arm.len() >= ARM_BACKLOG {
+                        let kept: Vec<_> = b.arm.iter().step_by(2).cloned().collect();
+                        b.arm = kept;
+                    }
+                    b.arm.push(text.clone());
+                }
+                ServerMsg::End { .. } => b.end = Some(text.clone()),
+                _ => {}
+            }
+        }
+        // No receiver (no page yet) is not an error.
+        let _ = self.shared.tx.send(text);
+    }
+
+    /// Flash stamps reported since the last call.
+    pub fn take_drawn(&self) -> Vec<DrawnReport> {
+        std::mem::take(&mut *lock(&self.shared.drawn))
+    }
+
+    pub fn stats(&self) -> PanelStats {
+        lock(&self.shared.stats).clone()
+    }
+
+    /// Waits until a page is connected (and has synchronised its clock: its hello arrived);
+    /// `false` after `timeout`.
+    pub fn wait_for_page(&self, timeout: Duration) -> bool {
+        let t0 = Instant::now();
+        loop {
+            {
+                let s = self.stats();
+                if s.connected > 0 && s.frame_ms.is_some() {
+                    return true;
+                }
+            }
+            if t0.elapsed() >= timeout {
+                return false;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for PanelServer {
+    fn drop(&mut self) {
+        let _ = self.shutdown.send(true);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+type AppState = (Arc<Shared>, watch::Receiver<bool>);
+
+async fn index() -> Html<&'static str> {
+    Html(INDEX_HTML)
+}
+
+async fn script() -> Response {
+    (
+        [(header::CONTENT_TYPE, "text/javascript; charset=utf-8")],
+        PANEL_JS,
+    )
+        .into_response()
+}
+
+async fn no_icon() -> axum::http::StatusCode {
+    axum::http::StatusCode::NO_CONTENT
+}
+
+async fn ws_upgrade(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
+    // Frames beyond 16 × the protocol's limit close the connection; anything between is
+    // refused message by message.
+    ws.max_message_size(16 * MAX_CLIENT_MESSAGE)
+        .max_frame_size(16 * MAX_CLIENT_MESSAGE)
+        .on_upgrade(move |socket| client(socket, state))
+}
+
+async fn client(mut socket: WebSocket, (shared, mut stop): AppState) {
+    {
+        let mut s = lock(&shared.stats);
+        s.connected += 1;
+        s.connections += 1;
+    }
+    let mut rx = shared.tx.subscribe();
+    let backlog: Vec<Arc<str>> = {
+        let b = lock(&shared.backlog);
+        b.config
+            .iter()
+            .chain(b.decisions.iter())
+            .chain(b.arm.iter())
+            .chain(b.trial.iter())
+            .chain(b.end.iter())
+            .cloned()
+            .collect()
+    };
+    let mut alive = true;
+    for text in backlog {
+        if socket
+            .send(Message::Text(text.as_ref().into()))
+            .await
+            .is_err()
+        {
+            alive = false;
+            break;
+        }
+    }
+    while alive {
+        alive = serve_one(&mut socket, &shared, &mut rx, &mut stop).await;
+    }
+    let mut s = lock(&shared.stats);
+    s.connected -= 1;
+    s.disconnects += 1;
+}
+
+/// Forwards one broadcast or handles one client message; `false` when the connection is over.
+async fn serve_one(
+    socket: &mut WebSocket,
+    shared: &Shared,
+    rx: &mut broadcast::Receiver<Arc<str>>,
+    stop: &mut watch::Receiver<bool>,
+) -> bool {
+    tokio::select! {
+        out = rx.recv() => match out {
+            Ok(text) => socket.send(Message::Text(text.as_ref().into())).await.is_ok(),
+            Err(broadcast::error::RecvError::Lagged(_)) => true,
+            Err(broadcast::error::RecvError::Closed) => false,
+        },
+        inc = socket.recv() => match inc {
+            Some(Ok(Message::Text(text))) => match handle(shared, text.as_str()) {
+                Some(reply) => {
+                    let reply = serde_json::to_string(&reply).expect("server messages serialise");
+                    socket.send(Message::Text(reply.into())).await.is_ok()
+                }
+                None => true,
+            },
+            Some(Ok(Message::Binary(_))) => {
+                reject(shared, "binary messages are not part of the protocol".into());
+                true
+            }
+            Some(Ok(Message::Close(_))) | None | Some(Err(_)) => false,
+            Some(Ok(_)) => true,
+        },
+        _ = stop.changed() => {
+            let _ = socket.send(Message::Close(None)).await;
+            false
+        }
+    }
+}
+
+fn reject(shared: &Shared, reason: String) {
+    let mut s = lock(&shared.stats);
+    s.rejected += 1;
+    s.last_rejection = Some(reason);
+}
+
+/// Handles one client message; returns the reply, if any.
+fn handle(shared: &Shared, text: &str) -> Option<ServerMsg> {
+    match parse_client(text) {
+        Ok(ClientMsg::Ping { id, page_ms }) => Some(ServerMsg::Pong {
+            id,
+            page_ms,
+            server_ms: shared.clock.now_ms(),
+        }),
+        Ok(ClientMsg::On { id, code, on_ms }) => {
+            lock(&shared.drawn).push(DrawnReport::On {
+                id,
+                code,
+                on_ms,
+                received_ms: shared.clock.now_ms(),
+            });
+            None
+        }
+        Ok(ClientMsg::Off { id, off_ms }) => {
+            lock(&shared.drawn).push(DrawnReport::Off { id, off_ms });
+            None
+        }
+        Ok(ClientMsg::Hello { frame_ms, agent }) => {
+            let mut s = lock(&shared.stats);
+            s.frame_ms = Some(frame_ms);
+            s.agent = Some(agent);
+            None
+        }
+        Err(e) => {
+            reject(shared, e.to_string());
+            None
+        }
+    }
+}

@@ -1,0 +1,88 @@
+//! The live subject without a page: flashes on schedule, so a session over a simulated live
+//! source decides exactly as the same session over the simulated subject directly, and the
+//! recording holds what the session received.
+
+use oddball_arm::{ArmConfig, ArmSim, Command};
+use oddball_live::live::{LiveSubject, SimSource};
+use oddball_live::panel::Clock;
+use oddball_live::record::Recorder;
+use oddball_session::engine::{Session, SessionParams, Subject};
+use oddball_session::paradigm::FourBulbParams;
+use oddball_session::subject::{SubjectParams, SubjectPreset};
+
+fn params() -> SessionParams {
+    let mut p = SessionParams::paper("lda");
+    p.calibration_per_bulb = 3;
+    p.seed = 5;
+    p
+}
+
+fn sim() -> oddball_session::SimulatedSubject {
+    SubjectParams::preset(SubjectPreset::Easy)
+        .with_seed(5)
+        .build()
+        .unwrap()
+}
+
+#[test]
+fn a_live_session_on_schedule_equals_the_direct_session_and_records_it() {
+    let commands = [Command::Up, Command::Left, Command::Down];
+    let arm = || ArmSim::from_config(&ArmConfig::default()).unwrap();
+
+    let mut direct = Session::new(params(), sim(), Some(arm())).unwrap();
+    direct.calibrate().unwrap();
+    let a: Vec<_> = commands
+        .iter()
+        .map(|&c| direct.decide(Some(c)).unwrap())
+        .collect();
+
+    let dir = std::env::temp_dir().join(format!("oddball-live-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("live.xdf");
+    let _ = std::fs::remove_file(&path);
+    let clock = Clock::new();
+    let source = SimSource::unpaced(sim(), clock);
+    let s = sim();
+    let recorder = Recorder::create(&path, s.ch_names(), s.sfreq(), "test").unwrap();
+    let subject = LiveSubject::new(source, FourBulbParams::paper(), clock).with_recorder(recorder);
+    let mut live = Session::new(params(), subject, Some(arm())).unwrap();
+    live.calibrate().unwrap();
+    let b: Vec<_> = commands
+        .iter()
+        .map(|&c| live.decide(Some(c)).unwrap())
+        .collect();
+    assert_eq!(a, b, "same decisions, posteriors, timing");
+
+    let n = live.subject().position() as usize;
+    let (log, _, _) = live.finish();
+    let rec = oddball_io::read(&path).unwrap();
+    // The live subject's recorder is still open (not finished): whole blocks are on disk.
+    assert_eq!(rec.raw.n_times(), n);
+    for (x, y) in rec.raw.data().iter().zip(log.raw.iter()) {
+        assert_eq!(*x, f64::from(*y as f32));
+    }
+    // Markers: a cue per trial, a flash per flash shown, a decision per online trial.
+    let info = rec.xdf().unwrap();
+    let texts: Vec<&str> = info.markers.iter().map(|m| m.text.as_str()).collect();
+    assert_eq!(
+        texts.iter().filter(|t| t.starts_with("cue ")).count(),
+        log.trials.len()
+    );
+    assert_eq!(
+        texts.iter().filter(|t| t.starts_with("flash ")).count(),
+        log.flashes.len()
+    );
+    assert_eq!(
+        texts.iter().filter(|t| t.starts_with("decision ")).count(),
+        commands.len()
+    );
+    // Each flash marker sits on its flash's onset sample.
+    let onsets: Vec<u64> = info
+        .markers
+        .iter()
+        .filter(|m| m.text.starts_with("flash "))
+        .map(|m| m.sample.expect("inside the EEG") as u64)
+        .collect();
+    let shown: Vec<u64> = log.flashes.iter().map(|f| f.onset).collect();
+    assert_eq!(onsets, shown);
+}

@@ -1,0 +1,376 @@
+//! `oddball online`: a live session. EEG from a live stream (or the simulated subject paced by
+//! the wall clock), flashes drawn by the browser panel the binary serves, markers stamped by
+//! the frames that drew them, decisions driving the arm, everything recorded to XDF as it runs.
+//!
+//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`), then
+//! waits for a page before the first countdown.
+
+use std::fs;
+use std::net::{SocketAddr, ToSocketAddrs};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use oddball_arm::{parse_commands, ArmConfig, ArmSim};
+use oddball_decode::pipeline::Model;
+use oddball_live::live::{EegSource, LiveSubject, SimSource, Summary};
+use oddball_live::panel::{Clock, PanelConfig, PanelServer, ServerMsg};
+use oddball_live::record::Recorder;
+use oddball_session::engine::{Session, SessionParams, Subject};
+use oddball_session::paradigm::FourBulbParams;
+use oddball_session::subject::SubjectParams;
+use serde::Serialize;
+
+use crate::cmd_demo::SessionOptions;
+
+/// Options of `oddball online`.
+#[derive(Debug, clap::Args)]
+pub struct OnlineArgs {
+    /// Where the EEG comes from: `sim` (the simulated subject, paced by the wall clock) or
+    /// `lsl:NAME` (a Lab Streaming Layer EEG stream; needs the `lsl` feature).
+    #[arg(long, default_value = "sim", value_name = "SOURCE")]
+    pub source: String,
+    /// A model trained in a session (`oddball demo` writes one: out/demo/model.json).
+    #[arg(long, value_name = "FILE", required_unless_present = "calibrate")]
+    pub model: Option<PathBuf>,
+    /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model.
+    #[arg(long, conflicts_with = "model")]
+    pub calibrate: bool,
+    /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub serve: Option<String>,
+    /// Let --serve bind a non-loopback address.
+    #[arg(long)]
+    pub allow_remote: bool,
+    /// Seconds to wait for a page to open the panel before the session starts.
+    #[arg(long, default_value_t = 120.0)]
+    pub wait_page: f64,
+    /// Comma-separated intended commands (a copy task: the panel cues each); the letter G by
+    /// default.
+    #[arg(long, default_value = "up,left,down,right,up,left")]
+    pub commands: String,
+    /// Name of the LSL marker outlet (flashes, cues, decisions) with an LSL source.
+    #[arg(long, default_value = "oddball-markers")]
+    pub markers: String,
+    /// Latency of the simulated amplifier, ms: how late its samples arrive.
+    #[arg(long, default_value_t = 250.0)]
+    pub sim_latency_ms: f64,
+    #[command(flatten)]
+    pub session: SessionOptions,
+    /// Report folder: session.xdf (written as the session runs; an existing one is kept and the
+    /// new one numbered) and summary.json.
+    #[arg(long, value_name = "DIR", default_value = "out/online")]
+    pub out: PathBuf,
+}
+
+#[derive(Debug, Serialize)]
+struct DecisionRow {
+    index: usize,
+    intended: String,
+    decided: Option<String>,
+    rounds: usize,
+    confidence: f64,
+    seconds: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct TimingRow {
+    n: usize,
+    mean_ms: f64,
+    sd_ms: f64,
+    min_ms: f64,
+    max_ms: f64,
+}
+
+impl From<Summary> for TimingRow {
+    fn from(s: Summary) -> Self {
+        Self {
+            n: s.n,
+            mean_ms: s.mean,
+            sd_ms: s.sd,
+            min_ms: s.min,
+            max_ms: s.max,
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+struct OnlineSummary {
+    source: String,
+    decisions: Vec<DecisionRow>,
+    correct: usize,
+    abstained: usize,
+    flash_on_time: Option<TimingRow>,
+    flash_onset_error: Option<TimingRow>,
+    stamp_delay: Option<TimingRow>,
+    undrawn_flashes: usize,
+    decision_latency: Option<TimingRow>,
+    recording: String,
+}
+
+fn resolve(addr: &str) -> Result<SocketAddr> {
+    addr.to_socket_addrs()
+        .with_context(|| format!("{addr}: expected HOST:PORT"))?
+        .next()
+        .with_context(|| format!("{addr}: no address"))
+}
+
+pub fn run(args: &OnlineArgs) -> Result<()> {
+    let commands = parse_commands(&args.commands).context("parsing --commands")?;
+    if commands.is_empty() {
+        bail!("--commands is empty: give at least one of up, down, left, right");
+    }
+    let (_, rule) = args.session.rules()?;
+    let clock = Clock::new();
+    if let Some(name) = args.source.strip_prefix("lsl:") {
+        #[cfg(feature = "lsl")]
+        {
+            let source = crate::cmd_online_lsl::source(name, &clock)?;
+            let markers = crate::cmd_online_lsl::markers(&args.markers, &clock)?;
+            return run_with(args, source, Some(markers), clock, rule, &commands);
+        }
+        #[cfg(not(feature = "lsl"))]
+        bail!(
+            "--source lsl:{name}: built without the lsl feature: cargo build --release --features lsl"
+        );
+    }
+    if args.source.starts_with("replay:") {
+        bail!(
+            "--source {}: replaying a file live is not supported yet; `oddball demo --subject {}` replays it offline",
+            args.source,
+            args.source
+        );
+    }
+    if args.source != "sim" {
+        bail!("--source {}: expected sim or lsl:NAME", args.source);
+    }
+    let preset = args
+        .session
+        .preset()?
+        .context("--subject replay:… is not a live source")?;
+    let sim = SubjectParams::preset(preset)
+        .with_seed(args.session.seed)
+        .build()
+        .context("building the simulated subject")?;
+    let source = SimSource::new(sim, clock, args.sim_latency_ms);
+    run_with(args, source, None, clock, rule, &commands)
+}
+
+fn run_with<S: EegSource>(
+    args: &OnlineArgs,
+    source: S,
+    markers: Option<Box<dyn oddball_live::live::MarkerSink>>,
+    clock: Clock,
+    rule: oddball_decode::decision::DecisionRule,
+    commands: &[oddball_arm::Command],
+) -> Result<()> {
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
+    let paradigm = FourBulbParams::paper();
+    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
+    arm.set_recording(true);
+    let model = match &args.model {
+        Some(path) => {
+            let text =
+                fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            Some(Model::from_json(&text).with_context(|| format!("loading {}", path.display()))?)
+        }
+        None => None,
+    };
+    // Never overwrite an earlier recording: session.xdf, else session-1.xdf, session-2.xdf, …
+    let record_path = (0..)
+        .map(|i| match i {
+            0 => args.out.join("session.xdf"),
+            i => args.out.join(format!("session-{i}.xdf")),
+        })
+        .find(|p| !p.exists())
+        .expect("a free name");
+    let recorder = Recorder::create(
+        &record_path,
+        source.ch_names(),
+        source.sfreq(),
+        &args.source,
+    )
+    .with_context(|| format!("creating {}", record_path.display()))?;
+    let title = format!(
+        "{} · {} · {}",
+        args.source,
+        model.as_ref().map_or(args.session.pipeline.clone(), |m| m
+            .pipeline
+            .name()
+            .to_string()),
+        if args.calibrate {
+            "calibrating first"
+        } else {
+            "model loaded"
+        }
+    );
+    let mut subject = LiveSubject::new(source, paradigm, clock).with_recorder(recorder);
+    if let Some(m) = markers {
+        subject = subject.with_markers(m);
+    }
+    if let Some(addr) = &args.serve {
+        let ws = arm.workspace().board;
+        let config = PanelConfig {
+            bulbs: paradigm
+                .bulbs
+                .iter()
+                .map(|c| (paradigm.code_of(*c), c.name().to_string()))
+                .collect(),
+            flash_ms: paradigm.flash_s * 1e3,
+            countdown_s: paradigm.countdown_s,
+            board_m: [ws.x_min_m, ws.x_max_m, ws.z_min_m, ws.z_max_m],
+            base_m: [arm.plant().base()[0], arm.plant().base()[1]],
+            targets_m: Vec::new(),
+            plan_m: plan(&arm, commands),
+            title,
+        };
+        let panel = PanelServer::start(resolve(addr)?, args.allow_remote, config, clock)
+            .context("starting the panel")?;
+        println!("panel: http://{}/", panel.local_addr());
+        if !panel.wait_for_page(Duration::from_secs_f64(args.wait_page)) {
+            bail!(
+                "no page opened the panel at http://{}/ within {} s",
+                panel.local_addr(),
+                args.wait_page
+            );
+        }
+        let stats = panel.stats();
+        println!(
+            "panel page connected: frame {:.2} ms, {}",
+            stats.frame_ms.unwrap_or(f64::NAN),
+            stats.agent.as_deref().unwrap_or("?")
+        );
+        subject = subject.with_panel(panel);
+    }
+    println!(
+        "oddball online: source {}, {} commands, recording {}",
+        args.source,
+        commands.len(),
+        record_path.display()
+    );
+    let mut params = SessionParams::paper(&args.session.pipeline);
+    params.seed = args.session.seed;
+    params.rule = rule;
+    params.calibration_per_bulb = args.session.calibration_per_bulb;
+    let mut session = Session::new(params, subject, Some(arm)).context("setting up the session")?;
+    match model {
+        Some(m) => session.set_model(m).context("using the model")?,
+        None => {
+            let c = session.calibrate().context("calibrating")?;
+            println!(
+                "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
+                c.n_trials, c.n_epochs, c.cv_auc
+            );
+            if let Some(m) = session.model() {
+                fs::write(args.out.join("model.json"), m.to_json())?;
+            }
+        }
+    }
+    let mut rows = Vec::new();
+    let p = session.params().paradigm;
+    for (i, &command) in commands.iter().enumerate() {
+        let t = session
+            .decide(Some(command))
+            .with_context(|| format!("decision {}", i + 1))?;
+        let decided = t.decided().and_then(|c| p.command_of(c));
+        let row = DecisionRow {
+            index: i + 1,
+            intended: command.name().to_string(),
+            decided: decided.map(|c| c.name().to_string()),
+            rounds: t.rounds,
+            confidence: t.confidence(),
+            seconds: (t.end - t.start) as f64 / session.sfreq(),
+        };
+        println!(
+            "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
+            row.index,
+            row.intended,
+            row.decided.as_deref().unwrap_or("abstain"),
+            match decided {
+                Some(d) if d == command => " ✓",
+                Some(_) => " ✗",
+                None => "",
+            },
+            row.confidence,
+            row.rounds,
+            row.seconds
+        );
+        if let Some(r) = &t.arm_refusal {
+            println!("  the arm refused: {r}");
+        }
+        rows.push(row);
+    }
+    session.idle(1.5)?;
+    let correct = rows
+        .iter()
+        .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
+        .count();
+    let abstained = rows.iter().filter(|r| r.decided.is_none()).count();
+    let subject = session.subject_mut();
+    let timing = subject.timing.clone();
+    let latency = subject.decision_latency_ms.clone();
+    let health = subject.stream_health();
+    let summary_line = format!(
+        "{correct}/{} decisions right, {abstained} abstained",
+        rows.len()
+    );
+    if let Some(panel) = subject.panel() {
+        panel.send(&ServerMsg::End {
+            summary: summary_line.clone(),
+        });
+        let s = panel.stats();
+        println!(
+            "panel: {} connection(s), {} message(s) rejected",
+            s.connections, s.rejected
+        );
+    }
+    println!("{summary_line}");
+    println!("{}", timing.report());
+    if let Some(l) = Summary::of(&latency) {
+        println!("processing latency, last block of the deciding epoch → arm command: {l}");
+    }
+    if let Some(h) = health {
+        println!("stream: {h}");
+    }
+    let (log, _, _) = session.finish();
+    let summary = OnlineSummary {
+        source: args.source.clone(),
+        decisions: rows,
+        correct,
+        abstained,
+        flash_on_time: Summary::of(&timing.on_ms).map(Into::into),
+        flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
+        stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
+        undrawn_flashes: timing.undrawn,
+        decision_latency: Summary::of(&latency).map(Into::into),
+        recording: record_path.display().to_string(),
+    };
+    let _ = log;
+    let path = args.out.join("summary.json");
+    fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))?;
+    println!(
+        "recording: {} ({} samples)",
+        record_path.display(),
+        summary_samples(&record_path)
+    );
+    Ok(())
+}
+
+fn summary_samples(path: &std::path::Path) -> String {
+    match oddball_io::read(path) {
+        Ok(r) => r.raw.n_times().to_string(),
+        Err(e) => format!("unreadable: {e}"),
+    }
+}
+
+/// The pen's planned path for `commands` from where it starts.
+fn plan(arm: &ArmSim, commands: &[oddball_arm::Command]) -> Vec<[f64; 2]> {
+    let mut p = arm.target();
+    let mut out = vec![[p[0], p[1]]];
+    for &c in commands {
+        p = c.apply(&p, arm.settings().step_m);
+        out.push([p[0], p[1]]);
+    }
+    out
+}

@@ -1,0 +1,123 @@
+//! `oddball online` without a browser: the simulated subject paced by the wall clock, flashes
+//! on schedule, recorded to XDF as it runs. A recording cut by `kill -9` opens and holds every
+//! sample up to the last flushed block.
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use oddball_session::subject::{SubjectParams, SubjectPreset};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("oddball-online-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// A model from a (fast, unpaced) demo run.
+fn model() -> PathBuf {
+    let dir = tmp("model");
+    let (ok, _, err) =
+        common::oddball(&["demo", "--commands", "up", "--out", dir.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    dir.join("model.json")
+}
+
+#[test]
+fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
+    let model = model();
+    let out = tmp("kill");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["online", "--model", model.to_str().unwrap(), "--seed", "7"])
+        .args(["--sim-latency-ms", "20", "--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("oddball online starts");
+    let mut first = String::new();
+    BufReader::new(child.stdout.as_mut().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("oddball online: source sim"), "{first}");
+    let started = Instant::now();
+    std::thread::sleep(Duration::from_millis(3500));
+    child.kill().expect("SIGKILL"); // kill -9: no destructor, no footer
+    child.wait().unwrap();
+    let ran = started.elapsed().as_secs_f64();
+
+    let path = out.join("session.xdf");
+    let rec = oddball_io::read(&path).expect("the cut recording opens");
+    let info = rec.xdf().expect("an XDF recording");
+    assert!(!info.finished(), "no footers after kill -9");
+    let n = rec.raw.n_times();
+    // Samples are flushed per 20-sample block as the wall clock passes: all but the last
+    // block(s) of the ~3.5 s are there (start-up and the 20 ms latency cost a little).
+    assert!(
+        n as f64 >= (ran - 1.0) * 500.0 && n as f64 <= (ran + 0.1) * 500.0,
+        "{n} samples after {ran:.2} s"
+    );
+    assert_eq!(n % 20, 0, "whole blocks only: {n}");
+    // The first trial's countdown (5 s) has no flash: the recording equals a fresh subject of
+    // the same seed, sample for sample (float32 on disk).
+    let mut sim = SubjectParams::preset(SubjectPreset::Typical)
+        .with_seed(7)
+        .build()
+        .unwrap();
+    let fresh = sim.render(n);
+    let data = rec.raw.data();
+    for c in 0..fresh.nrows() {
+        for t in 0..n {
+            assert_eq!(
+                data[[c, t]],
+                f64::from(fresh[[c, t]] as f32),
+                "channel {c}, sample {t}"
+            );
+        }
+    }
+    // pyxdf, a standard reader, opens it too (when ODDBALL_PYXDF names a python with pyxdf).
+    match std::env::var("ODDBALL_PYXDF") {
+        Ok(py) => {
+            let script = concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../tools/golden/xdf/pyxdf_read.py"
+            );
+            let o = Command::new(py).arg(script).arg(&path).output().unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let s = String::from_utf8_lossy(&o.stdout);
+            assert!(s.contains(&format!("{n}")), "pyxdf sees {n} samples: {s}");
+        }
+        Err(_) => eprintln!("skipping the pyxdf check: set ODDBALL_PYXDF to a python with pyxdf"),
+    }
+}
+
+#[test]
+fn online_says_what_is_wrong_before_it_starts() {
+    let model = model();
+    let m = model.to_str().unwrap();
+    let out = tmp("errors");
+    let o = out.to_str().unwrap();
+    let (ok, _, err) =
+        common::oddball(&["online", "--model", m, "--serve", "0.0.0.0:0", "--out", o]);
+    assert!(!ok && err.contains("loopback"), "{err}");
+    let (ok, _, err) = common::oddball(&["online", "--model", m, "--source", "nope", "--out", o]);
+    assert!(!ok && err.contains("expected sim or lsl:NAME"), "{err}");
+    let (ok, _, err) = common::oddball(&["online", "--source", "sim"]);
+    assert!(!ok && err.contains("--model"), "{err}");
+    let (ok, _, err) =
+        common::oddball(&["online", "--model", "/nonexistent/model.json", "--out", o]);
+    assert!(!ok && err.contains("/nonexistent/model.json"), "{err}");
+    let (ok, _, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--serve",
+        "127.0.0.1:0",
+        "--wait-page",
+        "0.3",
+        "--out",
+        o,
+    ]);
+    assert!(!ok && err.contains("no page opened the panel"), "{err}");
+}

@@ -1,0 +1,75 @@
+// Drives the oddball panel in headless Chromium: it must load, count down, flash with on-times
+// of 100 ms within one frame, show the decisions and move the arm. Saves a screenshot.
+//
+//   node panel.mjs URL SCREENSHOT.png N_DECISIONS
+//
+// Chromium: $CHROMIUM or /usr/bin/chromium (Debian's). Prints one JSON line of measurements;
+// exits 1 with the reasons when a check fails.
+import { chromium } from "playwright-core";
+
+const [url, shot, nDecisions] = process.argv.slice(2);
+if (!url || !shot || !nDecisions) {
+  console.error("usage: node panel.mjs URL SCREENSHOT.png N_DECISIONS");
+  process.exit(2);
+}
+const want = Number(nDecisions);
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
+  args: ["--no-sandbox", "--disable-background-timer-throttling", "--disable-renderer-backgrounding"],
+});
+let failures = [];
+try {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 760 } });
+  page.on("console", (m) => { if (m.type() === "error") console.error("page:", m.text()); });
+  page.on("pageerror", (e) => failures.push(`page error: ${e.message}`));
+  await page.goto(url);
+  // The countdown shows a digit before the first flash.
+  await page.waitForFunction(() => /^[1-5]$/.test(document.getElementById("count").textContent), null, { timeout: 30000 });
+  // A rogue second client: malformed, oversized and binary messages, then it just goes away.
+  // The server must refuse them and carry on with the real page.
+  await page.waitForFunction(() => window.oddballDiag.flashes >= 2, null, { timeout: 30000 });
+  await page.evaluate(() => new Promise((done) => {
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    ws.onopen = () => {
+      ws.send("{not json");
+      ws.send(JSON.stringify({ t: "hello", frame_ms: 16, agent: "x".repeat(4000) }));
+      ws.send(new Uint8Array([1, 2, 3]));
+      ws.send(JSON.stringify({ t: "on", id: 1, code: 99, on_ms: 0 }));
+      setTimeout(() => { ws.close(); done(); }, 200);
+    };
+    ws.onerror = () => done();
+  }));
+  await page.waitForFunction((n) => window.oddballDiag.decisions.length >= n, want, { timeout: 60000 * want, polling: 200 });
+  // Let the arm move after the last decision.
+  await page.waitForTimeout(1500);
+  await page.screenshot({ path: shot });
+  const d = await page.evaluate(() => window.oddballDiag);
+  const frame = d.frameMs;
+  const on = d.onTimes;
+  const err = d.onsetErrors;
+  const worstOn = Math.max(...on.map((x) => Math.abs(x - 100)));
+  const out = {
+    frame_ms: frame, flashes: d.flashes, countdowns: d.countdowns, decisions: d.decisions.length,
+    decided: d.decisions.map((x) => [x.intended, x.code]),
+    on_ms_min: Math.min(...on), on_ms_max: Math.max(...on), on_ms_worst_error: worstOn,
+    onset_error_ms_min: Math.min(...err), onset_error_ms_max: Math.max(...err),
+    clock_rtt_ms: d.rtt, arm_moves: d.armMoves, cancelled: d.cancelled,
+  };
+  console.log(JSON.stringify(out));
+  if (d.countdowns < want) failures.push(`only ${d.countdowns} countdowns`);
+  if (d.flashes < 4 * want) failures.push(`only ${d.flashes} flashes drawn`);
+  if (!(worstOn <= frame)) failures.push(`flash on-time off 100 ms by ${worstOn.toFixed(2)} ms (> one frame, ${frame.toFixed(2)} ms)`);
+  // Onsets land on the frame nearest the schedule; a busy machine may miss frames, so only
+  // gross errors fail (the figures are printed above).
+  if (!(Math.max(...err.map(Math.abs)) <= 3 * frame)) failures.push(`flash onset off schedule by up to ${Math.max(...err.map(Math.abs)).toFixed(2)} ms (> three frames)`);
+  if (d.decisions.length < want) failures.push(`${d.decisions.length} decisions shown, expected ${want}`);
+  if (d.armMoves < 1) failures.push("the arm never moved on the page");
+} catch (e) {
+  failures.push(String(e));
+} finally {
+  await browser.close();
+}
+if (failures.length) {
+  console.error("panel test failed:\n  " + failures.join("\n  "));
+  process.exit(1);
+}
