@@ -25,7 +25,7 @@
   const D = (window.oddballDiag = {
     connected: false, synced: false, frames: 0, flashes: 0, countdowns: 0, decisions: [],
     onTimes: [], onsetErrors: [], rtt: null, offset: null, frameMs: null, armMoves: 0,
-    cancelled: 0, ended: false, serverDiag: "",
+    cancelled: 0, ended: false, serverDiag: "", targets: 0, planPoints: 0,
   });
 
   function send(obj) {
@@ -61,6 +61,7 @@
     switch (m.t) {
       case "config": {
         S.config = m;
+        D.targets = m.targets_m.length; D.planPoints = m.plan_m.length;
         $("title").textContent = m.title;
         S.bulbByCode.clear();
         for (const [code, label] of m.bulbs) S.bulbByCode.set(code, $("bulb-" + label));

@@ -86,6 +86,14 @@ impl SimSource {
         }
     }
 
+    /// From now on paced by the wall clock, the next sample acquired now (after an unpaced
+    /// calibration, say).
+    pub fn pace_from_now(&mut self, latency_ms: f64) {
+        self.paced = true;
+        self.latency_ms = latency_ms;
+        self.start_ms = self.clock.now_ms() - self.sim.position() as f64 * 1e3 / self.sim.sfreq();
+    }
+
     /// As fast as it can (tests, and replaying a session's timing without waiting).
     pub fn unpaced(sim: SimulatedSubject, clock: Clock) -> Self {
         Self {
@@ -223,6 +231,7 @@ pub struct LiveSubject<S: EegSource> {
     clock: Clock,
     position: u64,
     n_trials: usize,
+    n_decisions: usize,
     announced: Vec<Announced>,
     /// Flashes on screen: id and on frame (ms).
     lit: Vec<(u64, f64)>,
@@ -260,6 +269,7 @@ impl<S: EegSource> LiveSubject<S> {
             clock,
             position: 0,
             n_trials: 0,
+            n_decisions: 0,
             announced: Vec::new(),
             lit: Vec::new(),
             next_id: 1,
@@ -277,6 +287,16 @@ impl<S: EegSource> LiveSubject<S> {
         self.panel = Some(panel);
         self.stamping = Stamping::Panel;
         self
+    }
+
+    /// Hands flashes to this panel's page from now on.
+    pub fn attach_panel(&mut self, panel: PanelServer) {
+        self.panel = Some(panel);
+        self.stamping = Stamping::Panel;
+    }
+
+    pub fn source_mut(&mut self) -> &mut S {
+        &mut self.source
     }
 
     pub fn with_markers(mut self, sink: Box<dyn MarkerSink>) -> Self {
@@ -297,6 +317,15 @@ impl<S: EegSource> LiveSubject<S> {
     }
     pub fn clock(&self) -> Clock {
         self.clock
+    }
+
+    /// Tells the page the session is over (`summary` shown).
+    pub fn end(&self, summary: &str) {
+        if let Some(p) = &self.panel {
+            p.send(&ServerMsg::End {
+                summary: summary.to_string(),
+            });
+        }
     }
 
     /// Closes the recording (footers written) and returns the panel, if any.
@@ -515,9 +544,10 @@ impl<S: EegSource> Subject for LiveSubject<S> {
             self.decision_latency_ms
                 .push(self.last_block.elapsed().as_secs_f64() * 1e3);
             let code = t.decided();
+            self.n_decisions += 1;
             if let Some(p) = &self.panel {
                 p.send(&ServerMsg::Decision {
-                    trial: self.n_trials - 1,
+                    trial: self.n_decisions,
                     code,
                     intended: t.intended,
                     posterior: t.posterior.clone(),

@@ -387,20 +387,38 @@ pub fn seeded_targets(arm: &ArmSim, n: usize, seed: u64) -> Vec<Vector2<f64>> {
     out
 }
 
+/// The targets a tracking task places for `arm` where it stands: the given ones snapped to its
+/// step grid, or seeded ones.
+pub fn task_targets(arm: &ArmSim, params: &TrackParams) -> Vec<Vector2<f64>> {
+    let step = arm.settings().step_m;
+    let origin = arm.target();
+    match &params.targets {
+        Some(t) => t
+            .iter()
+            .map(|p| grid_point(&origin, step, &Vector2::new(p[0], p[1])))
+            .collect(),
+        None => seeded_targets(arm, params.n_targets, params.seed),
+    }
+}
+
+/// The vertices of the path that draws `text` from `arm`'s current target, metres.
+pub fn drawing_path(arm: &ArmSim, text: &str) -> Result<Vec<Vector2<f64>>, SessionError> {
+    let step = arm.settings().step_m;
+    let mut path = vec![arm.target()];
+    for m in stroke_plan(text)? {
+        let last = *path.last().expect("non-empty");
+        path.push(m.command.apply(&last, step));
+    }
+    Ok(path)
+}
+
 /// Steers the pen to each target in turn.
 pub fn run_tracking<P: Pilot>(
     pilot: &mut P,
     params: &TrackParams,
 ) -> Result<TrackReport, SessionError> {
     let step = pilot.arm().settings().step_m;
-    let origin = pilot.arm().target();
-    let targets: Vec<Vector2<f64>> = match &params.targets {
-        Some(t) => t
-            .iter()
-            .map(|p| grid_point(&origin, step, &Vector2::new(p[0], p[1])))
-            .collect(),
-        None => seeded_targets(pilot.arm(), params.n_targets, params.seed),
-    };
+    let targets = task_targets(pilot.arm(), params);
     let mut results = Vec::new();
     let mut steps = Vec::new();
     let mut exhausted = false;
@@ -620,11 +638,7 @@ pub fn run_drawing<P: Pilot>(
     let plan = stroke_plan(text)?;
     let step = pilot.arm().settings().step_m;
     let start = pilot.arm().target();
-    let mut path = vec![start];
-    for m in &plan {
-        let last = *path.last().expect("non-empty");
-        path.push(m.command.apply(&last, step));
-    }
+    let path = drawing_path(pilot.arm(), text)?;
     let board = pilot.arm().workspace().board;
     if let Some(p) = path.iter().find(|p| !board.contains(p)) {
         return Err(SessionError::InvalidParameter {

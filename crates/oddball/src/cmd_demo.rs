@@ -22,7 +22,7 @@ use oddball_session::engine::{CalibrationReport, Session, SessionParams, Subject
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::{self, ReplayParams};
-use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
+use oddball_session::subject::{SubjectParams, SubjectPreset};
 use oddball_signal::Epochs;
 use serde::Serialize;
 
@@ -399,21 +399,6 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         run.calibration.fit_seconds,
     );
     Ok(())
-}
-
-/// A simulated subject's session, calibrated, with its arm (recording its samples); prints the
-/// calibration when `verbose`. Returns the pen's start position too.
-pub fn calibrated_session(
-    opts: &SessionOptions,
-    preset: SubjectPreset,
-    rule: DecisionRule,
-    verbose: bool,
-) -> Result<(Session<SimulatedSubject>, CalibrationReport, Vector2<f64>)> {
-    let subject = SubjectParams::preset(preset)
-        .with_seed(opts.seed)
-        .build()
-        .context("building the simulated subject")?;
-    calibrated(opts, subject, rule, verbose)
 }
 
 /// A session with any subject (simulated, or a live stream), calibrated.

@@ -14,7 +14,7 @@ use anyhow::{bail, Context, Result};
 use oddball_arm::{parse_commands, ArmConfig, ArmSim};
 use oddball_decode::pipeline::Model;
 use oddball_live::live::{EegSource, LiveSubject, SimSource, Summary};
-use oddball_live::panel::{Clock, PanelConfig, PanelServer, ServerMsg};
+use oddball_live::panel::{Clock, PanelConfig, PanelServer};
 use oddball_live::record::Recorder;
 use oddball_session::engine::{Session, SessionParams, Subject};
 use oddball_session::paradigm::FourBulbParams;
@@ -36,15 +36,8 @@ pub struct OnlineArgs {
     /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model.
     #[arg(long, conflicts_with = "model")]
     pub calibrate: bool,
-    /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one).
-    #[arg(long, value_name = "HOST:PORT")]
-    pub serve: Option<String>,
-    /// Let --serve bind a non-loopback address.
-    #[arg(long)]
-    pub allow_remote: bool,
-    /// Seconds to wait for a page to open the panel before the session starts.
-    #[arg(long, default_value_t = 120.0)]
-    pub wait_page: f64,
+    #[command(flatten)]
+    pub panel: PanelOptions,
     /// Comma-separated intended commands (a copy task: the panel cues each); the letter G by
     /// default.
     #[arg(long, default_value = "up,left,down,right,up,left")]
@@ -61,6 +54,73 @@ pub struct OnlineArgs {
     /// new one numbered) and summary.json.
     #[arg(long, value_name = "DIR", default_value = "out/online")]
     pub out: PathBuf,
+}
+
+/// The stimulus panel in a browser: shared by `oddball online` and `oddball task`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PanelOptions {
+    /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one) and
+    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/`.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub serve: Option<String>,
+    /// Let --serve bind a non-loopback address.
+    #[arg(long)]
+    pub allow_remote: bool,
+    /// Seconds to wait for a page to open the panel before the session starts.
+    #[arg(long, default_value_t = 120.0)]
+    pub wait_page: f64,
+}
+
+impl PanelOptions {
+    /// Starts the panel (when --serve) and waits for a page; prints its address first.
+    pub fn start(&self, config: PanelConfig, clock: Clock) -> Result<Option<PanelServer>> {
+        let Some(addr) = &self.serve else {
+            return Ok(None);
+        };
+        let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
+            .context("starting the panel")?;
+        println!("panel: http://{}/", panel.local_addr());
+        if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
+            bail!(
+                "no page opened the panel at http://{}/ within {} s",
+                panel.local_addr(),
+                self.wait_page
+            );
+        }
+        let stats = panel.stats();
+        println!(
+            "panel page connected: frame {:.2} ms, {}",
+            stats.frame_ms.unwrap_or(f64::NAN),
+            stats.agent.as_deref().unwrap_or("?")
+        );
+        Ok(Some(panel))
+    }
+}
+
+/// What the page needs to draw the panel and the arm for `arm` (targets and planned path in
+/// metres).
+pub fn panel_config(
+    arm: &ArmSim,
+    paradigm: &FourBulbParams,
+    targets_m: Vec<[f64; 2]>,
+    plan_m: Vec<[f64; 2]>,
+    title: String,
+) -> PanelConfig {
+    let board = arm.workspace().board;
+    PanelConfig {
+        bulbs: paradigm
+            .bulbs
+            .iter()
+            .map(|c| (paradigm.code_of(*c), c.name().to_string()))
+            .collect(),
+        flash_ms: paradigm.flash_s * 1e3,
+        countdown_s: paradigm.countdown_s,
+        board_m: [board.x_min_m, board.x_max_m, board.z_min_m, board.z_max_m],
+        base_m: [arm.plant().base()[0], arm.plant().base()[1]],
+        targets_m,
+        plan_m,
+        title,
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -208,38 +268,8 @@ fn run_with<S: EegSource>(
     if let Some(m) = markers {
         subject = subject.with_markers(m);
     }
-    if let Some(addr) = &args.serve {
-        let ws = arm.workspace().board;
-        let config = PanelConfig {
-            bulbs: paradigm
-                .bulbs
-                .iter()
-                .map(|c| (paradigm.code_of(*c), c.name().to_string()))
-                .collect(),
-            flash_ms: paradigm.flash_s * 1e3,
-            countdown_s: paradigm.countdown_s,
-            board_m: [ws.x_min_m, ws.x_max_m, ws.z_min_m, ws.z_max_m],
-            base_m: [arm.plant().base()[0], arm.plant().base()[1]],
-            targets_m: Vec::new(),
-            plan_m: plan(&arm, commands),
-            title,
-        };
-        let panel = PanelServer::start(resolve(addr)?, args.allow_remote, config, clock)
-            .context("starting the panel")?;
-        println!("panel: http://{}/", panel.local_addr());
-        if !panel.wait_for_page(Duration::from_secs_f64(args.wait_page)) {
-            bail!(
-                "no page opened the panel at http://{}/ within {} s",
-                panel.local_addr(),
-                args.wait_page
-            );
-        }
-        let stats = panel.stats();
-        println!(
-            "panel page connected: frame {:.2} ms, {}",
-            stats.frame_ms.unwrap_or(f64::NAN),
-            stats.agent.as_deref().unwrap_or("?")
-        );
+    let config = panel_config(&arm, &paradigm, Vec::new(), plan(&arm, commands), title);
+    if let Some(panel) = args.panel.start(config, clock)? {
         subject = subject.with_panel(panel);
     }
     println!(
@@ -314,10 +344,8 @@ fn run_with<S: EegSource>(
         "{correct}/{} decisions right, {abstained} abstained",
         rows.len()
     );
+    subject.end(&summary_line);
     if let Some(panel) = subject.panel() {
-        panel.send(&ServerMsg::End {
-            summary: summary_line.clone(),
-        });
         let s = panel.stats();
         println!(
             "panel: {} connection(s), {} message(s) rejected",

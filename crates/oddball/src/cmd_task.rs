@@ -13,19 +13,23 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
+use oddball_live::live::{LiveSubject, SimSource};
+use oddball_live::panel::Clock;
 use oddball_session::engine::{CalibrationReport, Session};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::record::save_session;
 use oddball_session::replay::{stream_epochs, ReplaySource};
-use oddball_session::subject::SimulatedSubject;
+use oddball_session::subject::SubjectParams;
 use oddball_session::task::{
-    run_drawing, run_tracking, DrawReport, Pilot, ReplayPilot, Step, TrackParams, TrackReport,
+    drawing_path, run_drawing, run_tracking, task_targets, DrawReport, Pilot, ReplayPilot, Step,
+    TrackParams, TrackReport,
 };
 use oddball_session::SessionError;
 use oddball_signal::Epochs;
 use serde::Serialize;
 
-use crate::cmd_demo::{calibrated_replay, calibrated_session, SessionOptions, REPLAY_NOTE};
+use crate::cmd_demo::{calibrated, calibrated_replay, SessionOptions, REPLAY_NOTE};
+use crate::cmd_online::{panel_config, PanelOptions};
 
 /// Options of `oddball task`.
 #[derive(Debug, clap::Args)]
@@ -55,6 +59,8 @@ pub struct TrackArgs {
     /// The settled pen must be this close to the target, millimetres.
     #[arg(long, default_value_t = 1.0)]
     pub tolerance_mm: f64,
+    #[command(flatten)]
+    pub panel: PanelOptions,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/track")]
     pub out: PathBuf,
@@ -67,15 +73,18 @@ pub struct DrawArgs {
     /// Text to draw: A–Z, 0–9 and spaces.
     #[arg(long = "draw", value_name = "TEXT", default_value = "HI")]
     pub text: String,
+    #[command(flatten)]
+    pub panel: PanelOptions,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/draw")]
     pub out: PathBuf,
 }
 
-/// A simulated session or a replayed recording, as one pilot.
+/// A simulated session (its subject a live source: run unpaced, or paced with the browser
+/// panel after calibration) or a replayed recording, as one pilot.
 #[allow(clippy::large_enum_variant)]
 enum AnyPilot {
-    Sim(Session<SimulatedSubject>),
+    Sim(Session<LiveSubject<SimSource>>),
     Replay(ReplayPilot),
 }
 
@@ -116,9 +125,23 @@ struct Prepared {
     pen_start: Vector2<f64>,
 }
 
-fn prepare(opts: &SessionOptions, what: &str) -> Result<Prepared> {
+/// What a task shows on the panel: its targets and planned path, metres.
+struct TaskView {
+    targets_m: Vec<[f64; 2]>,
+    plan_m: Vec<[f64; 2]>,
+}
+
+fn prepare(
+    opts: &SessionOptions,
+    what: &str,
+    panel: &PanelOptions,
+    view: impl Fn(&ArmSim) -> Result<TaskView>,
+) -> Result<Prepared> {
     let (_, rule) = opts.rules()?;
     let preset = opts.preset()?;
+    if panel.serve.is_some() && preset.is_none() {
+        anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
+    }
     match (opts.replay_files()?, preset) {
         (Some((file, cal)), _) => {
             println!(
@@ -154,7 +177,32 @@ fn prepare(opts: &SessionOptions, what: &str) -> Result<Prepared> {
                 "oddball task {what}: {preset} simulated subject (seed {}), pipeline {}",
                 opts.seed, opts.pipeline
             );
-            let (session, calibration, pen_start) = calibrated_session(opts, preset, rule, true)?;
+            let sim = SubjectParams::preset(preset)
+                .with_seed(opts.seed)
+                .build()
+                .context("building the simulated subject")?;
+            let clock = Clock::new();
+            let subject = LiveSubject::new(
+                SimSource::unpaced(sim, clock),
+                FourBulbParams::paper(),
+                clock,
+            );
+            let (mut session, calibration, pen_start) = calibrated(opts, subject, rule, true)?;
+            let arm = Pilot::arm(&session).clone();
+            let v = view(&arm)?;
+            let config = panel_config(
+                &arm,
+                &session.params().paradigm,
+                v.targets_m,
+                v.plan_m,
+                format!("task {what} · {preset} subject · {}", opts.pipeline),
+            );
+            if let Some(p) = panel.start(config, clock)? {
+                // The task runs in real time in front of the page; calibration ran unpaced.
+                let subject = session.subject_mut();
+                subject.source_mut().pace_from_now(250.0);
+                subject.attach_panel(p);
+            }
             let erp = session.calibration_epochs()?;
             let model_json = session
                 .model()
@@ -212,8 +260,6 @@ fn run_track(args: &TrackArgs) -> Result<()> {
     if !(args.tolerance_mm.is_finite() && args.tolerance_mm > 0.0) {
         anyhow::bail!("--tolerance-mm must be a positive number");
     }
-    let mut prep = prepare(&args.session, "track")?;
-    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let params = TrackParams {
         n_targets: args.targets,
         seed: args.session.seed,
@@ -221,6 +267,16 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         tolerance_m: args.tolerance_mm * 1e-3,
         ..TrackParams::default()
     };
+    let mut prep = prepare(&args.session, "track", &args.panel, |arm| {
+        Ok(TaskView {
+            targets_m: task_targets(arm, &params)
+                .iter()
+                .map(|p| [p[0], p[1]])
+                .collect(),
+            plan_m: Vec::new(),
+        })
+    })?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_tracking(&mut prep.pilot, &params)?;
     print!("{report}");
     let expected: Vec<Vector2<f64>> = std::iter::once(prep.pen_start)
@@ -240,7 +296,15 @@ fn run_track(args: &TrackArgs) -> Result<()> {
 
 fn run_draw(args: &DrawArgs) -> Result<()> {
     let wall = Instant::now();
-    let mut prep = prepare(&args.session, "draw")?;
+    let mut prep = prepare(&args.session, "draw", &args.panel, |arm| {
+        Ok(TaskView {
+            targets_m: Vec::new(),
+            plan_m: drawing_path(arm, &args.text)?
+                .iter()
+                .map(|p| [p[0], p[1]])
+                .collect(),
+        })
+    })?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_drawing(&mut prep.pilot, &args.text, 3, 1.0)
         .with_context(|| format!("drawing {:?}", args.text))?;
@@ -329,6 +393,9 @@ fn write_summary<T: Serialize>(
 /// Saves a simulated session's raw EEG and prints the wall time.
 fn finish(prep: Prepared, out: &Path, wall: Instant) -> Result<()> {
     if let AnyPilot::Sim(session) = prep.pilot {
+        session
+            .subject()
+            .end(&format!("task over: report in {}", out.display()));
         let paradigm = session.params().paradigm;
         let (log, _, _) = session.finish();
         let path = out.join("session.dat");

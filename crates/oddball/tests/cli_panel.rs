@@ -97,3 +97,63 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
         .expect("panel stats line");
     assert!(rejected >= 3, "{rest}");
 }
+
+#[test]
+fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
+    let Some(chromium) = std::env::var_os("ODDBALL_CHROMIUM") else {
+        eprintln!("skipping the browser test: set ODDBALL_CHROMIUM=/usr/bin/chromium (and npm ci in tools/panel-test)");
+        return;
+    };
+    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let dir = std::env::temp_dir().join(format!("oddball-panel-task-{}", std::process::id()));
+    // One explicit target two steps right of the start: two decisions in front of the page.
+    let mut task = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args([
+            "task",
+            "track",
+            "--target",
+            "0.39,0.05",
+            "--calibration-per-bulb",
+            "5",
+        ])
+        .args(["--serve", "127.0.0.1:0", "--seed", "4"])
+        .args(["--out", dir.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("oddball task starts");
+    let mut stdout = BufReader::new(task.stdout.take().unwrap());
+    let mut url = None;
+    let mut head = String::new();
+    for _ in 0..10 {
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        head.push_str(&line);
+        if let Some(u) = line.trim().strip_prefix("panel: ") {
+            url = Some(u.to_string());
+            break;
+        }
+    }
+    let url = url.unwrap_or_else(|| panic!("no panel line in:\n{head}"));
+    let shot = root.join("target/panel-task.png");
+    let page = Command::new("node")
+        .current_dir(root.join("tools/panel-test"))
+        .env("CHROMIUM", &chromium)
+        .args(["panel.mjs", &url, shot.to_str().unwrap(), "2"])
+        .output()
+        .expect("node runs");
+    let mut rest = String::new();
+    stdout.read_to_string(&mut rest).unwrap();
+    let status = task.wait().unwrap();
+    let page_out = String::from_utf8_lossy(&page.stdout);
+    println!(
+        "page: {page_out}\n{}\n{head}{rest}",
+        String::from_utf8_lossy(&page.stderr)
+    );
+    assert!(page.status.success(), "the page checks failed");
+    assert!(status.success(), "{rest}");
+    assert!(
+        page_out.contains("\"targets\":1"),
+        "the page shows the target: {page_out}"
+    );
+    assert!(rest.contains("reached 1/1 targets"), "{rest}");
+}

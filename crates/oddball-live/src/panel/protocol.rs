@@ -54,7 +54,8 @@ pub enum ServerMsg {
     Cancel {
         after_ms: f64,
     },
-    /// A decision: `code` chosen (`None`: abstained) after `rounds` rounds.
+    /// Online decision number `trial` (from 1): `code` chosen (`None`: abstained) after
+    /// `rounds` rounds.
     Decision {
         trial: usize,
         code: Option<u32>,

@@ -358,6 +358,12 @@ async fn serve_one(
             Some(Ok(_)) => true,
         },
         _ = stop.changed() => {
+            // Whatever was sent before the stop (the session's end) still goes out.
+            while let Ok(text) = rx.try_recv() {
+                if socket.send(Message::Text(text.as_ref().into())).await.is_err() {
+                    return false;
+                }
+            }
             let _ = socket.send(Message::Close(None)).await;
             false
         }
