@@ -371,6 +371,36 @@ impl<S: Subject> Session<S> {
         &self.subject
     }
 
+    /// Per channel: epochs rejected because of it (NaN, flat or saturated, over threshold).
+    pub fn channel_faults(&self) -> &[crate::online::ChannelFaults] {
+        self.epocher.channel_faults()
+    }
+
+    /// Channels that cost epochs, as text (`P3: 12 flat`), or `None` when all were clean.
+    pub fn channel_report(&self) -> Option<String> {
+        let names = self.subject.ch_names();
+        let parts: Vec<String> = self
+            .channel_faults()
+            .iter()
+            .zip(names)
+            .filter(|(f, _)| f.total() > 0)
+            .map(|(f, name)| {
+                let mut why = Vec::new();
+                for (n, what) in [
+                    (f.non_finite, "NaN/inf"),
+                    (f.flat, "flat or saturated"),
+                    (f.over_threshold, "over threshold"),
+                ] {
+                    if n > 0 {
+                        why.push(format!("{n} {what}"));
+                    }
+                }
+                format!("{name}: {}", why.join(", "))
+            })
+            .collect();
+        (!parts.is_empty()).then(|| format!("epochs rejected by channel: {}", parts.join("; ")))
+    }
+
     pub fn subject_mut(&mut self) -> &mut S {
         &mut self.subject
     }

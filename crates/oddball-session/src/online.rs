@@ -36,6 +36,39 @@ pub struct ReadyEpoch {
     pub accepted: bool,
 }
 
+/// Why epochs were rejected, counted for one channel.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct ChannelFaults {
+    /// The channel held NaN or infinite samples in the epoch.
+    pub non_finite: u64,
+    /// Flat: peak-to-peak under [`oddball_decode::pipeline::FLAT_UV`] (disconnected, or stuck at
+    /// a rail: saturated).
+    pub flat: u64,
+    /// Peak-to-peak over the rejection threshold (blinks, movement, a railing amplifier).
+    pub over_threshold: u64,
+}
+
+impl ChannelFaults {
+    pub fn total(&self) -> u64 {
+        self.non_finite + self.flat + self.over_threshold
+    }
+}
+
+/// Which channels of a sample were non-finite (up to 128 channels; more are folded).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct ChannelMask(u128);
+
+impl std::ops::Index<usize> for ChannelMask {
+    type Output = bool;
+    fn index(&self, c: usize) -> &bool {
+        if self.0 >> (c % 128) & 1 == 1 {
+            &true
+        } else {
+            &false
+        }
+    }
+}
+
 /// Streaming filter + buffer + pending markers.
 #[derive(Debug)]
 pub struct OnlineEpocher {
@@ -49,6 +82,10 @@ pub struct OnlineEpocher {
     buf: Vec<Vec<f64>>,
     /// Per buffered sample: some channel was NaN or infinite there (held at its last value).
     bad: Vec<bool>,
+    /// Per buffered sample, per channel: that channel was NaN or infinite (only kept while some
+    /// channel is bad; empty rows otherwise would cost memory, so a bitmask per sample).
+    bad_channel: Vec<ChannelMask>,
+    faults: Vec<ChannelFaults>,
     /// Last finite value per channel (what a non-finite sample is replaced with).
     hold: Vec<f64>,
     /// Non-finite samples seen, per channel.
@@ -89,6 +126,8 @@ impl OnlineEpocher {
             n_channels,
             buf: vec![Vec::new(); n_channels],
             bad: Vec::new(),
+            bad_channel: Vec::new(),
+            faults: vec![ChannelFaults::default(); n_channels],
             hold: vec![0.0; n_channels],
             non_finite: vec![0; n_channels],
             duplicate_markers: 0,
@@ -198,6 +237,17 @@ impl OnlineEpocher {
         for (b, row) in self.buf.iter_mut().zip(filtered.rows()) {
             b.extend(row.iter());
         }
+        for (t, &b) in bad.iter().enumerate() {
+            let mut mask = ChannelMask::default();
+            if b {
+                for (c, v) in chunk.column(t).iter().enumerate() {
+                    if !v.is_finite() {
+                        mask.0 |= 1 << (c % 128);
+                    }
+                }
+            }
+            self.bad_channel.push(mask);
+        }
         self.bad.extend(bad);
         self.received += chunk.ncols() as u64;
         let mut ready = Vec::new();
@@ -212,8 +262,11 @@ impl OnlineEpocher {
                 data.row_mut(c)
                     .assign(&ndarray::ArrayView1::from(&b[lo..lo + self.n_times]));
             }
-            let accepted = !self.bad[lo..lo + self.n_times].iter().any(|&b| b)
-                && self.pre.accepts(data.view());
+            let held = self.bad[lo..lo + self.n_times].iter().any(|&b| b);
+            let accepted = !held && self.pre.accepts(data.view());
+            if !accepted {
+                self.blame(&data, lo, held);
+            }
             ready.push(ReadyEpoch {
                 marker: m,
                 data,
@@ -222,6 +275,33 @@ impl OnlineEpocher {
         }
         self.trim();
         Ok(ready)
+    }
+
+    /// Counts, per channel, why a rejected epoch was rejected.
+    fn blame(&mut self, data: &Array2<f64>, lo: usize, held: bool) {
+        for (c, row) in data.rows().into_iter().enumerate() {
+            let f = &mut self.faults[c];
+            if held && self.bad_channel[lo..lo + self.n_times].iter().any(|b| b[c]) {
+                f.non_finite += 1;
+                continue;
+            }
+            let (lo_v, hi_v) = row
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let ptp = hi_v - lo_v;
+            if ptp < oddball_decode::pipeline::FLAT_UV {
+                f.flat += 1;
+            } else if self.pre.reject_peak_to_peak_uv.is_some_and(|t| ptp > t) {
+                f.over_threshold += 1;
+            }
+        }
+    }
+
+    /// Per channel: epochs rejected because of it, by reason.
+    pub fn channel_faults(&self) -> &[ChannelFaults] {
+        &self.faults
     }
 
     fn trim(&mut self) {
@@ -236,6 +316,7 @@ impl OnlineEpocher {
                 b.drain(..drop);
             }
             self.bad.drain(..drop);
+            self.bad_channel.drain(..drop);
             self.buf_start += drop as u64;
         }
     }

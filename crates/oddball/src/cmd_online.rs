@@ -336,6 +336,9 @@ fn run_with<S: EegSource>(
         .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
         .count();
     let abstained = rows.iter().filter(|r| r.decided.is_none()).count();
+    if let Some(r) = session.channel_report() {
+        println!("{r}");
+    }
     let subject = session.subject_mut();
     let timing = subject.timing.clone();
     let latency = subject.decision_latency_ms.clone();
