@@ -12,6 +12,8 @@ mod error;
 pub mod live;
 #[cfg(feature = "lsl")]
 pub mod lsl;
+#[cfg(feature = "lsl")]
+pub mod lsl_live;
 pub mod panel;
 pub mod record;
 

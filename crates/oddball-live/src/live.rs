@@ -320,7 +320,11 @@ impl<S: EegSource> LiveSubject<S> {
     }
 
     /// Tells the page the session is over (`summary` shown).
-    pub fn end(&self, summary: &str) {
+    pub fn end(&mut self, summary: &str) {
+        let now = self.clock.now_ms();
+        if let Some(m) = &mut self.markers {
+            m.marker("end", now);
+        }
         if let Some(p) = &self.panel {
             p.send(&ServerMsg::End {
                 summary: summary.to_string(),
@@ -450,9 +454,12 @@ impl<S: EegSource> Subject for LiveSubject<S> {
         self.position
     }
     fn lead(&self) -> u64 {
-        match self.stamping {
-            Stamping::Panel => (ANNOUNCE_AHEAD_S * self.source.sfreq()).round() as u64,
-            Stamping::Schedule => 0,
+        // A page, or a marker stream's consumer (a remote simulated subject), needs flashes
+        // ahead of time; on schedule in this process they need none.
+        if self.stamping == Stamping::Panel || self.markers.is_some() {
+            (ANNOUNCE_AHEAD_S * self.source.sfreq()).round() as u64
+        } else {
+            0
         }
     }
     fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError> {

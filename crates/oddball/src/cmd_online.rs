@@ -185,9 +185,25 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     if let Some(name) = args.source.strip_prefix("lsl:") {
         #[cfg(feature = "lsl")]
         {
-            let source = crate::cmd_online_lsl::source(name, &clock)?;
-            let markers = crate::cmd_online_lsl::markers(&args.markers, &clock)?;
-            return run_with(args, source, Some(markers), clock, rule, &commands);
+            use oddball_live::lsl::StreamQuery;
+            use oddball_live::lsl_live::{LslMarkers, LslSource};
+            let markers = LslMarkers::new(&args.markers, clock)
+                .with_context(|| format!("opening the marker outlet {}", args.markers))?;
+            println!("marker outlet: {}", args.markers);
+            let source = LslSource::resolve(&StreamQuery::Name(name.to_string()), 30.0, clock)
+                .with_context(|| format!("--source lsl:{name}"))?;
+            // Markers pushed before anyone listens are lost (the first cue, say).
+            if !markers.wait_for_consumers(10.0) {
+                println!("note: nobody reads the marker stream {} yet", args.markers);
+            }
+            return run_with(
+                args,
+                source,
+                Some(Box::new(markers)),
+                clock,
+                rule,
+                &commands,
+            );
         }
         #[cfg(not(feature = "lsl"))]
         bail!(

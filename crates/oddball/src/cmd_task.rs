@@ -392,9 +392,9 @@ fn write_summary<T: Serialize>(
 
 /// Saves a simulated session's raw EEG and prints the wall time.
 fn finish(prep: Prepared, out: &Path, wall: Instant) -> Result<()> {
-    if let AnyPilot::Sim(session) = prep.pilot {
+    if let AnyPilot::Sim(mut session) = prep.pilot {
         session
-            .subject()
+            .subject_mut()
             .end(&format!("task over: report in {}", out.display()));
         let paradigm = session.params().paradigm;
         let (log, _, _) = session.finish();

@@ -35,7 +35,7 @@ enum Command {
     Task(cmd_task::TaskArgs),
     /// A live session: EEG from a live stream, the stimulus panel in a browser, recorded as it runs.
     Online(Box<cmd_online::OnlineArgs>),
-    /// Serve the simulated subject as a live amplifier stream (NIC's TCP protocol).
+    /// Serve the simulated subject as a live amplifier stream: NIC's TCP protocol or an LSL outlet.
     Simulate(cmd_simulate::SimulateArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
     Inspect(cmd_inspect::InspectArgs),

@@ -1,0 +1,83 @@
+//! Two processes over Lab Streaming Layer: `oddball simulate --lsl` is the amplifier (it follows
+//! the panel's marker stream), `oddball online --source lsl:…` decodes it live and draws the
+//! letter G. Needs the `lsl` feature (`cargo test -p oddball --features lsl`); LSL stays on
+//! loopback (tools/lsl/lsl_api.cfg).
+#![cfg(feature = "lsl")]
+
+mod common;
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+#[test]
+fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
+    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    let cfg = root.join("tools/lsl/lsl_api.cfg");
+    let id = std::process::id();
+    let dir = std::env::temp_dir().join(format!("oddball-lsl-online-{id}"));
+    let (ok, _, err) = common::oddball(&[
+        "demo",
+        "--commands",
+        "up",
+        "--out",
+        dir.join("demo").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let eeg = format!("oddball-test-eeg-{id}");
+    let markers = format!("oddball-test-markers-{id}");
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .env("LSLAPICFG", &cfg)
+        .args([
+            "simulate",
+            "--lsl",
+            &eeg,
+            "--markers",
+            &markers,
+            "--seed",
+            "2",
+        ])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("the simulator starts");
+    let mut sim_out = BufReader::new(sim.stdout.take().unwrap());
+    let mut first = String::new();
+    sim_out.read_line(&mut first).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .env("LSLAPICFG", &cfg)
+        .args([
+            "online",
+            "--source",
+            &format!("lsl:{eeg}"),
+            "--markers",
+            &markers,
+        ])
+        .args(["--model", dir.join("demo/model.json").to_str().unwrap()])
+        .args(["--out", dir.join("online").to_str().unwrap()])
+        .output()
+        .expect("oddball online runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let mut rest = String::new();
+    sim_out.read_to_string(&mut rest).unwrap();
+    let sim_status = sim.wait().unwrap();
+    println!(
+        "online:\n{stdout}\n{}\nsimulator:\n{first}{rest}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success());
+    assert!(sim_status.success(), "the simulator ends at the end marker");
+    // ≥ 95 % of the G's six commands: all six.
+    assert!(stdout.contains("6/6 decisions right"), "{stdout}");
+    assert!(stdout.contains("0 samples lost"), "{stdout}");
+    assert!(
+        rest.contains(" 0 markers too late"),
+        "every flash reached the simulated brain: {rest}"
+    );
+    assert!(
+        rest.contains("(30 attended)"),
+        "the cues reached it too: {rest}"
+    );
+    // The recording holds the session.
+    let rec = oddball_io::read(dir.join("online/session.xdf")).unwrap();
+    assert!(rec.raw.n_times() > 30_000);
+}
