@@ -54,7 +54,7 @@ try {
     on_ms_min: Math.min(...on), on_ms_max: Math.max(...on), on_ms_worst_error: worstOn,
     onset_error_ms_min: Math.min(...err), onset_error_ms_max: Math.max(...err),
     clock_rtt_ms: d.rtt, arm_moves: d.armMoves, cancelled: d.cancelled,
-    targets: d.targets, plan_points: d.planPoints, ended: d.ended,
+    targets: d.targets, plan_points: d.planPoints, ended: d.ended, late_flashes: d.lateFlashes,
   };
   console.log(JSON.stringify(out));
   if (d.countdowns < want) failures.push(`only ${d.countdowns} countdowns`);

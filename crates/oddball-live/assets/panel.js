@@ -25,7 +25,7 @@
   const D = (window.oddballDiag = {
     connected: false, synced: false, frames: 0, flashes: 0, countdowns: 0, decisions: [],
     onTimes: [], onsetErrors: [], rtt: null, offset: null, frameMs: null, armMoves: 0,
-    cancelled: 0, ended: false, serverDiag: "", targets: 0, planPoints: 0,
+    cancelled: 0, ended: false, serverDiag: "", targets: 0, planPoints: 0, lateFlashes: [],
   });
 
   function send(obj) {
@@ -197,6 +197,7 @@
         const b = S.bulbByCode.get(f.code);
         if (b) b.classList.add("on");
         f.on = now; D.flashes++; D.onsetErrors.push(now - f.at);
+        if (now - f.at > 3 * S.frameMs) D.lateFlashes.push({ id: f.id, code: f.code, at: f.at, on: now });
         send({ t: "on", id: f.id, code: f.code, on_ms: now });
         S.lit.push(f);
         return false;

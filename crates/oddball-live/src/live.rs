@@ -42,6 +42,9 @@ pub trait EegSource: Send {
     fn saw(&mut self, _onset: u64, _attended: bool) -> bool {
         true
     }
+    /// The session starts now (after waiting for a page, say): a simulated source starts its
+    /// clock here instead of racing to catch up. Live streams keep theirs.
+    fn start_now(&mut self) {}
     /// Samples lost, reconnections, stalls; `None` for simulated sources.
     fn health(&self) -> Option<String> {
         None
@@ -127,6 +130,11 @@ impl EegSource for SimSource {
     }
     fn time_of(&self, sample: u64) -> f64 {
         self.start_ms + sample as f64 * 1e3 / self.sim.sfreq()
+    }
+    fn start_now(&mut self) {
+        if self.paced {
+            self.pace_from_now(self.latency_ms);
+        }
     }
     fn saw(&mut self, onset: u64, attended: bool) -> bool {
         if onset < self.sim.position() || self.sim.flash(onset, attended).is_err() {

@@ -248,7 +248,13 @@ fn run_with<S: EegSource>(
         Some(path) => {
             let text =
                 fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            Some(Model::from_json(&text).with_context(|| format!("loading {}", path.display()))?)
+            let mut m =
+                Model::from_json(&text).with_context(|| format!("loading {}", path.display()))?;
+            // The stopping rule is this session's choice, not the training session's.
+            if let Some(d) = &mut m.decision {
+                d.rule = rule;
+            }
+            Some(m)
         }
         None => None,
     };
@@ -294,6 +300,7 @@ fn run_with<S: EegSource>(
         commands.len(),
         record_path.display()
     );
+    subject.source_mut().start_now();
     let mut params = SessionParams::paper(&args.session.pipeline);
     params.seed = args.session.seed;
     params.rule = rule;
