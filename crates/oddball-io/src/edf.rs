@@ -497,10 +497,10 @@ fn parse_tals(ctx: &Ctx<'_>, b: &[u8], base: usize, record: usize) -> Result<Vec
 }
 
 /// Code, target flag and label of an annotation text.
-type EventText = (u32, Option<bool>, Option<String>);
+pub(crate) type EventText = (u32, Option<bool>, Option<String>);
 
 /// Splits an annotation text of the form `CODE [target|nontarget][: LABEL]`.
-fn parse_event_text(text: &str) -> Option<EventText> {
+pub(crate) fn parse_event_text(text: &str) -> Option<EventText> {
     let t = text.trim();
     let (head, label) = match t.split_once(": ") {
         Some((h, l)) => (h, Some(l.to_string())),

@@ -1984,32 +1984,6 @@ fn clock_fit(offsets: &[(f64, f64)]) -> Option<(f64, f64)> {
     (a.is_finite() && b.is_finite()).then_some((a, b))
 }
 
-/// Code, target flag and label of a `CODE [target|nontarget][: LABEL]` text.
-type EventText = (u32, Option<bool>, Option<String>);
-
-fn parse_code_text(text: &str) -> Option<EventText> {
-    let t = text.trim();
-    if !t.starts_with(|c: char| c.is_ascii_digit()) {
-        return None;
-    }
-    let (head, label) = match t.split_once(": ") {
-        Some((h, l)) => (h, Some(l.to_string())),
-        None => (t, None),
-    };
-    let mut words = head.split_whitespace();
-    let code: u32 = words.next()?.parse().ok()?;
-    let target = match words.next() {
-        None => None,
-        Some("target") => Some(true),
-        Some("nontarget") => Some(false),
-        Some(_) => return None,
-    };
-    if words.next().is_some() {
-        return None;
-    }
-    Some((code, target, label))
-}
-
 /// The number a text ends in, after a space, `_`, `:`, `=` or `#` (`flash 3` → 3).
 fn trailing_code(text: &str) -> Option<u32> {
     let t = text.trim_end();
@@ -2235,10 +2209,10 @@ pub fn parse_xdf_with(
             XdfValues::Numeric(_) => {}
         }
     }
-    let parsed: Vec<Option<EventText>> = raw_markers
+    let parsed: Vec<Option<crate::edf::EventText>> = raw_markers
         .iter()
         .map(|m| {
-            parse_code_text(&m.text)
+            crate::edf::parse_event_text(&m.text)
                 .or_else(|| trailing_code(&m.text).map(|c| (c, None, Some(m.text.clone()))))
         })
         .collect();
@@ -2381,11 +2355,11 @@ mod tests {
     #[test]
     fn marker_texts() {
         assert_eq!(
-            parse_code_text("3 target: Ä b"),
+            crate::edf::parse_event_text("3 target: Ä b"),
             Some((3, Some(true), Some("Ä b".into())))
         );
-        assert_eq!(parse_code_text("12"), Some((12, None, None)));
-        assert_eq!(parse_code_text("flash 3"), None);
+        assert_eq!(crate::edf::parse_event_text("12"), Some((12, None, None)));
+        assert_eq!(crate::edf::parse_event_text("flash 3"), None);
         assert_eq!(trailing_code("flash 3"), Some(3));
         assert_eq!(trailing_code("S  12"), Some(12));
         assert_eq!(trailing_code("stim:7"), Some(7));

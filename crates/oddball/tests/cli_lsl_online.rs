@@ -16,14 +16,7 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
     let cfg = root.join("tools/lsl/lsl_api.cfg");
     let id = std::process::id();
     let dir = std::env::temp_dir().join(format!("oddball-lsl-online-{id}"));
-    let (ok, _, err) = common::oddball(&[
-        "demo",
-        "--commands",
-        "up",
-        "--out",
-        dir.join("demo").to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    let model = common::demo_model(&dir);
     let eeg = format!("oddball-test-eeg-{id}");
     let markers = format!("oddball-test-markers-{id}");
     let mut sim = Command::new(env!("CARGO_BIN_EXE_oddball"))
@@ -52,7 +45,7 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
             "--markers",
             &markers,
         ])
-        .args(["--model", dir.join("demo/model.json").to_str().unwrap()])
+        .args(["--model", model.to_str().unwrap()])
         .args(["--out", dir.join("online").to_str().unwrap()])
         .output()
         .expect("oddball online runs");

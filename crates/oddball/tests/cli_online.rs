@@ -12,18 +12,12 @@ use std::time::{Duration, Instant};
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("oddball-online-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::tmp_dir(&format!("online-{name}"))
 }
 
 /// A model from a (fast, unpaced) demo run.
 fn model() -> PathBuf {
-    let dir = tmp("model");
-    let (ok, _, err) =
-        common::oddball(&["demo", "--commands", "up", "--out", dir.to_str().unwrap()]);
-    assert!(ok, "{err}");
-    dir.join("model.json")
+    common::demo_model(&tmp("model"))
 }
 
 #[test]

@@ -13,28 +13,81 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
+/// Chromium's path from ODDBALL_CHROMIUM, or `None` with a skip message.
+fn chromium() -> Option<std::ffi::OsString> {
+    let c = std::env::var_os("ODDBALL_CHROMIUM");
+    if c.is_none() {
+        eprintln!("skipping the browser test: set ODDBALL_CHROMIUM=/usr/bin/chromium (and npm ci in tools/panel-test)");
+    }
+    c
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+}
+
+/// Reads a session's stdout up to its `panel: URL` line and returns the URL.
+fn panel_url(stdout: &mut impl BufRead) -> String {
+    let mut head = String::new();
+    for _ in 0..10 {
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        head.push_str(&line);
+        if let Some(u) = line.trim().strip_prefix("panel: ") {
+            return u.to_string();
+        }
+    }
+    panic!("no panel line in:\n{head}");
+}
+
+/// Drives the page at `url` with tools/panel-test/panel.mjs until `n` decisions (screenshot to
+/// target/`shot`), then reads the rest of the session's stdout and waits for it; both must
+/// succeed. Returns (page stdout, session stdout).
+fn drive(
+    chromium: &std::ffi::OsStr,
+    url: &str,
+    shot: &str,
+    n: usize,
+    stdout: &mut impl Read,
+    child: &mut std::process::Child,
+) -> (String, String) {
+    let page = Command::new("node")
+        .current_dir(root().join("tools/panel-test"))
+        .env("CHROMIUM", chromium)
+        .args([
+            "panel.mjs",
+            url,
+            root().join("target").join(shot).to_str().unwrap(),
+        ])
+        .arg(n.to_string())
+        .output()
+        .expect("node runs");
+    let mut rest = String::new();
+    stdout.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    let page_out = String::from_utf8_lossy(&page.stdout).into_owned();
+    println!(
+        "page: {page_out}\n{}\nsession:\n{rest}",
+        String::from_utf8_lossy(&page.stderr)
+    );
+    assert!(page.status.success(), "the page checks failed");
+    assert!(status.success(), "the session failed:\n{rest}");
+    (page_out, rest)
+}
+
 #[test]
 fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
-    let Some(chromium) = std::env::var_os("ODDBALL_CHROMIUM") else {
-        eprintln!("skipping the browser test: set ODDBALL_CHROMIUM=/usr/bin/chromium (and npm ci in tools/panel-test)");
+    let Some(chromium) = chromium() else {
         return;
     };
-    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
-    let tool = root.join("tools/panel-test");
     assert!(
-        tool.join("node_modules/playwright-core").is_dir(),
-        "run `npm ci` in {}",
-        tool.display()
+        root()
+            .join("tools/panel-test/node_modules/playwright-core")
+            .is_dir(),
+        "run `npm ci` in tools/panel-test"
     );
-    let dir = std::env::temp_dir().join(format!("oddball-panel-{}", std::process::id()));
-    let (ok, _, err) = common::oddball(&[
-        "demo",
-        "--commands",
-        "up",
-        "--out",
-        dir.join("demo").to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    let dir = common::tmp_dir("panel");
+    let model = common::demo_model(&dir);
     let mut online = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args([
             "online",
@@ -45,35 +98,22 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
             "--seed",
             "3",
         ])
-        .args(["--model", dir.join("demo/model.json").to_str().unwrap()])
+        .args(["--model", model.to_str().unwrap()])
         .args(["--out", dir.join("online").to_str().unwrap()])
         .stdout(Stdio::piped())
         .spawn()
         .expect("oddball online starts");
     let mut stdout = BufReader::new(online.stdout.take().unwrap());
-    let mut first = String::new();
-    stdout.read_line(&mut first).unwrap();
-    let url = first
-        .trim()
-        .strip_prefix("panel: ")
-        .expect("panel line")
-        .to_string();
-    let shot = root.join("target/panel-test.png");
-    let page = Command::new("node")
-        .current_dir(&tool)
-        .env("CHROMIUM", &chromium)
-        .args(["panel.mjs", &url, shot.to_str().unwrap(), "2"])
-        .output()
-        .expect("node runs");
-    let mut rest = String::new();
-    stdout.read_to_string(&mut rest).unwrap();
-    let status = online.wait().unwrap();
-    let page_out = String::from_utf8_lossy(&page.stdout);
-    let page_err = String::from_utf8_lossy(&page.stderr);
-    println!("page: {page_out}\n{page_err}\noddball online:\n{first}{rest}");
-    assert!(page.status.success(), "the page checks failed: {page_err}");
-    assert!(status.success(), "oddball online failed:\n{rest}");
-    assert!(shot.is_file());
+    let url = panel_url(&mut stdout);
+    let (_, rest) = drive(
+        &chromium,
+        &url,
+        "panel-test.png",
+        2,
+        &mut stdout,
+        &mut online,
+    );
+    assert!(root().join("target/panel-test.png").is_file());
     // The session heard the page: every flash stamped and timed; the rogue client refused.
     assert!(rest.contains("flash on-time 10"), "{rest}");
     // A flash the page drew more than 200 ms late (a starved machine) is voided, as it should
@@ -100,12 +140,10 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
 
 #[test]
 fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
-    let Some(chromium) = std::env::var_os("ODDBALL_CHROMIUM") else {
-        eprintln!("skipping the browser test: set ODDBALL_CHROMIUM=/usr/bin/chromium (and npm ci in tools/panel-test)");
+    let Some(chromium) = chromium() else {
         return;
     };
-    let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
-    let dir = std::env::temp_dir().join(format!("oddball-panel-task-{}", std::process::id()));
+    let dir = common::tmp_dir("panel-task");
     // One explicit target two steps right of the start: two decisions in front of the page.
     let mut task = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args([
@@ -122,35 +160,8 @@ fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
         .spawn()
         .expect("oddball task starts");
     let mut stdout = BufReader::new(task.stdout.take().unwrap());
-    let mut url = None;
-    let mut head = String::new();
-    for _ in 0..10 {
-        let mut line = String::new();
-        stdout.read_line(&mut line).unwrap();
-        head.push_str(&line);
-        if let Some(u) = line.trim().strip_prefix("panel: ") {
-            url = Some(u.to_string());
-            break;
-        }
-    }
-    let url = url.unwrap_or_else(|| panic!("no panel line in:\n{head}"));
-    let shot = root.join("target/panel-task.png");
-    let page = Command::new("node")
-        .current_dir(root.join("tools/panel-test"))
-        .env("CHROMIUM", &chromium)
-        .args(["panel.mjs", &url, shot.to_str().unwrap(), "2"])
-        .output()
-        .expect("node runs");
-    let mut rest = String::new();
-    stdout.read_to_string(&mut rest).unwrap();
-    let status = task.wait().unwrap();
-    let page_out = String::from_utf8_lossy(&page.stdout);
-    println!(
-        "page: {page_out}\n{}\n{head}{rest}",
-        String::from_utf8_lossy(&page.stderr)
-    );
-    assert!(page.status.success(), "the page checks failed");
-    assert!(status.success(), "{rest}");
+    let url = panel_url(&mut stdout);
+    let (page_out, rest) = drive(&chromium, &url, "panel-task.png", 2, &mut stdout, &mut task);
     assert!(
         page_out.contains("\"targets\":1"),
         "the page shows the target: {page_out}"

@@ -32,3 +32,18 @@ pub fn oddball(args: &[&str]) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// A fresh temporary folder for one test (removed first if a previous run left it).
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("oddball-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// A model fitted in a quick (unpaced) one-command demo session, for `oddball online`.
+pub fn demo_model(dir: &std::path::Path) -> PathBuf {
+    let out = dir.join("demo");
+    let (ok, _, err) = oddball(&["demo", "--commands", "up", "--out", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    out.join("model.json")
+}
