@@ -62,7 +62,32 @@ impl NicFormat {
     pub fn binary_len(&self) -> usize {
         4 * self.n_channels + 4 * usize::from(self.trigger) + 8 * usize::from(self.timestamp)
     }
+
+    /// At least one value per sample and at most [`MAX_NIC_CHANNELS`] channels (an empty
+    /// sample would decode forever from no bytes; a huge count would overflow the frame size).
+    pub fn validate(&self) -> Result<(), SessionError> {
+        let bad = |reason: &str| {
+            Err(SessionError::InvalidParameter {
+                name: "NIC format",
+                value: format!(
+                    "{} channels, trigger {}, timestamp {}",
+                    self.n_channels, self.trigger, self.timestamp
+                ),
+                reason: reason.into(),
+            })
+        };
+        if self.n_channels > MAX_NIC_CHANNELS {
+            return bad(&format!("more than {MAX_NIC_CHANNELS} channels"));
+        }
+        if self.n_channels == 0 && !self.trigger && !self.timestamp {
+            return bad("a sample of no values");
+        }
+        Ok(())
+    }
 }
+
+/// Most channels a NIC stream may declare.
+pub const MAX_NIC_CHANNELS: usize = 1024;
 
 /// One sample off the wire.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -136,6 +161,7 @@ impl NicDecoder {
 
     /// Decodes every whole sample in `bytes` (plus what was pending).
     pub fn push(&mut self, bytes: &[u8]) -> Result<Vec<NicSample>, SessionError> {
+        self.format.validate()?;
         self.buf.extend_from_slice(bytes);
         let mut out = Vec::new();
         let mut at = 0;

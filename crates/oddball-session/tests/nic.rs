@@ -230,3 +230,36 @@ fn a_two_second_pause_waits_or_stops_cleanly() {
         server.join().unwrap();
     }
 }
+
+/// Found by the `nic` fuzz target: a format of no values decoded empty samples from no bytes
+/// forever (out of memory), and a huge channel count overflowed the frame size. Both are now
+/// refused with an error naming the format, for any input.
+#[test]
+fn fuzz_regression_formats_of_no_values_or_absurd_channel_counts_are_refused() {
+    use oddball_session::nic::{NicDecoder, NicFormat, NicMode};
+    let crash = [0x30u8, 0x30, 0x30, 0x30, 0x33, 0x09, 0x31];
+    for (mode, n, trigger, timestamp) in [
+        (NicMode::Binary, 0, false, false),
+        (NicMode::Ascii, 0, false, false),
+        (NicMode::Binary, usize::MAX, true, true),
+        (NicMode::Binary, 1 << 62, false, false),
+        (NicMode::Ascii, 1 << 30, false, false),
+    ] {
+        let format = NicFormat {
+            mode,
+            n_channels: n,
+            trigger,
+            timestamp,
+        };
+        let err = NicDecoder::new(format).push(&crash).unwrap_err();
+        assert!(err.to_string().contains("NIC format"), "{err}");
+    }
+    // A trigger-only stream is a valid (if odd) format.
+    let format = NicFormat {
+        mode: NicMode::Binary,
+        n_channels: 0,
+        trigger: true,
+        timestamp: false,
+    };
+    assert_eq!(NicDecoder::new(format).push(&[1, 0, 0, 0]).unwrap().len(), 1);
+}

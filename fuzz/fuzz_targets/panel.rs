@@ -1,0 +1,22 @@
+//! Arbitrary text through the panel's WebSocket message parser (what any page, or anyone on
+//! the machine, may send to `oddball online --serve`).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use oddball_live::panel::protocol::{parse_client, ClientMsg, MAX_CLIENT_MESSAGE};
+
+fuzz_target!(|data: &[u8]| {
+    if let Ok(text) = std::str::from_utf8(data) {
+        if let Ok(msg) = parse_client(text) {
+            assert!(text.len() <= MAX_CLIENT_MESSAGE);
+            match msg {
+                ClientMsg::Ping { page_ms, .. } => assert!(page_ms.is_finite()),
+                ClientMsg::On { code, on_ms, .. } => {
+                    assert!(on_ms.is_finite() && (1..=64).contains(&code))
+                }
+                ClientMsg::Off { off_ms, .. } => assert!(off_ms.is_finite()),
+                ClientMsg::Hello { frame_ms, .. } => assert!(frame_ms.is_finite()),
+            }
+        }
+    }
+});
