@@ -261,5 +261,8 @@ fn fuzz_regression_formats_of_no_values_or_absurd_channel_counts_are_refused() {
         trigger: true,
         timestamp: false,
     };
-    assert_eq!(NicDecoder::new(format).push(&[1, 0, 0, 0]).unwrap().len(), 1);
+    assert_eq!(
+        NicDecoder::new(format).push(&[1, 0, 0, 0]).unwrap().len(),
+        1
+    );
 }

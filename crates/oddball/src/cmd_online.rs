@@ -27,7 +27,8 @@ use crate::cmd_demo::SessionOptions;
 #[derive(Debug, clap::Args)]
 pub struct OnlineArgs {
     /// Where the EEG comes from: `sim` (the simulated subject, paced by the wall clock) or
-    /// `lsl:NAME` (a Lab Streaming Layer EEG stream; needs the `lsl` feature).
+    /// `lsl:NAME` / `lsl:type=EEG` (a Lab Streaming Layer EEG stream by name or type; needs the
+    /// `lsl` feature).
     #[arg(long, default_value = "sim", value_name = "SOURCE")]
     pub source: String,
     /// A model trained in a session (`oddball demo` writes one: out/demo/model.json).
@@ -190,7 +191,8 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
             let markers = LslMarkers::new(&args.markers, clock)
                 .with_context(|| format!("opening the marker outlet {}", args.markers))?;
             println!("marker outlet: {}", args.markers);
-            let source = LslSource::resolve(&StreamQuery::Name(name.to_string()), 30.0, clock)
+            let query: StreamQuery = name.parse()?;
+            let source = LslSource::resolve(&query, 30.0, clock)
                 .with_context(|| format!("--source lsl:{name}"))?;
             // Markers pushed before anyone listens are lost (the first cue, say).
             if !markers.wait_for_consumers(10.0) {
