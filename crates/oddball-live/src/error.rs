@@ -17,6 +17,12 @@ pub enum LiveError {
     Bind { addr: String, reason: String },
     #[error("the stream {name} is gone (its outlet closed and cannot be recovered)")]
     StreamLost { name: String },
+    #[error("the recording {} ended after {n_times} samples ({seconds:.1} s): playback stopped", path.display())]
+    RecordingEnded {
+        path: std::path::PathBuf,
+        n_times: usize,
+        seconds: f64,
+    },
     #[error("LSL: {0}")]
     Lsl(String),
     #[error(transparent)]

@@ -4,6 +4,7 @@
 //! * [`panel`]: the stimulus panel, a web page served by the binary, live over a WebSocket.
 //! * [`live`]: the live session's subject: a live EEG source, the panel, the marker stream and
 //!   the recording on one clock; the simulated subject as a live source.
+//! * [`playback`]: a recording played back as a live source (`--source replay:FILE`).
 //! * [`record`]: the recording, XDF flushed per block.
 //! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
 //!   decisions out) and the simulated subject as a live LSL amplifier.
@@ -15,6 +16,7 @@ pub mod lsl;
 #[cfg(feature = "lsl")]
 pub mod lsl_live;
 pub mod panel;
+pub mod playback;
 pub mod record;
 
 pub use error::LiveError;

@@ -5,7 +5,9 @@
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_live::live::{LiveSubject, SimSource};
 use oddball_live::panel::Clock;
+use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
+use oddball_live::LiveError;
 use oddball_session::engine::{Session, SessionParams, Subject};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::subject::{SubjectParams, SubjectPreset};
@@ -85,4 +87,71 @@ fn a_live_session_on_schedule_equals_the_direct_session_and_records_it() {
         .collect();
     let shown: Vec<u64> = log.flashes.iter().map(|f| f.onset).collect();
     assert_eq!(onsets, shown);
+}
+
+#[test]
+fn a_recorded_session_played_back_decides_the_same_and_stops_at_the_end_of_the_file() {
+    let commands = [Command::Up, Command::Right];
+    let arm = || ArmSim::from_config(&ArmConfig::default()).unwrap();
+    let dir = std::env::temp_dir().join(format!("oddball-playback-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("recorded.xdf");
+    let _ = std::fs::remove_file(&path);
+    let clock = Clock::new();
+
+    let s = sim();
+    let recorder = Recorder::create(&path, s.ch_names(), s.sfreq(), "test").unwrap();
+    let subject = LiveSubject::new(
+        SimSource::unpaced(sim(), clock),
+        FourBulbParams::paper(),
+        clock,
+    )
+    .with_recorder(recorder);
+    let mut live = Session::new(params(), subject, Some(arm())).unwrap();
+    live.calibrate().unwrap();
+    let a: Vec<_> = commands
+        .iter()
+        .map(|&c| live.decide(Some(c)).unwrap())
+        .collect();
+    let n = live.subject().position() as usize;
+    let (recorded, _, _) = live.finish();
+
+    let source = PlaybackSource::open(&path, clock).unwrap().unpaced();
+    assert_eq!(source.n_times(), n);
+    let subject = LiveSubject::new(source, FourBulbParams::paper(), clock);
+    let mut replay = Session::new(params(), subject, Some(arm())).unwrap();
+    replay.calibrate().unwrap();
+    let b: Vec<_> = commands
+        .iter()
+        .map(|&c| replay.decide(Some(c)).unwrap())
+        .collect();
+    // float32 on disk: the same choices and rounds, posteriors to float32 precision.
+    for (x, y) in a.iter().zip(&b) {
+        assert_eq!(x.decided(), y.decided());
+        assert_eq!((x.start, x.end, x.rounds), (y.start, y.end, y.rounds));
+        for (p, q) in x.posterior.iter().zip(&y.posterior) {
+            assert!(
+                (p - q).abs() < 1e-3,
+                "{:?} vs {:?}",
+                x.posterior,
+                y.posterior
+            );
+        }
+    }
+    let recorded_flashes: Vec<(u64, u32)> =
+        recorded.flashes.iter().map(|f| (f.onset, f.code)).collect();
+    let shown: Vec<(u64, u32)> = replay.flashes().iter().map(|f| (f.onset, f.code)).collect();
+    assert_eq!(shown, recorded_flashes);
+    let source = replay.subject().source();
+    assert_eq!(source.coincidence(&shown, 0), shown.len());
+    // Another schedule (shifted by a sample) misses every flash at tolerance 0, not at 1.
+    let shifted: Vec<(u64, u32)> = shown.iter().map(|&(o, c)| (o + 1, c)).collect();
+    assert_eq!(source.coincidence(&shifted, 0), 0);
+    assert_eq!(source.coincidence(&shifted, 1), shown.len());
+    // A third decision runs past the end of the file: a clear error, nothing invented.
+    assert!(replay.decide(Some(Command::Down)).is_err());
+    match replay.subject_mut().take_error() {
+        Some(LiveError::RecordingEnded { n_times, .. }) => assert_eq!(n_times, n),
+        other => panic!("expected RecordingEnded, got {other:?}"),
+    }
 }

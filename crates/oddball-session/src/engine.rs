@@ -413,6 +413,11 @@ impl<S: Subject> Session<S> {
         &self.trials
     }
 
+    /// Every flash shown so far, in order.
+    pub fn flashes(&self) -> &[ShownFlash] {
+        &self.flashes
+    }
+
     /// The accepted calibration epochs (band-passed, as the model saw them), events flagged.
     pub fn calibration_epochs(&self) -> Result<oddball_signal::Epochs, SessionError> {
         let cal = &self.calibration;

@@ -15,8 +15,10 @@ use oddball_arm::{parse_commands, ArmConfig, ArmSim};
 use oddball_decode::pipeline::Model;
 use oddball_live::live::{EegSource, LiveSubject, SimSource, Summary};
 use oddball_live::panel::{Clock, PanelConfig, PanelServer};
+use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
-use oddball_session::engine::{Session, SessionParams, Subject};
+use oddball_live::LiveError;
+use oddball_session::engine::{Session, SessionParams, ShownFlash, Subject};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::subject::SubjectParams;
 use serde::Serialize;
@@ -26,9 +28,11 @@ use crate::cmd_demo::SessionOptions;
 /// Options of `oddball online`.
 #[derive(Debug, clap::Args)]
 pub struct OnlineArgs {
-    /// Where the EEG comes from: `sim` (the simulated subject, paced by the wall clock) or
+    /// Where the EEG comes from: `sim` (the simulated subject, paced by the wall clock),
     /// `lsl:NAME` / `lsl:type=EEG` (a Lab Streaming Layer EEG stream by name or type; needs the
-    /// `lsl` feature).
+    /// `lsl` feature) or `replay:FILE` (a recording played back at its own rate from its first
+    /// sample; a session.xdf of `oddball online` replays to the same flashes with the same
+    /// --seed and --commands; the session stops at the end of the file).
     #[arg(long, default_value = "sim", value_name = "SOURCE")]
     pub source: String,
     /// A model trained in a session (`oddball demo` writes one: out/demo/model.json).
@@ -46,6 +50,10 @@ pub struct OnlineArgs {
     /// Name of the LSL marker outlet (flashes, cues, decisions) with an LSL source.
     #[arg(long, default_value = "oddball-markers")]
     pub markers: String,
+    /// With --source replay:FILE, play the file back as fast as it is processed instead of in
+    /// real time (re-running a recorded session with another model, say); not with --serve.
+    #[arg(long, conflicts_with = "serve")]
+    pub fast: bool,
     /// Latency of the simulated amplifier, ms: how late its samples arrive.
     #[arg(long, default_value_t = 250.0)]
     pub sim_latency_ms: f64,
@@ -167,6 +175,10 @@ struct OnlineSummary {
     undrawn_flashes: usize,
     decision_latency: Option<TimingRow>,
     recording: String,
+    /// `--source replay:…`: how many flashes fell on the file's flashes.
+    replay: Option<String>,
+    /// What stopped the session early (the replayed file's end).
+    ended: Option<String>,
 }
 
 fn resolve(addr: &str) -> Result<SocketAddr> {
@@ -182,6 +194,9 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         bail!("--commands is empty: give at least one of up, down, left, right");
     }
     let (_, rule) = args.session.rules()?;
+    if args.fast && !args.source.starts_with("replay:") {
+        bail!("--fast plays back a file: it needs --source replay:FILE");
+    }
     let clock = Clock::new();
     if let Some(name) = args.source.strip_prefix("lsl:") {
         #[cfg(feature = "lsl")]
@@ -205,6 +220,7 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
                 clock,
                 rule,
                 &commands,
+                |_, _| None,
             );
         }
         #[cfg(not(feature = "lsl"))]
@@ -212,15 +228,26 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
             "--source lsl:{name}: built without the lsl feature: cargo build --release --features lsl"
         );
     }
-    if args.source.starts_with("replay:") {
-        bail!(
-            "--source {}: replaying a file live is not supported yet; `oddball demo --subject {}` replays it offline",
-            args.source,
-            args.source
+    if let Some(file) = args.source.strip_prefix("replay:") {
+        let mut source =
+            PlaybackSource::open(file, clock).with_context(|| format!("--source replay:{file}"))?;
+        if args.fast {
+            source = source.unpaced();
+        }
+        println!(
+            "replaying {file}: {} channels, {} Hz, {:.1} s, {} events",
+            source.ch_names().len(),
+            source.sfreq(),
+            source.n_times() as f64 / source.sfreq(),
+            source.events().len()
         );
+        return run_with(args, source, None, clock, rule, &commands, coincidence);
     }
     if args.source != "sim" {
-        bail!("--source {}: expected sim or lsl:NAME", args.source);
+        bail!(
+            "--source {}: expected sim, lsl:NAME or replay:FILE",
+            args.source
+        );
     }
     let preset = args
         .session
@@ -231,8 +258,29 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         .build()
         .context("building the simulated subject")?;
     let source = SimSource::new(sim, clock, args.sim_latency_ms);
-    run_with(args, source, None, clock, rule, &commands)
+    run_with(args, source, None, clock, rule, &commands, |_, _| None)
 }
+
+/// How many of this session's flashes fall on a flash of the same bulb in the replayed file.
+fn coincidence(source: &PlaybackSource, flashes: &[ShownFlash]) -> Option<String> {
+    // A P300 spans hundreds of ms: a page's few ms of onset jitter do not matter.
+    let tolerance = (REPLAY_TOLERANCE_S * source.sfreq()).round().max(1.0) as u64;
+    let shown: Vec<(u64, u32)> = flashes.iter().map(|f| (f.onset, f.code)).collect();
+    let k = source.coincidence(&shown, tolerance);
+    let mut line = format!(
+        "replay: {k} of {} flashes of this session fall on a flash of the same bulb in the file (±{tolerance} samples)",
+        shown.len()
+    );
+    if k < shown.len() {
+        line.push_str(
+            "; the others met EEG with no response to them (replay with the recording's --seed and --commands)",
+        );
+    }
+    Some(line)
+}
+
+/// Flashes of a replayed session within this of a flash in the file coincide with it, s.
+const REPLAY_TOLERANCE_S: f64 = 0.010;
 
 fn run_with<S: EegSource>(
     args: &OnlineArgs,
@@ -241,6 +289,7 @@ fn run_with<S: EegSource>(
     clock: Clock,
     rule: oddball_decode::decision::DecisionRule,
     commands: &[oddball_arm::Command],
+    review: impl FnOnce(&S, &[ShownFlash]) -> Option<String>,
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = FourBulbParams::paper();
@@ -323,10 +372,19 @@ fn run_with<S: EegSource>(
     }
     let mut rows = Vec::new();
     let p = session.params().paradigm;
+    let mut ended = None;
     for (i, &command) in commands.iter().enumerate() {
-        let t = session
-            .decide(Some(command))
-            .with_context(|| format!("decision {}", i + 1))?;
+        let t = match session.decide(Some(command)) {
+            Ok(t) => t,
+            Err(e) => match recording_ended(&mut session) {
+                Some(end) => {
+                    println!("decision {}: {end}", i + 1);
+                    ended = Some(end);
+                    break;
+                }
+                None => return Err(e).with_context(|| format!("decision {}", i + 1)),
+            },
+        };
         let decided = t.decided().and_then(|c| p.command_of(c));
         let row = DecisionRow {
             index: i + 1,
@@ -355,7 +413,11 @@ fn run_with<S: EegSource>(
         }
         rows.push(row);
     }
-    session.idle(1.5)?;
+    if ended.is_none() {
+        if let Err(e) = session.idle(1.5) {
+            ended = Some(recording_ended(&mut session).ok_or(e)?);
+        }
+    }
     let correct = rows
         .iter()
         .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
@@ -364,14 +426,25 @@ fn run_with<S: EegSource>(
     if let Some(r) = session.channel_report() {
         println!("{r}");
     }
+    let replay = review(session.subject().source(), session.flashes());
+    if let Some(r) = &replay {
+        println!("{r}");
+    }
     let subject = session.subject_mut();
     let timing = subject.timing.clone();
     let latency = subject.decision_latency_ms.clone();
     let health = subject.stream_health();
-    let summary_line = format!(
+    let mut summary_line = format!(
         "{correct}/{} decisions right, {abstained} abstained",
         rows.len()
     );
+    if ended.is_some() {
+        summary_line.push_str(&format!(
+            " ({} of {} made before the recording ended)",
+            rows.len(),
+            commands.len()
+        ));
+    }
     subject.end(&summary_line);
     if let Some(panel) = subject.panel() {
         let s = panel.stats();
@@ -400,6 +473,8 @@ fn run_with<S: EegSource>(
         undrawn_flashes: timing.undrawn,
         decision_latency: Summary::of(&latency).map(Into::into),
         recording: record_path.display().to_string(),
+        replay,
+        ended: ended.map(|e| e.to_string()),
     };
     let _ = log;
     let path = args.out.join("summary.json");
@@ -411,6 +486,14 @@ fn run_with<S: EegSource>(
         summary_samples(&record_path)
     );
     Ok(())
+}
+
+/// The replayed file's end, when that is what stopped the session.
+fn recording_ended<S: EegSource>(session: &mut Session<LiveSubject<S>>) -> Option<LiveError> {
+    match session.subject_mut().take_error() {
+        Some(e @ LiveError::RecordingEnded { .. }) => Some(e),
+        _ => None,
+    }
 }
 
 fn summary_samples(path: &std::path::Path) -> String {

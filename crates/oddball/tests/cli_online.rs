@@ -96,7 +96,10 @@ fn online_says_what_is_wrong_before_it_starts() {
         common::oddball(&["online", "--model", m, "--serve", "0.0.0.0:0", "--out", o]);
     assert!(!ok && err.contains("loopback"), "{err}");
     let (ok, _, err) = common::oddball(&["online", "--model", m, "--source", "nope", "--out", o]);
-    assert!(!ok && err.contains("expected sim or lsl:NAME"), "{err}");
+    assert!(
+        !ok && err.contains("expected sim, lsl:NAME or replay:FILE"),
+        "{err}"
+    );
     let (ok, _, err) = common::oddball(&["online", "--source", "sim"]);
     assert!(!ok && err.contains("--model"), "{err}");
     let (ok, _, err) =
@@ -114,4 +117,107 @@ fn online_says_what_is_wrong_before_it_starts() {
         o,
     ]);
     assert!(!ok && err.contains("no page opened the panel"), "{err}");
+}
+
+/// The decision lines of `oddball online`'s output, e.g. `decision 1: up → up ✓ (…)`.
+fn decisions(stdout: &str) -> Vec<&str> {
+    stdout
+        .lines()
+        .filter(|l| l.starts_with("decision "))
+        .collect()
+}
+
+#[test]
+fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_file() {
+    let model = model();
+    let m = model.to_str().unwrap();
+    let out = tmp("replay");
+    let (rec_dir, again, other) = (out.join("rec"), out.join("again"), out.join("other"));
+    // Recorded in real time (one decision: ~11 s).
+    let (ok, recorded, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--seed",
+        "3",
+        "--commands",
+        "up",
+        "--sim-latency-ms",
+        "20",
+        "--out",
+        rec_dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let file = format!("replay:{}", rec_dir.join("session.xdf").display());
+    // Played back as fast as it goes, same seed and commands: the same decision, every flash
+    // on a flash of the file.
+    let (ok, replayed, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--seed",
+        "3",
+        "--commands",
+        "up",
+        "--source",
+        &file,
+        "--fast",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(replayed.starts_with("replaying "), "{replayed}");
+    let d = decisions(&recorded);
+    assert_eq!(d.len(), 1, "{recorded}");
+    // The line ends with the posterior and timing; the choice and rounds are what must agree.
+    let head = |l: &str| l.split(" (p ").next().unwrap().to_string();
+    assert_eq!(
+        decisions(&replayed)
+            .iter()
+            .map(|l| head(l))
+            .collect::<Vec<_>>(),
+        vec![head(d[0])],
+        "{replayed}"
+    );
+    assert!(
+        replayed
+            .contains("replay: 20 of 20 flashes of this session fall on a flash of the same bulb"),
+        "{replayed}"
+    );
+    // Another seed and one command more: the flashes mostly miss the file's, and the file ends
+    // before the second decision: a clean stop with the summary written.
+    let (ok, short, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--seed",
+        "4",
+        "--commands",
+        "up,left",
+        "--source",
+        &file,
+        "--fast",
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(short.contains("ended after"), "{short}");
+    assert!(
+        short.contains("(1 of 2 made before the recording ended)"),
+        "{short}"
+    );
+    assert!(!short.contains("replay: 20 of 20"), "{short}");
+    let summary = std::fs::read_to_string(other.join("summary.json")).unwrap();
+    assert!(summary.contains("\"ended\": \"the recording"), "{summary}");
+    // Errors: --fast without a file, a file that is not there.
+    let (ok, _, err) = common::oddball(&["online", "--model", m, "--fast"]);
+    assert!(!ok && err.contains("--fast plays back a file"), "{err}");
+    let (ok, _, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--source",
+        "replay:/nonexistent/session.xdf",
+    ]);
+    assert!(!ok && err.contains("/nonexistent/session.xdf"), "{err}");
 }
