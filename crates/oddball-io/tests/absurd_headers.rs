@@ -45,7 +45,7 @@ fn edf_record_counts_and_durations_that_make_no_sense_are_refused() {
 }
 
 #[test]
-fn bci2000_zero_hz_and_negative_channel_counts_are_refused() {
+fn bci2000_zero_hz_negative_channel_counts_and_zero_columns_are_refused() {
     let Some(path) = [concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../../../shared/data/bci2000-samplefiles-p300/eeg3_1.dat"
@@ -76,6 +76,11 @@ fn bci2000_zero_hz_and_negative_channel_counts_are_refused() {
             ),
             "sourcech",
         ),
+        // A speller matrix of 0 columns.
+        (
+            replace_once(&bytes, b"NumMatrixColumns= 1 6", b"NumMatrixColumns= 1 0"),
+            "nummatrixcolumns",
+        ),
     ];
     for (i, (b, field)) in cases.into_iter().enumerate() {
         let p = dir.join(format!("case{i}.dat"));
@@ -86,6 +91,23 @@ fn bci2000_zero_hz_and_negative_channel_counts_are_refused() {
             .to_lowercase();
         assert!(err.contains(field), "{field}: {err}");
     }
+}
+
+/// Found by `cargo fuzz run bci2000`: a speller with no targets made the layout split its
+/// targets into rows of 0 and panicked (the fixture is the fuzzer's file, synthetic). An
+/// explicit 0 columns is refused as a count (the BCI2000 test above).
+#[test]
+fn a_speller_of_no_targets_is_refused() {
+    let path = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/fuzz/bci2000_no_targets.dat"
+    ));
+    let bytes = std::fs::read(path).unwrap();
+    let options = oddball_io::Bci2000Options::default();
+    let err = oddball_io::bci2000::parse_bci2000(&bytes, path, &options)
+        .expect_err("no targets")
+        .to_string();
+    assert!(err.contains("TargetDefinitions"), "{err}");
 }
 
 fn replace_once(haystack: &[u8], from: &[u8], to: &[u8]) -> Vec<u8> {

@@ -483,6 +483,14 @@ fn speller_from(ctx: &Ctx<'_>, params: &Parameters) -> Result<Option<Speller>, I
             }),
         }
     };
+    if symbols.is_empty() {
+        return Err(ctx.invalid(
+            "parameter TargetDefinitions",
+            defs.offset,
+            "at least one target",
+            "0 targets",
+        ));
+    }
     let (n_rows, n_cols) = match (dim("NumMatrixRows")?, dim("NumMatrixColumns")?) {
         (Some(r), Some(c)) => (r, c),
         (r, c) => {
