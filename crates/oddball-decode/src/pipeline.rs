@@ -145,8 +145,9 @@ pub struct XdawnTangent {
     pub tangent: TangentSpace,
 }
 
-fn every_nth(epochs: ArrayView3<f64>, step: usize) -> Array3<f64> {
-    epochs.slice(s![.., .., ..;step]).to_owned()
+/// Every `step`-th sample of each epoch, as a view (no copy).
+fn every_nth(epochs: ArrayView3<'_, f64>, step: usize) -> ArrayView3<'_, f64> {
+    epochs.slice_move(s![.., .., ..;step])
 }
 
 fn check_step(step: usize) -> Result<()> {
@@ -210,14 +211,22 @@ impl Features {
                 let x = every_nth(epochs, f.step);
                 let n_features = f.tangent.n_features();
                 let mut out = Array2::zeros((x.dim().0, n_features));
+                // Each thread reuses its own buffers: no allocation per epoch.
                 out.axis_iter_mut(Axis(0))
                     .into_par_iter()
                     .zip(x.axis_iter(Axis(0)).into_par_iter())
-                    .try_for_each(|(mut row, epoch)| -> Result<()> {
-                        let cov = f.xdawn.transform_epoch(epoch)?;
-                        row.assign(&f.tangent.transform_one(cov.view())?);
-                        Ok(())
-                    })?;
+                    .try_for_each_init(
+                        || {
+                            (
+                                crate::xdawn::Buffers::default(),
+                                crate::riemann::Scratch::default(),
+                            )
+                        },
+                        |(buf, scratch), (row, epoch)| -> Result<()> {
+                            let cov = f.xdawn.covariance_of(epoch, buf)?;
+                            f.tangent.vectorize_symmetric_into(cov, scratch, row)
+                        },
+                    )?;
                 Ok(out)
             }
             Features::XdawnCovariances(f) => {
@@ -227,11 +236,15 @@ impl Features {
                 out.axis_iter_mut(Axis(0))
                     .into_par_iter()
                     .zip(x.axis_iter(Axis(0)).into_par_iter())
-                    .try_for_each(|(mut row, epoch)| -> Result<()> {
-                        let cov = f.xdawn.transform_epoch(epoch)?;
-                        row.iter_mut().zip(cov.iter()).for_each(|(o, &v)| *o = v);
-                        Ok(())
-                    })?;
+                    .try_for_each_init(
+                        crate::xdawn::Buffers::default,
+                        |buf, (mut row, epoch)| -> Result<()> {
+                            let cov = f.xdawn.covariance_of(epoch, buf)?;
+                            // Row-major flattening of a symmetric matrix.
+                            row.iter_mut().zip(cov.iter()).for_each(|(o, &v)| *o = v);
+                            Ok(())
+                        },
+                    )?;
                 Ok(out)
             }
         }

@@ -348,9 +348,9 @@ impl From<TangentSpace> for TangentSpaceRepr {
     }
 }
 
-/// Scratch buffers of one projection, reused across matrices.
+/// Scratch buffers of one projection, reused across matrices (one per thread in batches).
 #[derive(Debug, Default)]
-struct Scratch {
+pub(crate) struct Scratch {
     input: DMatrix<f64>,
     tmp: DMatrix<f64>,
     white: DMatrix<f64>,
@@ -442,11 +442,24 @@ impl TangentSpace {
         &self,
         c: ArrayView2<f64>,
         s: &mut Scratch,
+        out: ArrayViewMut1<f64>,
+    ) -> Result<()> {
+        let input = symmetric_from("tangent-space input", c)?;
+        self.vectorize_symmetric_into(&input, s, out)?;
+        s.input = input;
+        Ok(())
+    }
+
+    /// Tangent vector of `c`, an exactly symmetric matrix of the right side (checked for
+    /// finiteness and positive definiteness, not for symmetry), into `out`.
+    pub(crate) fn vectorize_symmetric_into(
+        &self,
+        c: &DMatrix<f64>,
+        s: &mut Scratch,
         mut out: ArrayViewMut1<f64>,
     ) -> Result<()> {
-        s.input = symmetric_from("tangent-space input", c)?;
-        congruence_into(&self.invsqrt_ref, &s.input, &mut s.tmp, &mut s.white);
-        let eig = spd_eigen("tangent-space input", s.white.clone())?;
+        congruence_into(&self.invsqrt_ref, c, &mut s.tmp, &mut s.white);
+        let eig = spd_eigen("tangent-space input", std::mem::take(&mut s.white))?;
         let mut k = 0;
         eigen_function_upper(&eig, f64::ln, |i, j, v| {
             out[k] = if i == j {
@@ -456,6 +469,8 @@ impl TangentSpace {
             };
             k += 1;
         });
+        // The eigenvectors' storage serves the next whitened matrix.
+        s.white = eig.eigenvectors;
         Ok(())
     }
 }

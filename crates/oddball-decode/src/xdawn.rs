@@ -273,9 +273,9 @@ impl From<XdawnCovariances> for XdawnCovariancesRepr {
     }
 }
 
-/// Reusable buffers for [`XdawnCovariances`] on one epoch.
+/// Reusable buffers for [`XdawnCovariances`] on one epoch (one per thread in batches).
 #[derive(Debug, Default)]
-struct Buffers {
+pub(crate) struct Buffers {
     xt: DMatrix<f64>,
     super_trial: DMatrix<f64>,
     cov: DMatrix<f64>,
@@ -335,6 +335,19 @@ impl XdawnCovariances {
         let mut buf = Buffers::default();
         self.covariance_into(epoch, &mut buf);
         Ok(to_array2(&buf.cov))
+    }
+
+    /// SPD matrix `(4k, 4k)` of one epoch, computed in `buf` (no allocation once `buf` has
+    /// seen an epoch of this shape).
+    pub(crate) fn covariance_of<'b>(
+        &self,
+        epoch: ArrayView2<f64>,
+        buf: &'b mut Buffers,
+    ) -> Result<&'b DMatrix<f64>> {
+        self.check_epoch(epoch.nrows(), epoch.ncols())?;
+        check_finite("xDAWN covariance input", epoch.iter())?;
+        self.covariance_into(epoch, buf);
+        Ok(&buf.cov)
     }
 
     fn check_epoch(&self, n_channels: usize, n_times: usize) -> Result<()> {
