@@ -363,6 +363,11 @@ pub struct PipelineParams {
     pub scaler: Option<StandardScalerParams>,
     pub pca: Option<PcaParams>,
     pub classifier: ClassifierParams,
+    /// Score fusion: further pipelines fitted on the same epochs, whose scores are added to this
+    /// one's. Each pipeline's decision value is divided by its standard deviation over the
+    /// training epochs (so each counts equally), then all are summed. Empty for one pipeline.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fused: Vec<PipelineParams>,
     /// Multiplies the RBF SVMs' `γ = 'scale'`: 1 is scikit-learn's `'scale'`; otherwise the
     /// γ is resolved once on the training features (the Platt-calibration folds inside share it).
     #[serde(default = "one")]
@@ -374,7 +379,15 @@ fn one() -> f64 {
 }
 
 /// The names [`PipelineParams::preset`] knows.
-pub const PRESETS: [&str; 6] = ["lda", "riemann", "mdm", "paper", "paper-svm", "paper-knn"];
+pub const PRESETS: [&str; 7] = [
+    "lda",
+    "riemann",
+    "lda+riemann",
+    "mdm",
+    "paper",
+    "paper-svm",
+    "paper-knn",
+];
 
 impl PipelineParams {
     /// A named preset for epochs sampled at `sfreq` Hz:
@@ -385,7 +398,10 @@ impl PipelineParams {
     ///   `MDM`), scored `d²(C, M_non-target) − d²(C, M_target)`;
     /// * `paper`: the paper's amplitude + HHT + wavelet features → StandardScaler → PCA (95 %
     ///   variance) → soft vote of an RBF SVM and a 3-NN;
-    /// * `paper-svm`, `paper-knn`: the same features with one of the two members alone.
+    /// * `paper-svm`, `paper-knn`: the same features with one of the two members alone;
+    /// * `lda+riemann`: score fusion of `lda` and `riemann` (each pipeline's decision value
+    ///   divided by its standard deviation on the training epochs, then summed; no weights to
+    ///   tune).
     pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
         let paper_front = |classifier| -> Result<Self> {
             Ok(Self {
@@ -396,6 +412,7 @@ impl PipelineParams {
                 pca: Some(PcaParams::variance_fraction(0.95)),
                 classifier,
                 svm_gamma_scale: 1.0,
+                fused: Vec::new(),
             })
         };
         let xdawn_step = ((sfreq / 64.0).round() as usize).max(1);
@@ -408,6 +425,7 @@ impl PipelineParams {
                 pca: None,
                 classifier: ClassifierParams::Lda(LdaParams::default()),
                 svm_gamma_scale: 1.0,
+                fused: Vec::new(),
             }),
             "riemann" => Ok(Self {
                 name: name.to_string(),
@@ -421,6 +439,7 @@ impl PipelineParams {
                 pca: None,
                 classifier: ClassifierParams::Logistic(LogisticParams::default()),
                 svm_gamma_scale: 1.0,
+                fused: Vec::new(),
             }),
             "mdm" => Ok(Self {
                 name: name.to_string(),
@@ -433,6 +452,7 @@ impl PipelineParams {
                 pca: None,
                 classifier: ClassifierParams::Mdm(MdmParams::default()),
                 svm_gamma_scale: 1.0,
+                fused: Vec::new(),
             }),
             "paper" => paper_front(ClassifierParams::Vote(SoftVoteParams::paper())),
             // Alone, the SVM's decision value is the score: no probability calibration needed.
@@ -441,6 +461,12 @@ impl PipelineParams {
                 ..SvmParams::default()
             })),
             "paper-knn" => paper_front(ClassifierParams::Knn(KnnParams::default())),
+            "lda+riemann" => {
+                let mut p = Self::preset("lda", sfreq)?;
+                p.name = name.to_string();
+                p.fused = vec![Self::preset("riemann", sfreq)?];
+                Ok(p)
+            }
             other => Err(DecodeError::InvalidParameter {
                 name: "pipeline",
                 value: other.to_string(),
@@ -480,7 +506,7 @@ impl PipelineParams {
             pca,
             classifier,
         } = self.fit_head(x, y)?;
-        Ok(Pipeline {
+        let mut pipeline = Pipeline {
             name: self.name.clone(),
             n_channels,
             n_times,
@@ -490,7 +516,18 @@ impl PipelineParams {
             pca,
             classifier,
             params: Some(self.clone()),
-        })
+            fused: Vec::new(),
+            score_scale: 1.0,
+        };
+        if !self.fused.is_empty() {
+            pipeline.score_scale = training_score_sd(&pipeline, epochs)?;
+            for p in &self.fused {
+                let mut member = p.fit(epochs, y)?;
+                member.score_scale = training_score_sd(&member, epochs)?;
+                pipeline.fused.push(member);
+            }
+        }
+        Ok(pipeline)
     }
 
     /// Fits the channel selection and the features on `epochs`; returns them with the features
@@ -569,6 +606,24 @@ impl PipelineParams {
     }
 }
 
+/// Standard deviation of `pipeline`'s own decision values on its training `epochs` (its unit in
+/// a score fusion).
+fn training_score_sd(pipeline: &Pipeline, epochs: ArrayView3<f64>) -> Result<f64> {
+    let scores = pipeline.own_decision_function(epochs)?;
+    let sd = scores.std(0.0);
+    if sd.is_finite() && sd > 0.0 {
+        Ok(sd)
+    } else {
+        Err(DecodeError::InvalidParameter {
+            name: "fused",
+            value: pipeline.name.clone(),
+            reason: format!(
+                "its training scores have no spread (standard deviation {sd}): nothing to fuse"
+            ),
+        })
+    }
+}
+
 /// The fitted channel selection and features.
 #[derive(Debug)]
 pub(crate) struct Front {
@@ -622,6 +677,18 @@ pub struct Pipeline {
     /// The settings it was fitted with (absent in models saved before they were kept).
     #[serde(default)]
     params: Option<PipelineParams>,
+    /// Score fusion: the further pipelines whose scores are added (see
+    /// [`PipelineParams::fused`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    fused: Vec<Pipeline>,
+    /// Standard deviation of the decision values on the training epochs: a fused score adds
+    /// each pipeline's decision value divided by this.
+    #[serde(default = "unit_scale")]
+    score_scale: f64,
+}
+
+fn unit_scale() -> f64 {
+    1.0
 }
 
 impl Pipeline {
@@ -685,14 +752,37 @@ impl Pipeline {
         Ok(x)
     }
 
-    /// Continuous target evidence per epoch (larger = more target-like).
+    /// The pipelines fused with this one (empty for a single pipeline).
+    pub fn fused(&self) -> &[Pipeline] {
+        &self.fused
+    }
+
+    /// Continuous target evidence per epoch (larger = more target-like). For a score fusion,
+    /// the sum of every pipeline's decision value in units of its training spread.
     pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let own = self.own_decision_function(epochs)?;
+        if self.fused.is_empty() {
+            return Ok(own);
+        }
+        let mut total = own / self.score_scale;
+        for m in &self.fused {
+            total += &(m.decision_function(epochs)? / m.score_scale);
+        }
+        Ok(total)
+    }
+
+    /// This pipeline's decision values, without the pipelines fused with it.
+    fn own_decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
         let x = self.features(epochs)?;
         self.classifier.inner().decision_function(x.view())
     }
 
-    /// P(target) per epoch.
+    /// P(target) per epoch. A score fusion has no calibrated probability: the logistic of its
+    /// fused score.
     pub fn predict_proba(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        if !self.fused.is_empty() {
+            return Ok(self.decision_function(epochs)?.mapv(crate::linalg::sigmoid));
+        }
         let x = self.features(epochs)?;
         self.classifier.inner().predict_proba(x.view())
     }
@@ -704,8 +794,14 @@ impl Pipeline {
     }
 }
 
-/// Version of the saved-model format; a file of another version is refused at load.
-pub const MODEL_FORMAT_VERSION: u32 = 1;
+/// Version of the saved-model format written; a file of a version not in
+/// [`READABLE_MODEL_VERSIONS`] is refused at load. Version 2 added score fusion (a model of
+/// version 1 reads the same under 2; a binary that knows only 1 refuses a fused model rather
+/// than scoring half of it).
+pub const MODEL_FORMAT_VERSION: u32 = 2;
+
+/// Saved-model versions this build reads.
+pub const READABLE_MODEL_VERSIONS: [u32; 2] = [1, 2];
 
 /// A channel whose band-passed epoch spans less than this (µV) is flat: no electrode signal.
 pub const FLAT_UV: f64 = 1e-3;
@@ -837,7 +933,7 @@ impl Model {
             reason: e.to_string(),
         })?;
         match v.format_version {
-            Some(MODEL_FORMAT_VERSION) => {}
+            Some(found) if READABLE_MODEL_VERSIONS.contains(&found) => {}
             found => {
                 return Err(DecodeError::ModelVersion {
                     found,
@@ -875,7 +971,7 @@ mod tests {
     fn presets_learn_a_separable_p300_and_round_trip_through_json() {
         let (xtr, ytr) = synthetic(200, 1);
         let (xte, yte) = synthetic(100, 2);
-        for name in ["lda", "riemann", "mdm", "paper-svm"] {
+        for name in ["lda", "riemann", "lda+riemann", "mdm", "paper-svm"] {
             let p = PipelineParams::preset(name, 64.0).unwrap();
             let m = p.fit(xtr.view(), &ytr).unwrap();
             let scores = m.decision_function(xte.view()).unwrap();
@@ -891,6 +987,47 @@ mod tests {
                 .unwrap();
             assert!((one - scores[3]).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn a_score_fusion_adds_its_members_scores_in_units_of_their_training_spread() {
+        let (xtr, ytr) = synthetic(200, 6);
+        let (xte, _) = synthetic(30, 7);
+        let fused = PipelineParams::preset("lda+riemann", 64.0)
+            .unwrap()
+            .fit(xtr.view(), &ytr)
+            .unwrap();
+        assert_eq!(fused.fused().len(), 1);
+        // Independently: each preset alone, scaled by the spread of its own training scores.
+        let part = |name: &str| {
+            let m = PipelineParams::preset(name, 64.0)
+                .unwrap()
+                .fit(xtr.view(), &ytr)
+                .unwrap();
+            let train = m.decision_function(xtr.view()).unwrap();
+            let n = train.len() as f64;
+            let mean = train.sum() / n;
+            let sd = (train.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+            m.decision_function(xte.view()).unwrap() / sd
+        };
+        let expected = part("lda") + part("riemann");
+        let got = fused.decision_function(xte.view()).unwrap();
+        for (g, e) in got.iter().zip(expected.iter()) {
+            assert!((g - e).abs() < 1e-9 * e.abs().max(1.0), "{g} vs {e}");
+        }
+        // The probability is the logistic of the fused score.
+        let p = fused.predict_proba(xte.view()).unwrap();
+        assert!((p[0] - 1.0 / (1.0 + (-got[0]).exp())).abs() < 1e-12);
+        // A model of the older format (version 1, no fusion) still loads.
+        let single = PipelineParams::preset("lda", 64.0)
+            .unwrap()
+            .fit(xtr.view(), &ytr)
+            .unwrap();
+        let v1 = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], single)
+            .to_json()
+            .replace("\"format_version\":2", "\"format_version\":1");
+        assert!(v1.contains("\"format_version\":1"));
+        assert!(Model::from_json(&v1).is_ok());
     }
 
     #[test]
@@ -967,12 +1104,12 @@ mod tests {
         let model = Model::new(Preprocess::peer(), 64.0, vec!["Cz".into(); 4], m);
         let text = model
             .to_json()
-            .replace("\"format_version\":1", "\"format_version\":99");
+            .replace("\"format_version\":2", "\"format_version\":99");
         assert!(matches!(
             Model::from_json(&text),
             Err(DecodeError::ModelVersion {
                 found: Some(99),
-                expected: 1
+                expected: 2
             })
         ));
         assert!(matches!(

@@ -23,7 +23,8 @@ pub struct TrainArgs {
     /// Training recordings (targets flagged).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// Pipeline preset: lda, riemann, mdm, paper, paper-svm, paper-knn.
+    /// Pipeline preset: lda, riemann, lda+riemann (score fusion), mdm, paper, paper-svm,
+    /// paper-knn.
     #[arg(long, default_value = "riemann")]
     pub pipeline: String,
     /// Where to write the model (JSON).

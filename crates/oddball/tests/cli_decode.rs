@@ -332,3 +332,53 @@ fn mdm_preset_spells_the_speller_split() {
     assert!(reps <= 4, "{out}");
     let _ = std::fs::remove_file(json);
 }
+
+/// The fusion of shrinkage LDA and xDAWN + tangent space: every character of eeg3_2 within 2
+/// repetitions when trained on eeg3_1, and of eeg3_1 within 3 when trained on eeg3_2 (every peer
+/// pipeline needs 4 there); a saved fused model scores the same.
+#[test]
+fn lda_riemann_fusion_spells_both_directions_in_2_and_3_repetitions() {
+    let Some(d) = data_dir() else { return };
+    let tmp = common::tmp_dir("decode-fusion");
+    std::fs::create_dir_all(&tmp).unwrap();
+    for (train, test, text, most) in [
+        ("eeg3_1.dat", "eeg3_2.dat", "6MK?", 2),
+        ("eeg3_2.dat", "eeg3_1.dat", "T3OF", 3),
+    ] {
+        let json = tmp.join(format!("{train}.json"));
+        let (ok, out, err) = oddball(&[
+            "evaluate",
+            "--train",
+            d.join(train).to_str().unwrap(),
+            "--test",
+            d.join(test).to_str().unwrap(),
+            "--pipeline",
+            "lda+riemann",
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        assert!(ok, "{err}");
+        let v = read_json(&json);
+        assert_eq!(field(&v[0], "speller_text"), text);
+        let reps = field(&v[0], "reps_for_all_correct").as_u64().unwrap();
+        assert!(reps <= most, "{train} → {test}: {reps} repetitions: {out}");
+        if train == "eeg3_2.dat" {
+            let model = tmp.join("fused.json");
+            let (ok, _, err) = oddball(&[
+                "train",
+                d.join(train).to_str().unwrap(),
+                "--pipeline",
+                "lda+riemann",
+                "-o",
+                model.to_str().unwrap(),
+            ]);
+            assert!(ok, "{err}");
+            let loaded = evaluate_saved_model(&model, &d.join(test), &tmp.join("loaded.json"));
+            assert_eq!(field(&loaded[0], "auc"), field(&v[0], "auc"));
+            assert_eq!(
+                field(&loaded[0], "speller_accuracy"),
+                field(&v[0], "speller_accuracy")
+            );
+        }
+    }
+}
