@@ -771,6 +771,35 @@ impl Pipeline {
         Ok(total)
     }
 
+    /// A fusion's score scales are finite and positive (a file could say anything).
+    fn check_fusion(&self) -> Result<()> {
+        if self.fused.is_empty() {
+            return Ok(());
+        }
+        for p in std::iter::once(self).chain(&self.fused) {
+            let nested = !std::ptr::eq(p, self) && !p.fused.is_empty();
+            if !(p.score_scale.is_finite() && p.score_scale > 0.0) || nested {
+                return Err(DecodeError::ModelFormat {
+                    reason: format!(
+                        "fused pipeline {}: score scale {} (must be finite and > 0, one level of fusion)",
+                        p.name, p.score_scale
+                    ),
+                });
+            }
+            if p.epoch_shape() != self.epoch_shape() {
+                return Err(DecodeError::ModelFormat {
+                    reason: format!(
+                        "fused pipeline {} expects epochs {:?}, the model {:?}",
+                        p.name,
+                        p.epoch_shape(),
+                        self.epoch_shape()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// This pipeline's decision values, without the pipelines fused with it.
     fn own_decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
         let x = self.features(epochs)?;
@@ -941,9 +970,11 @@ impl Model {
                 })
             }
         }
-        serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
+        let model: Self = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
             reason: e.to_string(),
-        })
+        })?;
+        model.pipeline.check_fusion()?;
+        Ok(model)
     }
 
     /// Checks that a recording's channels and rate are the ones the model was trained on.
@@ -1028,6 +1059,24 @@ mod tests {
             .replace("\"format_version\":2", "\"format_version\":1");
         assert!(v1.contains("\"format_version\":1"));
         assert!(Model::from_json(&v1).is_ok());
+        // A fused model whose score scale is not a positive number is refused at load.
+        let text = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], fused).to_json();
+        assert!(Model::from_json(&text).is_ok());
+        let scale = format!("\"score_scale\":{}", {
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            v["pipeline"]["score_scale"].clone()
+        });
+        assert!(text.contains(&scale), "{scale}");
+        for bad in ["0.0", "-1.0"] {
+            let broken = text.replacen(&scale, &format!("\"score_scale\":{bad}"), 1);
+            assert!(
+                matches!(
+                    Model::from_json(&broken),
+                    Err(DecodeError::ModelFormat { .. })
+                ),
+                "{bad}"
+            );
+        }
     }
 
     #[test]
