@@ -296,7 +296,8 @@ mod lsl_sim {
     /// Finds the marker stream (retrying until `stop`), then forwards its markers.
     fn follow(query: StreamQuery, tx: mpsc::Sender<FromMarkers>, stop: Arc<AtomicBool>) {
         while !stop.load(Ordering::Relaxed) {
-            let mut inlet = match MarkerInlet::resolve(&query, 0.5) {
+            // Each attempt listens 1 s for the stream's answer (0.5 s missed it under load).
+            let mut inlet = match MarkerInlet::resolve(&query, 1.0) {
                 Ok(inlet) => inlet,
                 Err(LiveError::StreamNotFound { .. }) => continue,
                 Err(e) => {

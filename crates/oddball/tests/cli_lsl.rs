@@ -125,9 +125,10 @@ mod live {
         let mut inlet = EegInlet::resolve(&StreamQuery::Name(name.clone()), 20.0).unwrap();
         assert_eq!(inlet.sfreq(), SFREQ);
         assert_eq!(inlet.ch_names()[PZ], "Pz");
+        // A ceiling, not a timing check: on a loaded 2-core machine discovery has taken > 20 s.
         assert!(
-            panel.wait_for_consumers(20.0),
-            "the simulator never connected to the marker stream"
+            panel.wait_for_consumers(60.0),
+            "the simulator never connected to the marker stream within 60 s"
         );
 
         // The schedule, relative to t0 (so the EEG it produces is the same every run when the
