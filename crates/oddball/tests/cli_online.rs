@@ -149,22 +149,26 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
     ]);
     assert!(ok, "{err}");
     let file = format!("replay:{}", rec_dir.join("session.xdf").display());
+    // `oddball online --model M --seed SEED --commands C --source FILE --fast --out DIR`.
+    let replay = |seed: &str, commands: &str, out: &std::path::Path| {
+        common::oddball(&[
+            "online",
+            "--model",
+            m,
+            "--seed",
+            seed,
+            "--commands",
+            commands,
+            "--source",
+            &file,
+            "--fast",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
     // Played back as fast as it goes, same seed and commands: the same decision, every flash
     // on a flash of the file.
-    let (ok, replayed, err) = common::oddball(&[
-        "online",
-        "--model",
-        m,
-        "--seed",
-        "3",
-        "--commands",
-        "up",
-        "--source",
-        &file,
-        "--fast",
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    let (ok, replayed, err) = replay("3", "up", &again);
     assert!(ok, "{err}");
     assert!(replayed.starts_with("replaying "), "{replayed}");
     let d = decisions(&recorded);
@@ -186,20 +190,7 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
     );
     // Another seed and one command more: the flashes mostly miss the file's, and the file ends
     // before the second decision: a clean stop with the summary written.
-    let (ok, short, err) = common::oddball(&[
-        "online",
-        "--model",
-        m,
-        "--seed",
-        "4",
-        "--commands",
-        "up,left",
-        "--source",
-        &file,
-        "--fast",
-        "--out",
-        other.to_str().unwrap(),
-    ]);
+    let (ok, short, err) = replay("4", "up,left", &other);
     assert!(ok, "{err}");
     assert!(short.contains("ended after"), "{short}");
     assert!(
