@@ -115,7 +115,21 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
     );
     assert!(root().join("target/panel-test.png").is_file());
     // The session heard the page: every flash stamped and timed; the rogue client refused.
-    assert!(rest.contains("flash on-time 10"), "{rest}");
+    // Measured on-times of 100 ms within one frame (the mean may print as 99.99).
+    let on_time: f64 = rest
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("flash on-time ")?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no flash on-time line:\n{rest}"));
+    assert!(
+        (on_time - 100.0).abs() < 16.7,
+        "mean on-time {on_time} ms:\n{rest}"
+    );
     // A flash the page drew more than 200 ms late (a starved machine) is voided, as it should
     // be; on an idle machine there are none.
     let undrawn: usize = rest
