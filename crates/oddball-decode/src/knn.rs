@@ -35,6 +35,9 @@ pub struct Knn {
     k: usize,
     x: Array2<f64>,
     y: Vec<bool>,
+    /// `‖xᵢ‖²` per training sample, computed on first use (not saved).
+    #[serde(skip)]
+    x_sq: std::sync::OnceLock<Array1<f64>>,
 }
 
 impl KnnParams {
@@ -53,6 +56,7 @@ impl KnnParams {
             k: self.k,
             x: x.to_owned(),
             y: y.to_vec(),
+            x_sq: Default::default(),
         })
     }
 }
@@ -81,11 +85,13 @@ impl Knn {
     /// Squared distances `(n_queries, n_train)` as `‖q‖² + ‖x‖² − 2 q·x` (one matrix product, the
     /// formula scikit-learn's brute-force search uses), clipped at 0.
     fn sq_distances(&self, q: ArrayView2<f64>) -> Array2<f64> {
-        let x_sq: Array1<f64> = self.x.outer_iter().map(|r| r.dot(&r)).collect();
+        let x_sq = self
+            .x_sq
+            .get_or_init(|| crate::linalg::row_sq_norms(self.x.view()));
         let mut d = dot_transposed(q, self.x.view());
         for (mut row, qr) in d.outer_iter_mut().zip(q.outer_iter()) {
             let q_sq = qr.dot(&qr);
-            for (v, s) in row.iter_mut().zip(&x_sq) {
+            for (v, s) in row.iter_mut().zip(x_sq) {
                 *v = (q_sq + s - 2.0 * *v).max(0.0);
             }
         }

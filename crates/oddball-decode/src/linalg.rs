@@ -556,6 +556,97 @@ pub(crate) fn generalized_eigh(
     Ok((values, v))
 }
 
+/// `a · b` over equal-length slices of a few dozen values or more (short ones: [`dot`]), in 16 independent lanes summed pairwise at the end. On an
+/// x86-64 CPU with AVX2 and FMA (checked at run time, once per call: a cached flag) the lanes
+/// become four 256-bit fused multiply-add accumulators, about twice the throughput of the
+/// baseline SSE2 build; elsewhere the same lane order runs without fusion. The scoring of one
+/// epoch is a few of these matrix–vector products (PCA, SVM kernel, k-NN distances), so this is
+/// what single-epoch latency mostly waits on.
+pub(crate) fn dot_wide(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len());
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            #[allow(unsafe_code)]
+            // SAFETY: `dot_avx2_fma` only needs AVX2 and FMA, which the CPU was just seen to have.
+            return unsafe { dot_avx2_fma(a, b) };
+        }
+    }
+    dot_lanes::<false>(a, b)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn dot_avx2_fma(a: &[f64], b: &[f64]) -> f64 {
+    dot_lanes::<true>(a, b)
+}
+
+/// The lane-wise dot product behind [`dot_wide`]; `FUSED` uses `mul_add` (one rounding per term), which
+/// is only fast where the FMA instruction is enabled.
+#[inline(always)]
+fn dot_lanes<const FUSED: bool>(a: &[f64], b: &[f64]) -> f64 {
+    const LANES: usize = 16;
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let (ca, ta) = a.as_chunks::<LANES>();
+    let (cb, tb) = b.as_chunks::<LANES>();
+    let mut acc = [0.0f64; LANES];
+    for (x, y) in ca.iter().zip(cb) {
+        for i in 0..LANES {
+            acc[i] = if FUSED {
+                x[i].mul_add(y[i], acc[i])
+            } else {
+                acc[i] + x[i] * y[i]
+            };
+        }
+    }
+    for (i, (x, y)) in ta.iter().zip(tb).enumerate() {
+        acc[i] = if FUSED {
+            x.mul_add(*y, acc[i])
+        } else {
+            acc[i] + x * y
+        };
+    }
+    let mut width = LANES;
+    while width > 1 {
+        width /= 2;
+        for i in 0..width {
+            acc[i] += acc[i + width];
+        }
+    }
+    acc[0]
+}
+
+/// `out[i] = m.row(i) · x` for every row of `m` `(n_rows, n)`. Rows that are not contiguous
+/// in memory are copied first.
+pub(crate) fn mat_vec_into(m: ndarray::ArrayView2<f64>, x: &[f64], out: &mut [f64]) {
+    debug_assert_eq!(m.ncols(), x.len());
+    debug_assert_eq!(m.nrows(), out.len());
+    let mut tmp = Vec::new();
+    for (o, row) in out.iter_mut().zip(m.outer_iter()) {
+        let r = match row.as_slice() {
+            Some(s) => s,
+            None => {
+                tmp.clear();
+                tmp.extend(row.iter().copied());
+                &tmp[..]
+            }
+        };
+        *o = dot_wide(r, x);
+    }
+}
+
+/// Squared norm of each row of `m`.
+pub(crate) fn row_sq_norms(m: ndarray::ArrayView2<f64>) -> ndarray::Array1<f64> {
+    m.outer_iter()
+        .map(|r| match r.as_slice() {
+            Some(s) => dot_wide(s, s),
+            None => r.dot(&r),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -655,5 +746,42 @@ mod tests {
         });
         check_decomposition(&(&r + r.transpose()));
         check_decomposition(&(&r * r.transpose()));
+    }
+
+    #[test]
+    fn wide_dot_and_mat_vec_match_the_naive_sums() {
+        // fixed pseudo-random values, lengths around the 16-lane chunks and their tails
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for n in [0, 1, 3, 15, 16, 17, 31, 33, 207, 656] {
+            let a: Vec<f64> = (0..n).map(|_| next()).collect();
+            let b: Vec<f64> = (0..n).map(|_| next()).collect();
+            let naive: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            let scale: f64 = a.iter().zip(&b).map(|(x, y)| (x * y).abs()).sum();
+            assert!(
+                (dot_wide(&a, &b) - naive).abs() <= 1e-14 * scale.max(1.0),
+                "n = {n}"
+            );
+        }
+        // a matrix whose rows are not contiguous (a transposed view) gives the same products
+        let m = Array2::from_shape_fn((5, 40), |(i, j)| ((i * 40 + j) as f64).sin());
+        let x: Vec<f64> = (0..40).map(|j| (j as f64 * 0.3).cos()).collect();
+        let mt = m.t().to_owned();
+        let mut fast = vec![0.0; 5];
+        let mut strided = vec![0.0; 5];
+        mat_vec_into(m.view(), &x, &mut fast);
+        mat_vec_into(mt.t(), &x, &mut strided);
+        for i in 0..5 {
+            let naive: f64 = m.row(i).iter().zip(&x).map(|(a, b)| a * b).sum();
+            assert!((fast[i] - naive).abs() < 1e-12);
+            assert_eq!(fast[i], strided[i]);
+        }
+        let norms = row_sq_norms(m.view());
+        assert!((norms[2] - m.row(2).dot(&m.row(2))).abs() < 1e-12);
     }
 }

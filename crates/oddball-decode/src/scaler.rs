@@ -132,8 +132,12 @@ pub(crate) fn dot_transposed(x: ArrayView2<f64>, m: ArrayView2<f64>) -> Array2<f
         return x.dot(&m.t());
     }
     let mut out = Array2::zeros((x.nrows(), m.nrows()));
+    let mut xr = Vec::with_capacity(x.ncols());
     for (mut o, row) in out.outer_iter_mut().zip(x.outer_iter()) {
-        o.assign(&m.dot(&row));
+        xr.clear();
+        xr.extend(row.iter().copied());
+        let o = o.as_slice_mut().expect("a new array's rows are contiguous");
+        crate::linalg::mat_vec_into(m, &xr, o);
     }
     out
 }
