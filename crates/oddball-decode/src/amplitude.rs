@@ -37,7 +37,8 @@ pub fn vec_bin(sfreq: f64) -> Result<usize> {
             reason: "must be finite and > 0".into(),
         });
     }
-    Ok(((sfreq / 25.0).round() as usize).max(1))
+    // Python's round (ties to even), as the peer
+    Ok(((sfreq / 25.0).round_ties_even() as usize).max(1))
 }
 
 /// Means of the non-overlapping bins of `bin` samples of `x` into `out` (`x.len() / bin` values; a

@@ -415,7 +415,8 @@ impl PipelineParams {
                 fused: Vec::new(),
             })
         };
-        let xdawn_step = ((sfreq / 64.0).round() as usize).max(1);
+        // Python's round (ties to even), as the peer: 2 at 160 Hz
+        let xdawn_step = ((sfreq / 64.0).round_ties_even() as usize).max(1);
         match name {
             "lda" => Ok(Self {
                 name: name.to_string(),
@@ -841,9 +842,15 @@ pub struct Preprocess {
     /// Band-pass applied to each recording before epoching: zero-phase offline (after removing
     /// each channel's mean), or causal when `causal` is set.
     pub band: ButterworthParams,
-    /// Epoch window relative to the onset, seconds (both ends included).
+    /// Epoch window relative to the onset, seconds: both ends included (MNE's convention), or
+    /// the end left out when `end_exclusive` is set.
     pub tmin: f64,
     pub tmax: f64,
+    /// The window stops one sample before `tmax` (numpy's `x[onset : onset + round(tmax·sfreq)]`,
+    /// the peer stack's epochs: 205 samples for 0–0.8 s at 256 Hz, not 206). Absent in models
+    /// saved before it existed, which cut both ends included.
+    #[serde(default)]
+    pub end_exclusive: bool,
     /// Online processing: the band-pass runs forward only, from the first sample of the
     /// recording with its steady state at that sample (what the streaming filter does), and no
     /// mean is removed. Offline re-evaluation of an online session gives bit-identical epochs.
@@ -856,7 +863,8 @@ pub struct Preprocess {
 }
 
 impl Preprocess {
-    /// The peer stack's pre-processing: 4th-order Butterworth 0.5–20 Hz, epochs 0–0.8 s.
+    /// The peer stack's pre-processing: 4th-order Butterworth 0.5–20 Hz, epochs of the
+    /// round(0.8·sfreq) samples from the onset.
     pub fn peer() -> Self {
         Self {
             band: ButterworthParams {
@@ -868,6 +876,7 @@ impl Preprocess {
             },
             tmin: 0.0,
             tmax: 0.8,
+            end_exclusive: true,
             causal: false,
             reject_peak_to_peak_uv: None,
         }
@@ -880,16 +889,35 @@ impl Preprocess {
             band: ButterworthParams::paper(),
             tmin: 0.0,
             tmax: 0.6,
+            end_exclusive: false,
             causal: true,
             reject_peak_to_peak_uv: Some(150.0),
         }
     }
 
-    /// Samples of an epoch at `sfreq`: round(tmin·sfreq) ..= round(tmax·sfreq) after the onset.
+    /// Samples of an epoch at `sfreq` as (first offset from the onset, count): round(tmin·sfreq)
+    /// ..= round(tmax·sfreq), or up to but not including round(tmax·sfreq) when `end_exclusive`.
     pub fn window(&self, sfreq: f64) -> (i64, usize) {
         let first = (self.tmin * sfreq).round() as i64;
         let last = (self.tmax * sfreq).round() as i64;
-        (first, (last - first + 1).max(0) as usize)
+        let n = last - first + i64::from(!self.end_exclusive);
+        (first, n.max(0) as usize)
+    }
+
+    /// The epoching of this pre-processing at `sfreq`: its [`window`](Self::window) and its
+    /// peak-to-peak rejection.
+    pub fn epochs_params(&self, sfreq: f64) -> oddball_signal::epochs::EpochsParams {
+        let (first, n) = self.window(sfreq);
+        // sample offsets back to seconds; EpochsParams rounds them to the same offsets
+        let last = first + n as i64 - 1;
+        let mut p = oddball_signal::epochs::EpochsParams::new(
+            first as f64 / sfreq,
+            last.max(first) as f64 / sfreq,
+        );
+        if let Some(t) = self.reject_peak_to_peak_uv {
+            p = p.with_reject(oddball_signal::epochs::Reject::PeakToPeak(t));
+        }
+        p
     }
 
     /// Whether an epoch `(n_channels, n_times)` passes the peak-to-peak rejection, holds no NaN
@@ -1141,6 +1169,36 @@ mod tests {
         assert!(!text.contains("svm_gamma_scale"));
         let back: PipelineParams = serde_json::from_str(&text).unwrap();
         assert_eq!(back.svm_gamma_scale, 1.0);
+    }
+
+    #[test]
+    fn the_peer_window_and_steps_follow_numpy_and_python() {
+        // numpy's x[onset : onset + round(0.8·sfreq)]: 205 samples at 256 Hz, 128 at 160 Hz
+        let peer = Preprocess::peer();
+        assert_eq!(peer.window(256.0), (0, 205));
+        assert_eq!(peer.window(160.0), (0, 128));
+        // MNE's both-ends-included window online: 0–0.6 s at 500 Hz is 301 samples
+        assert_eq!(Preprocess::online().window(500.0), (0, 301));
+        for (pre, sfreq) in [(peer, 256.0), (peer, 160.0), (Preprocess::online(), 500.0)] {
+            let (first, n) = pre.window(sfreq);
+            let (a, b) = pre.epochs_params(sfreq).offsets(sfreq).unwrap();
+            assert_eq!((a, b - a + 1), (first, n as i64));
+        }
+        // a model saved before `end_exclusive` existed reads as both ends included
+        let old: Preprocess = serde_json::from_str(
+            r#"{"band":{"order":4,"band":{"Bandpass":{"l_freq":0.5,"h_freq":20.0}}},"tmin":0.0,"tmax":0.8}"#,
+        )
+        .unwrap();
+        assert_eq!(old.window(256.0), (0, 206));
+        // Python's round(160 / 64) = round(2.5) = 2 (ties to even), not 3
+        let step =
+            |name: &str, sfreq: f64| match PipelineParams::preset(name, sfreq).unwrap().features {
+                FeatureParams::XdawnTangent { step, .. }
+                | FeatureParams::XdawnCovariances { step, .. } => step,
+                _ => unreachable!("an xDAWN preset"),
+            };
+        assert_eq!((step("riemann", 160.0), step("mdm", 160.0)), (2, 2));
+        assert_eq!((step("riemann", 256.0), step("riemann", 96.0)), (4, 2));
     }
 
     #[test]

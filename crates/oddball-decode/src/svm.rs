@@ -16,10 +16,11 @@
 //!   [`PlattSigmoid::fit`] with scikit-learn's `_sigmoid_calibration` semantics (targets
 //!   `(N₊+1)/(N₊+2)` and `1/(N₋+2)`, decision values rescaled when |f| ≥ 30), solved by Newton's method
 //!   to convergence. [`Calibration::CrossValidated`] fits it on out-of-fold decision values from
-//!   `n_folds` folds made exactly as scikit-learn's `StratifiedKFold(n_folds)` without shuffling
-//!   ([`stratified_folds`]), then refits the SVM on all data — `CalibratedClassifierCV(sigmoid,
-//!   cv=StratifiedKFold(k), ensemble=False)`. The peer shuffles its folds with numpy's RNG (seed 0),
-//!   which can't be reproduced here, so its probabilities differ slightly. (libsvm's own
+//!   `n_folds` folds made exactly as scikit-learn's `StratifiedKFold(n_folds)`, unshuffled
+//!   ([`stratified_folds`]) or shuffled with `random_state=seed` ([`stratified_folds_shuffled`],
+//!   numpy's MT19937 stream reproduced), then refits the SVM on all data —
+//!   `CalibratedClassifierCV(sigmoid, cv=StratifiedKFold(k, …), ensemble=False)`, the peer's
+//!   twin with its seed 0 by default. (libsvm's own
 //!   `probability=True` also uses internal CV but with its own RNG, and scikit-learn 1.9 deprecates
 //!   it.) [`Calibration::TrainingSet`] fits the sigmoid on the training decision values (cheaper,
 //!   overconfident); [`Calibration::None`] skips it and `predict_proba` is an error.
@@ -60,12 +61,20 @@ pub enum Calibration {
     None,
     /// Sigmoid fitted on the training set's own decision values.
     TrainingSet,
-    /// Sigmoid fitted on out-of-fold decision values (stratified, unshuffled folds).
-    CrossValidated { n_folds: usize },
+    /// Sigmoid fitted on out-of-fold decision values of stratified folds: in blocks, or shuffled
+    /// as scikit-learn's `StratifiedKFold(n_folds, shuffle=True, random_state=seed)` shuffles them
+    /// ([`stratified_folds_shuffled`]).
+    CrossValidated {
+        n_folds: usize,
+        /// Absent in models saved before it existed: unshuffled folds.
+        #[serde(default)]
+        shuffle_seed: Option<u32>,
+    },
 }
 
 /// Unfitted SVM settings. [`Default`] is the paper's `SVC(kernel='rbf', C=1, gamma='scale')` with
-/// 5-fold sigmoid calibration.
+/// 5-fold sigmoid calibration on folds shuffled as the peer's `StratifiedKFold(5, shuffle=True,
+/// random_state=0)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SvmParams {
     /// Penalty `C` > 0.
@@ -84,7 +93,10 @@ impl Default for SvmParams {
             c: 1.0,
             kernel: Kernel::Rbf(Gamma::Scale),
             tol: 1e-3,
-            calibration: Calibration::CrossValidated { n_folds: 5 },
+            calibration: Calibration::CrossValidated {
+                n_folds: 5,
+                shuffle_seed: Some(0),
+            },
         }
     }
 }
@@ -200,6 +212,36 @@ impl PlattSigmoid {
 /// each class (in order of first appearance) is dealt to folds in contiguous blocks whose sizes
 /// follow scikit-learn's allocation. Every class needs at least `n_splits` samples.
 pub fn stratified_folds(y: &[bool], n_splits: usize) -> Result<Vec<usize>> {
+    stratified(y, n_splits, None)
+}
+
+/// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=True,
+/// random_state=seed)` (scikit-learn 1.x, numpy's legacy `RandomState`): the fold labels of each
+/// class, in blocks as [`stratified_folds`] deals them, are shuffled in class order by one
+/// MT19937 stream seeded with `seed` (`init_genrand`, from the `rand_mt` crate), each with
+/// numpy's Fisher–Yates `shuffle` drawing `j ≤ i` by masked rejection of 32-bit outputs
+/// (numpy's `random_interval`).
+pub fn stratified_folds_shuffled(y: &[bool], n_splits: usize, seed: u32) -> Result<Vec<usize>> {
+    stratified(y, n_splits, Some(seed))
+}
+
+/// numpy's legacy `RandomState.shuffle` of a 1-D array.
+fn numpy_shuffle(v: &mut [usize], rng: &mut rand_mt::Mt) {
+    for i in (1..v.len()).rev() {
+        // numpy's random_interval(i): the smallest all-ones mask covering i, redrawn until ≤ i
+        let max = i as u64;
+        let mask = u64::MAX >> max.leading_zeros();
+        let j = loop {
+            let value = u64::from(rng.next_u32()) & mask;
+            if value <= max {
+                break value as usize;
+            }
+        };
+        v.swap(i, j);
+    }
+}
+
+fn stratified(y: &[bool], n_splits: usize, shuffle_seed: Option<u32>) -> Result<Vec<usize>> {
     if n_splits < 2 {
         return Err(DecodeError::InvalidParameter {
             name: "n_folds",
@@ -228,18 +270,28 @@ pub fn stratified_folds(y: &[bool], n_splits: usize) -> Result<Vec<usize>> {
         let code = usize::from(pos >= counts[0]);
         alloc[pos % n_splits][code] += 1;
     }
-    let mut next = [(0usize, 0usize); 2]; // (fold, used in fold) per class
-    let mut folds = vec![0usize; y.len()];
-    for (i, &v) in y.iter().enumerate() {
-        let code = usize::from(v != first);
-        let (ref mut fold, ref mut used) = next[code];
-        while *used >= alloc[*fold][code] {
-            *fold += 1;
-            *used = 0;
-        }
-        folds[i] = *fold;
-        *used += 1;
-    }
+    // per class, its fold labels in blocks (numpy's arange(n_splits).repeat(allocation[:, k]))
+    let mut rng = shuffle_seed.map(rand_mt::Mt::new);
+    let per_class: Vec<Vec<usize>> = (0..2)
+        .map(|code| {
+            let mut labels: Vec<usize> = (0..n_splits)
+                .flat_map(|fold| std::iter::repeat_n(fold, alloc[fold][code]))
+                .collect();
+            if let Some(rng) = rng.as_mut() {
+                numpy_shuffle(&mut labels, rng);
+            }
+            labels
+        })
+        .collect();
+    let mut next = [0usize; 2];
+    let folds = y
+        .iter()
+        .map(|&v| {
+            let code = usize::from(v != first);
+            next[code] += 1;
+            per_class[code][next[code] - 1]
+        })
+        .collect();
     Ok(folds)
 }
 
@@ -266,6 +318,9 @@ struct Dual {
     intercept: f64,
     /// γ of the RBF kernel.
     gamma: Option<f64>,
+    /// `‖svᵢ‖²` per support vector, computed on first use (not saved).
+    #[serde(skip)]
+    sv_sq: std::sync::OnceLock<Array1<f64>>,
 }
 
 fn fit_dual(p: &SvmParams, x: ArrayView2<f64>, y: &[bool]) -> Result<Dual> {
@@ -314,6 +369,7 @@ fn fit_dual(p: &SvmParams, x: ArrayView2<f64>, y: &[bool]) -> Result<Dual> {
         weights,
         intercept: -model.rho,
         gamma,
+        sv_sq: Default::default(),
     })
 }
 
@@ -326,7 +382,9 @@ fn decision_values(d: &Dual, x: ArrayView2<f64>) -> Array1<f64> {
     }
     let gamma = d.gamma.unwrap_or(1.0);
     let sv = &d.support_vectors;
-    let sv_sq: Array1<f64> = sv.outer_iter().map(|r| r.dot(&r)).collect();
+    let sv_sq = d
+        .sv_sq
+        .get_or_init(|| crate::linalg::row_sq_norms(sv.view()));
     let mut out = Array1::zeros(x.nrows());
     const BLOCK: usize = 256;
     for (xb, mut ob) in x
@@ -336,7 +394,7 @@ fn decision_values(d: &Dual, x: ArrayView2<f64>) -> Array1<f64> {
         let mut k = dot_transposed(xb, sv.view()); // (block, n_sv) inner products
         for (mut row, xr) in k.outer_iter_mut().zip(xb.outer_iter()) {
             let xsq = xr.dot(&xr);
-            for (v, s) in row.iter_mut().zip(&sv_sq) {
+            for (v, s) in row.iter_mut().zip(sv_sq) {
                 let d2 = (xsq + s - 2.0 * *v).max(0.0);
                 *v = (-gamma * d2).exp();
             }
@@ -379,8 +437,14 @@ impl SvmParams {
         }
         let cv_platt = match self.calibration {
             Calibration::None | Calibration::TrainingSet => None,
-            Calibration::CrossValidated { n_folds } => {
-                let folds = stratified_folds(y, n_folds)?;
+            Calibration::CrossValidated {
+                n_folds,
+                shuffle_seed,
+            } => {
+                let folds = match shuffle_seed {
+                    None => stratified_folds(y, n_folds)?,
+                    Some(seed) => stratified_folds_shuffled(y, n_folds, seed)?,
+                };
                 let mut oof = vec![0.0; y.len()];
                 for f in 0..n_folds {
                     let train: Vec<usize> = (0..y.len()).filter(|&i| folds[i] != f).collect();

@@ -156,7 +156,8 @@ impl DwtFeatures {
                 reason: "must be finite and > 16 Hz for a level >= 1".into(),
             });
         }
-        Self::new((sfreq / 8.0).log2().round() as usize)
+        // Python's round (ties to even), as the peer
+        Self::new((sfreq / 8.0).log2().round_ties_even() as usize)
     }
 
     /// Coefficients per band and channel after `level` levels on `n_times` samples.

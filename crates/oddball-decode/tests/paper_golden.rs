@@ -15,7 +15,10 @@ use oddball_decode::hilbert::{analytic_signal, HilbertTransform};
 use oddball_decode::knn::KnnParams;
 use oddball_decode::pca::{NComponents, PcaParams};
 use oddball_decode::scaler::StandardScalerParams;
-use oddball_decode::svm::{stratified_folds, Calibration, Gamma, Kernel, PlattSigmoid, SvmParams};
+use oddball_decode::svm::{
+    stratified_folds, stratified_folds_shuffled, Calibration, Gamma, Kernel, PlattSigmoid,
+    SvmParams,
+};
 use oddball_decode::wavelet::{wavedec_bior22, DwtFeatures};
 use serde::Deserialize;
 
@@ -136,6 +139,17 @@ struct ClfGolden {
     knn3_proba_test: Vec<f64>,
     knn5_proba_test: Vec<f64>,
     vote_proba_test: Vec<f64>,
+    shuffled_folds: Vec<ShuffledFolds>,
+    calibrated_svm_shuffled_proba_test: Vec<f64>,
+    vote_shuffled_proba_test: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+struct ShuffledFolds {
+    y: Vec<u8>,
+    n_splits: usize,
+    seed: u32,
+    folds: Vec<usize>,
 }
 
 #[derive(Deserialize)]
@@ -425,30 +439,66 @@ fn platt_folds_calibration_knn_and_vote_match_sklearn() {
     );
     println!("Platt a, b: |diff| {da:.1e}, {db:.1e}; rescaled decisions: {da2:.1e}, {db2:.1e}");
     assert!(da < 1e-5 && db < 1e-5 && da2 < 1e-6 && db2 < 1e-5);
-    // fold assignment: exactly StratifiedKFold(5)
+    // fold assignment: exactly StratifiedKFold(5), and StratifiedKFold(k, shuffle=True,
+    // random_state=seed) for several labels, k and seeds (numpy's MT19937 stream reproduced)
     assert_eq!(stratified_folds(&y, 5).unwrap(), g.stratified_folds);
-    // CalibratedClassifierCV(SVC, sigmoid, StratifiedKFold(5), ensemble=False)
-    let svm = SvmParams::default().fit(x.view(), &y).unwrap();
-    let p = svm.predict_proba(xt.view()).unwrap();
-    let want = Array1::from(g.calibrated_svm_proba_test.clone());
-    let ep = max_err(&p, &want);
-    println!(
-        "calibrated SVM P(target): max |difference| {ep:.2e}, correlation {:.6}",
-        corr(p.view(), want.view())
-    );
-    assert!(ep < 5e-3);
+    for case in &g.shuffled_folds {
+        let yy = labels(&case.y);
+        assert_eq!(
+            stratified_folds_shuffled(&yy, case.n_splits, case.seed).unwrap(),
+            case.folds,
+            "k = {}, seed {}",
+            case.n_splits,
+            case.seed
+        );
+    }
+    // CalibratedClassifierCV(SVC, sigmoid, StratifiedKFold(5[, shuffle, seed 0]), ensemble=False)
+    let unshuffled = SvmParams {
+        calibration: Calibration::CrossValidated {
+            n_folds: 5,
+            shuffle_seed: None,
+        },
+        ..SvmParams::default()
+    };
+    for (params, want, what) in [
+        (unshuffled, &g.calibrated_svm_proba_test, "unshuffled folds"),
+        (
+            SvmParams::default(),
+            &g.calibrated_svm_shuffled_proba_test,
+            "folds shuffled with seed 0 (the default)",
+        ),
+    ] {
+        let svm = params.fit(x.view(), &y).unwrap();
+        let p = svm.predict_proba(xt.view()).unwrap();
+        let want = Array1::from(want.clone());
+        let ep = max_err(&p, &want);
+        println!(
+            "calibrated SVM P(target), {what}: max |difference| {ep:.2e}, correlation {:.6}",
+            corr(p.view(), want.view())
+        );
+        assert!(ep < 5e-3);
+    }
     // k-NN: exact (no distance ties in this data)
     for (k, want) in [(3, &g.knn3_proba_test), (5, &g.knn5_proba_test)] {
         let m = KnnParams { k }.fit(x.view(), &y).unwrap();
         let p = m.predict_proba(xt.view()).unwrap();
         assert_eq!(p.to_vec(), *want, "k={k}");
     }
-    // soft vote of the calibrated SVM and the 3-NN
+    // soft vote of the calibrated SVM (the peer's shuffled folds) and the 3-NN
     let vote = SoftVoteParams::paper().fit(x.view(), &y).unwrap();
     let pv = vote.predict_proba(xt.view()).unwrap();
-    let ev = max_err(&pv, &g.vote_proba_test);
+    let ev = max_err(&pv, &g.vote_shuffled_proba_test);
     println!("soft vote P(target): max |difference| {ev:.2e}");
     assert!(ev < 5e-3);
+    // the same vote on unshuffled folds
+    let mut unshuffled_vote = SoftVoteParams::paper();
+    unshuffled_vote.members[0] = MemberParams::Svm(unshuffled);
+    let pu = unshuffled_vote
+        .fit(x.view(), &y)
+        .unwrap()
+        .predict_proba(xt.view())
+        .unwrap();
+    assert!(max_err(&pu, &g.vote_proba_test) < 5e-3);
     assert!(matches!(
         SoftVoteParams::paper().members[1],
         MemberParams::Knn(KnnParams { k: 3 })

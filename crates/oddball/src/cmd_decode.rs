@@ -14,7 +14,6 @@ use oddball_decode::pipeline::{Model, Pipeline, PipelineParams, Preprocess, PRES
 use oddball_decode::tuning::{cv_folds, preset_grid, tune, Folds, TuningReport};
 use oddball_io::Recording;
 use oddball_signal::detrend::{detrend, DetrendKind};
-use oddball_signal::epochs::{EpochsParams, Reject};
 use oddball_signal::Epochs;
 use serde::Serialize;
 
@@ -96,11 +95,7 @@ fn preprocess(rec: &Recording, pre: &Preprocess) -> Result<Epochs> {
         detrend(raw.data_mut(), DetrendKind::Constant);
         filter.apply_raw(&mut raw)?;
     }
-    let mut params = EpochsParams::new(pre.tmin, pre.tmax);
-    if let Some(t) = pre.reject_peak_to_peak_uv {
-        params = params.with_reject(Reject::PeakToPeak(t));
-    }
-    let (epochs, _dropped) = params.cut(&raw)?;
+    let (epochs, _dropped) = pre.epochs_params(raw.sfreq()).cut(&raw)?;
     Ok(epochs)
 }
 

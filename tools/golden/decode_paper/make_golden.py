@@ -176,6 +176,24 @@ vote = VotingClassifier([("svm", CalibratedClassifierCV(SVC(kernel="rbf", C=1.0,
                                                         cv=StratifiedKFold(5), ensemble=False)),
                          ("knn", KNeighborsClassifier(n_neighbors=3))], voting="soft").fit(Xtr, ytr)
 clf_out["vote_proba_test"] = arr(vote.predict_proba(Xte)[:, 1])
+# The peer's folds: StratifiedKFold(5, shuffle=True, random_state=seed) (numpy's legacy MT19937 stream)
+def fold_of_each(cv, X, y):
+    tests = [te for _, te in cv.split(X, y)]
+    return np.concatenate([np.full(len(te), i) for i, te in enumerate(tests)])[
+        np.argsort(np.concatenate(tests))].tolist()
+rng = np.random.RandomState(7)
+y_mixed = (rng.rand(53) < 0.3).astype(int)  # targets first seen second, odd sizes
+clf_out["shuffled_folds"] = [
+    {"y": yy.tolist(), "n_splits": k, "seed": seed,
+     "folds": fold_of_each(StratifiedKFold(k, shuffle=True, random_state=seed), np.zeros((len(yy), 1)), yy)}
+    for yy, k, seed in [(ytr, 5, 0), (ytr, 5, 1), (ytr, 3, 42), (y_mixed, 5, 0), (y_mixed, 4, 4294967295)]]
+cv0 = StratifiedKFold(5, shuffle=True, random_state=0)
+cal0 = CalibratedClassifierCV(SVC(kernel="rbf", C=1.0, gamma="scale"), method="sigmoid", cv=cv0, ensemble=False)
+clf_out["calibrated_svm_shuffled_proba_test"] = arr(cal0.fit(Xtr, ytr).predict_proba(Xte)[:, 1])
+vote0 = VotingClassifier([("svm", CalibratedClassifierCV(SVC(kernel="rbf", C=1.0, gamma="scale"), method="sigmoid",
+                                                         cv=cv0, ensemble=False)),
+                          ("knn", KNeighborsClassifier(n_neighbors=3))], voting="soft").fit(Xtr, ytr)
+clf_out["vote_shuffled_proba_test"] = arr(vote0.predict_proba(Xte)[:, 1])
 
 # ------------------------------------------------------------------ the peer's `paper` features, end to end
 def bin_mean(X, k):
