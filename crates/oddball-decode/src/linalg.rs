@@ -576,9 +576,12 @@ pub(crate) fn dot_wide(a: &[f64], b: &[f64]) -> f64 {
     dot_lanes::<false>(a, b)
 }
 
+/// # Safety
+/// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
 #[target_feature(enable = "avx2,fma")]
-fn dot_avx2_fma(a: &[f64], b: &[f64]) -> f64 {
+unsafe fn dot_avx2_fma(a: &[f64], b: &[f64]) -> f64 {
     dot_lanes::<true>(a, b)
 }
 
@@ -589,10 +592,14 @@ fn dot_lanes<const FUSED: bool>(a: &[f64], b: &[f64]) -> f64 {
     const LANES: usize = 16;
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
-    let (ca, ta) = a.as_chunks::<LANES>();
-    let (cb, tb) = b.as_chunks::<LANES>();
+    let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
+    let (ta, tb) = (ca.remainder(), cb.remainder());
     let mut acc = [0.0f64; LANES];
-    for (x, y) in ca.iter().zip(cb) {
+    for (x, y) in ca.zip(cb) {
+        let (x, y): (&[f64; LANES], &[f64; LANES]) = (
+            x.try_into().expect("a whole chunk"),
+            y.try_into().expect("a whole chunk"),
+        );
         for i in 0..LANES {
             acc[i] = if FUSED {
                 x[i].mul_add(y[i], acc[i])
