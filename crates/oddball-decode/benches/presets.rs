@@ -33,7 +33,7 @@ fn speller_epochs(name: &str, pre: &Preprocess) -> Option<Epochs> {
         .unwrap()
         .apply_raw(&mut raw)
         .unwrap();
-    Some(pre.epochs_params(raw.sfreq()).cut(&raw).unwrap().0)
+    Some(pre.epochs_params().cut(&raw).unwrap().0)
 }
 
 fn presets(c: &mut Criterion) {

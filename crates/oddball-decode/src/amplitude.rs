@@ -37,8 +37,13 @@ pub fn vec_bin(sfreq: f64) -> Result<usize> {
             reason: "must be finite and > 0".into(),
         });
     }
-    // Python's round (ties to even), as the peer
-    Ok(((sfreq / 25.0).round_ties_even() as usize).max(1))
+    Ok(samples_per(sfreq, 25.0))
+}
+
+/// max(1, round(sfreq / rate_hz)) samples, rounded as Python's `round` (ties to even), the way
+/// the peer derives its bins and steps from the sampling rate (64 Hz at 160 Hz: 2, not 3).
+pub(crate) fn samples_per(sfreq: f64, rate_hz: f64) -> usize {
+    ((sfreq / rate_hz).round_ties_even() as usize).max(1)
 }
 
 /// Means of the non-overlapping bins of `bin` samples of `x` into `out` (`x.len() / bin` values; a

@@ -630,17 +630,24 @@ fn dot_lanes<const FUSED: bool>(a: &[f64], b: &[f64]) -> f64 {
 pub(crate) fn mat_vec_into(m: ndarray::ArrayView2<f64>, x: &[f64], out: &mut [f64]) {
     debug_assert_eq!(m.ncols(), x.len());
     debug_assert_eq!(m.nrows(), out.len());
-    let mut tmp = Vec::new();
+    let mut copy = Vec::new();
     for (o, row) in out.iter_mut().zip(m.outer_iter()) {
-        let r = match row.as_slice() {
-            Some(s) => s,
-            None => {
-                tmp.clear();
-                tmp.extend(row.iter().copied());
-                &tmp[..]
-            }
-        };
-        *o = dot_wide(r, x);
+        *o = dot_wide(contiguous(row, &mut copy), x);
+    }
+}
+
+/// `v` as a slice: itself when contiguous, else copied into `copy`.
+pub(crate) fn contiguous<'s, 'v: 's>(
+    v: ndarray::ArrayView1<'v, f64>,
+    copy: &'s mut Vec<f64>,
+) -> &'s [f64] {
+    match v.to_slice() {
+        Some(s) => s,
+        None => {
+            copy.clear();
+            copy.extend(v.iter().copied());
+            copy
+        }
     }
 }
 

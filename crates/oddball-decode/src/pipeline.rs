@@ -415,8 +415,7 @@ impl PipelineParams {
                 fused: Vec::new(),
             })
         };
-        // Python's round (ties to even), as the peer: 2 at 160 Hz
-        let xdawn_step = ((sfreq / 64.0).round_ties_even() as usize).max(1);
+        let xdawn_step = crate::amplitude::samples_per(sfreq, 64.0);
         match name {
             "lda" => Ok(Self {
                 name: name.to_string(),
@@ -897,23 +896,20 @@ impl Preprocess {
 
     /// Samples of an epoch at `sfreq` as (first offset from the onset, count): round(tmin·sfreq)
     /// ..= round(tmax·sfreq), or up to but not including round(tmax·sfreq) when `end_exclusive`.
+    /// An invalid window (tmin after tmax, not finite) is empty.
     pub fn window(&self, sfreq: f64) -> (i64, usize) {
-        let first = (self.tmin * sfreq).round() as i64;
-        let last = (self.tmax * sfreq).round() as i64;
-        let n = last - first + i64::from(!self.end_exclusive);
-        (first, n.max(0) as usize)
+        match self.epochs_params().offsets(sfreq) {
+            Ok((first, last)) => (first, (last - first + 1) as usize),
+            Err(_) => ((self.tmin * sfreq).round() as i64, 0),
+        }
     }
 
-    /// The epoching of this pre-processing at `sfreq`: its [`window`](Self::window) and its
-    /// peak-to-peak rejection.
-    pub fn epochs_params(&self, sfreq: f64) -> oddball_signal::epochs::EpochsParams {
-        let (first, n) = self.window(sfreq);
-        // sample offsets back to seconds; EpochsParams rounds them to the same offsets
-        let last = first + n as i64 - 1;
-        let mut p = oddball_signal::epochs::EpochsParams::new(
-            first as f64 / sfreq,
-            last.max(first) as f64 / sfreq,
-        );
+    /// The epoching of this pre-processing: its window and its peak-to-peak rejection.
+    pub fn epochs_params(&self) -> oddball_signal::epochs::EpochsParams {
+        let mut p = oddball_signal::epochs::EpochsParams::new(self.tmin, self.tmax);
+        if self.end_exclusive {
+            p = p.with_end_exclusive();
+        }
         if let Some(t) = self.reject_peak_to_peak_uv {
             p = p.with_reject(oddball_signal::epochs::Reject::PeakToPeak(t));
         }
@@ -1181,7 +1177,7 @@ mod tests {
         assert_eq!(Preprocess::online().window(500.0), (0, 301));
         for (pre, sfreq) in [(peer, 256.0), (peer, 160.0), (Preprocess::online(), 500.0)] {
             let (first, n) = pre.window(sfreq);
-            let (a, b) = pre.epochs_params(sfreq).offsets(sfreq).unwrap();
+            let (a, b) = pre.epochs_params().offsets(sfreq).unwrap();
             assert_eq!((a, b - a + 1), (first, n as i64));
         }
         // a model saved before `end_exclusive` existed reads as both ends included

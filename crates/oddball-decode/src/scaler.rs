@@ -132,12 +132,10 @@ pub(crate) fn dot_transposed(x: ArrayView2<f64>, m: ArrayView2<f64>) -> Array2<f
         return x.dot(&m.t());
     }
     let mut out = Array2::zeros((x.nrows(), m.nrows()));
-    let mut xr = Vec::with_capacity(x.ncols());
+    let mut copy = Vec::new();
     for (mut o, row) in out.outer_iter_mut().zip(x.outer_iter()) {
-        xr.clear();
-        xr.extend(row.iter().copied());
         let o = o.as_slice_mut().expect("a new array's rows are contiguous");
-        crate::linalg::mat_vec_into(m, &xr, o);
+        crate::linalg::mat_vec_into(m, crate::linalg::contiguous(row, &mut copy), o);
     }
     out
 }

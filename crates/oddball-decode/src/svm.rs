@@ -441,10 +441,7 @@ impl SvmParams {
                 n_folds,
                 shuffle_seed,
             } => {
-                let folds = match shuffle_seed {
-                    None => stratified_folds(y, n_folds)?,
-                    Some(seed) => stratified_folds_shuffled(y, n_folds, seed)?,
-                };
+                let folds = stratified(y, n_folds, shuffle_seed)?;
                 let mut oof = vec![0.0; y.len()];
                 for f in 0..n_folds {
                     let train: Vec<usize> = (0..y.len()).filter(|&i| folds[i] != f).collect();

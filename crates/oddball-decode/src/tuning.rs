@@ -51,7 +51,7 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
         "lda" => {
             let mut bins: Vec<usize> = [32.0, 25.0, 20.0]
                 .iter()
-                .map(|f| ((sfreq / f).round_ties_even() as usize).max(1))
+                .map(|&f| crate::amplitude::samples_per(sfreq, f))
                 .collect();
             bins.dedup();
             for bin in bins {

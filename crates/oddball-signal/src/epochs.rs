@@ -2,7 +2,9 @@
 //! averaging of repeated stimuli.
 //!
 //! Sample convention (MNE's): an epoch covers the samples `onset + round(tmin·sfreq)` through
-//! `onset + round(tmax·sfreq)`, both included, so `[0, 0.6]` s at 500 Hz is 301 samples.
+//! `onset + round(tmax·sfreq)`, both included, so `[0, 0.6]` s at 500 Hz is 301 samples; or, with
+//! [`EpochsParams::with_end_exclusive`], up to but not including the last (numpy's
+//! `x[onset : onset + round(tmax·sfreq)]` when `tmin` is 0: 0–0.8 s at 256 Hz is 205 samples).
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -34,8 +36,11 @@ impl Reject {
 pub struct EpochsParams {
     /// Start of the window relative to the onset, seconds.
     pub tmin: f64,
-    /// End of the window relative to the onset, seconds (included).
+    /// End of the window relative to the onset, seconds (included unless `end_exclusive`).
     pub tmax: f64,
+    /// The window stops one sample before `tmax` (a half-open window, as numpy slices).
+    #[serde(default)]
+    pub end_exclusive: bool,
     /// Window whose per-channel mean is subtracted, seconds; `None` for no baseline correction.
     pub baseline: Option<(f64, f64)>,
     /// Amplitude rejection, applied after baseline correction.
@@ -48,9 +53,16 @@ impl EpochsParams {
         Self {
             tmin,
             tmax,
+            end_exclusive: false,
             baseline: None,
             reject: None,
         }
+    }
+
+    /// The same window without its last sample.
+    pub fn with_end_exclusive(mut self) -> Self {
+        self.end_exclusive = true;
+        self
     }
 
     /// The paper's epochs: 600 ms from the onset.
@@ -68,18 +80,21 @@ impl EpochsParams {
         self
     }
 
-    /// First and last sample offsets relative to the onset.
+    /// First and last sample offsets relative to the onset (both included).
     pub fn offsets(&self, sfreq: f64) -> Result<(i64, i64), SignalError> {
+        let invalid = || SignalError::InvalidWindow {
+            tmin: self.tmin,
+            tmax: self.tmax,
+        };
         if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax) {
-            return Err(SignalError::InvalidWindow {
-                tmin: self.tmin,
-                tmax: self.tmax,
-            });
+            return Err(invalid());
         }
-        Ok((
-            (self.tmin * sfreq).round() as i64,
-            (self.tmax * sfreq).round() as i64,
-        ))
+        let first = (self.tmin * sfreq).round() as i64;
+        let last = (self.tmax * sfreq).round() as i64 - i64::from(self.end_exclusive);
+        if last < first {
+            return Err(invalid());
+        }
+        Ok((first, last))
     }
 
     /// Cuts an epoch for every event of `raw`.
@@ -421,6 +436,23 @@ mod tests {
         assert!(matches!(
             log.dropped[0].reason,
             DropReason::OutOfBounds { .. }
+        ));
+    }
+
+    #[test]
+    fn an_end_exclusive_window_drops_its_last_sample() {
+        let raw = ramp_raw();
+        let half_open = EpochsParams::new(-0.05, 0.1).with_end_exclusive();
+        let (ep, _) = half_open.cut(&raw).unwrap();
+        assert_eq!(ep.n_times(), 15);
+        assert_eq!(ep.data()[[1, 1, 14]], (1000 + 109) as f64);
+        // a window of one sample has nothing left without its end
+        assert!(EpochsParams::new(0.1, 0.1).offsets(100.0).is_ok());
+        assert!(matches!(
+            EpochsParams::new(0.1, 0.1)
+                .with_end_exclusive()
+                .offsets(100.0),
+            Err(SignalError::InvalidWindow { .. })
         ));
     }
 

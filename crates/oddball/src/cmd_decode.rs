@@ -95,7 +95,7 @@ fn preprocess(rec: &Recording, pre: &Preprocess) -> Result<Epochs> {
         detrend(raw.data_mut(), DetrendKind::Constant);
         filter.apply_raw(&mut raw)?;
     }
-    let (epochs, _dropped) = pre.epochs_params(raw.sfreq()).cut(&raw)?;
+    let (epochs, _dropped) = pre.epochs_params().cut(&raw)?;
     Ok(epochs)
 }
 
