@@ -345,14 +345,9 @@ impl PaperExtractor {
         let (ifr, rest) = rest.split_at_mut(lay.inst_frequency);
         let (da, dd) = rest.split_at_mut(lay.dwt_approx);
         self.params.amplitude.epoch(epoch, amp)?;
-        let hb = lay.inst_amplitude / n_ch.max(1);
         let dc = lay.dwt_approx / n_ch.max(1);
+        self.hht.epoch(epoch, ia, ifr)?;
         for (c, lane) in epoch.outer_iter().enumerate() {
-            self.hht.channel_lane(
-                lane,
-                &mut ia[c * hb..(c + 1) * hb],
-                &mut ifr[c * hb..(c + 1) * hb],
-            )?;
             self.dwt.channel(
                 lane.iter().copied(),
                 &mut da[c * dc..(c + 1) * dc],

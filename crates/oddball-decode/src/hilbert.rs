@@ -16,14 +16,28 @@
 //! ([`crate::amplitude::bin_mean_into`]); all amplitude bins (channel-major) come before all frequency
 //! bins.
 //!
-//! The FFT and its plans come from `realfft`; the rest is written here (a few lines, and it must
-//! follow scipy's and numpy's conventions exactly).
+//! Two shortcuts make the features cheaper than their definition, and both are checked against it
+//! (tests below, and the peer's values in `tests/paper_golden.rs`):
+//! * [`HilbertTransform::imag_pair`] transforms two real channels at once: the Hilbert transform is a
+//!   complex-linear Fourier multiplier (−i·sgn k), so the transform of `a + i·b` is `H(a) + i·H(b)`:
+//!   one complex FFT pair of length n instead of two real ones (which `realfft` runs as complex FFTs
+//!   of length n anyway when n is odd, as the speller's 205 samples are).
+//! * [`frequency_bins`] never forms the per-sample phase: the mean of a bin of first differences is
+//!   the unwrapped phase's change across the bin, so `atan2` is needed only at the bin edges. The
+//!   unwrap corrections in between (numpy adds −2π·sgn(Δ) where |Δ| > π) are read off the signs of
+//!   the imaginary parts and of the cross product of neighbouring samples; wherever that could
+//!   disagree with numpy's rounding (a sample exactly on the real axis, or two neighbours within
+//!   1e-6 rad of opposite), the correction is numpy's own, computed from both phases.
+//!
+//! The FFTs and their plans come from `realfft` and `rustfft`; the rest is written here (a few lines,
+//! and it must follow scipy's and numpy's conventions exactly).
 
 use std::sync::Arc;
 
 use ndarray::{Array2, ArrayView3};
 use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
 use crate::amplitude::{bin_mean_into, vec_bin};
@@ -41,6 +55,11 @@ pub struct HilbertTransform {
     input: Vec<f64>,
     spectrum: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
+    /// Complex plans of length n for [`Self::imag_pair`], and its buffers.
+    fwd: Arc<dyn Fft<f64>>,
+    inv: Arc<dyn Fft<f64>>,
+    pair: Vec<Complex<f64>>,
+    pair_scratch: Vec<Complex<f64>>,
 }
 
 impl std::fmt::Debug for HilbertTransform {
@@ -64,6 +83,15 @@ impl HilbertTransform {
         let c2r = planner.plan_fft_inverse(n);
         let scratch =
             vec![Complex::new(0.0, 0.0); r2c.get_scratch_len().max(c2r.get_scratch_len())];
+        let mut complex = FftPlanner::<f64>::new();
+        let fwd = complex.plan_fft_forward(n);
+        let inv = complex.plan_fft_inverse(n);
+        let zero = Complex::new(0.0, 0.0);
+        let pair_scratch = vec![
+            zero;
+            fwd.get_inplace_scratch_len()
+                .max(inv.get_inplace_scratch_len())
+        ];
         Ok(Self {
             n,
             input: vec![0.0; n],
@@ -71,6 +99,10 @@ impl HilbertTransform {
             r2c,
             c2r,
             scratch,
+            fwd,
+            inv,
+            pair: vec![zero; n],
+            pair_scratch,
         })
     }
 
@@ -103,6 +135,47 @@ impl HilbertTransform {
             .map_err(fft_error)?;
         let scale = 1.0 / self.n as f64;
         out.iter_mut().for_each(|v| *v *= scale);
+        Ok(())
+    }
+
+    /// The Hilbert transforms of two signals at once (see the module docs): `out_a = H(a)`,
+    /// `out_b = H(b)`, as [`Self::imag`] of each to FFT round-off.
+    pub fn imag_pair(
+        &mut self,
+        a: &[f64],
+        b: &[f64],
+        out_a: &mut [f64],
+        out_b: &mut [f64],
+    ) -> Result<()> {
+        self.check_len("Hilbert input", a.len())?;
+        self.check_len("Hilbert input", b.len())?;
+        self.check_len("Hilbert output", out_a.len())?;
+        self.check_len("Hilbert output", out_b.len())?;
+        for ((z, &re), &im) in self.pair.iter_mut().zip(a).zip(b) {
+            *z = Complex::new(re, im);
+        }
+        self.fwd
+            .process_with_scratch(&mut self.pair, &mut self.pair_scratch);
+        // −i·sgn(k): positive frequencies 1 ≤ k < (n+1)/2 times −i, negative ones times +i; DC and
+        // (n even) Nyquist dropped — scipy's doubled positive half, seen from the imaginary part.
+        let n = self.n;
+        let first_negative = n / 2 + 1;
+        for (k, z) in self.pair.iter_mut().enumerate() {
+            *z = if k == 0 || (n % 2 == 0 && k == n / 2) {
+                Complex::new(0.0, 0.0)
+            } else if k < first_negative {
+                Complex::new(z.im, -z.re)
+            } else {
+                Complex::new(-z.im, z.re)
+            };
+        }
+        self.inv
+            .process_with_scratch(&mut self.pair, &mut self.pair_scratch);
+        let scale = 1.0 / n as f64;
+        for ((oa, ob), z) in out_a.iter_mut().zip(out_b.iter_mut()).zip(&self.pair) {
+            *oa = z.re * scale;
+            *ob = z.im * scale;
+        }
         Ok(())
     }
 
@@ -189,7 +262,6 @@ fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
         });
     }
     let pi = std::f64::consts::PI;
-    let period = 2.0 * pi;
     let to_hz = |d: f64| d * sfreq / (2.0 * pi);
     // numpy.unwrap: up[i] = p[i] + cumsum(correction)[i-1]
     let mut cum = 0.0;
@@ -197,24 +269,114 @@ fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
     let mut prev_p = p[0];
     for i in 1..n {
         let pi_now = p[i];
-        let dd = pi_now - prev_p;
-        // the correction is 0 unless the step reaches π (numpy computes it everywhere, then masks)
-        let correction = if dd.abs() < pi {
-            0.0
-        } else {
-            let mut ddmod = np_mod(dd + pi, period) - pi;
-            if ddmod == -pi && dd > 0.0 {
-                ddmod = pi;
-            }
-            ddmod - dd
-        };
-        cum += correction;
+        cum += unwrap_correction(pi_now - prev_p);
         let up = pi_now + cum;
         p[i - 1] = to_hz(up - prev_up);
         prev_up = up;
         prev_p = pi_now;
     }
     p[n - 1] = p[n - 2];
+    Ok(())
+}
+
+/// numpy's `unwrap` correction of one phase step `dd` (`ph_correct`): 0 unless |dd| reaches π
+/// (numpy computes it everywhere, then masks), else the multiple of 2π (to round-off) that brings
+/// the step into [−π, π], a step of exactly ±π kept as it is.
+fn unwrap_correction(dd: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    if dd.abs() < pi {
+        return 0.0;
+    }
+    let mut ddmod = np_mod(dd + pi, 2.0 * pi) - pi;
+    if ddmod == -pi && dd > 0.0 {
+        ddmod = pi;
+    }
+    ddmod - dd
+}
+
+/// numpy's unwrap correction of the phase step from sample `(ar, ai)` to `(br, bi)` of an analytic
+/// signal, without the phases where the geometry decides it (see the module docs): in one open
+/// half-plane the step is below π; across the real axis it wraps exactly when the short rotation
+/// crosses the negative half-axis, told by the sign of the cross product. Samples on the real axis
+/// and near-opposite neighbours take numpy's rule on the two `atan2` phases.
+#[inline]
+fn step_correction(ar: f64, ai: f64, br: f64, bi: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let halves = ai * bi;
+    if halves > 0.0 && halves.is_finite() {
+        return 0.0; // one open half-plane: |Δ| < π
+    }
+    if halves < 0.0 {
+        // across the real axis
+        let cross = ar * bi - ai * br;
+        let dot = ar * br + ai * bi;
+        // near-opposite (the rotation within 1e-6 rad of π, where rounding could decide), or a
+        // cross product that underflowed or overflowed
+        let near_opposite = dot < 0.0 && cross.abs() <= 1e-6 * (ar.hypot(ai) * br.hypot(bi));
+        if !near_opposite && cross.abs() > 0.0 && cross.is_finite() {
+            return match (ai < 0.0, cross < 0.0) {
+                (true, true) => -two_pi,  // lower → upper, clockwise through −π/π: Δ > π
+                (false, false) => two_pi, // upper → lower, anticlockwise through π/−π: Δ < −π
+                _ => 0.0,
+            };
+        }
+    }
+    // on the real axis (signed zeros matter to atan2), underflow, near-opposite or not finite
+    unwrap_correction(bi.atan2(br) - ai.atan2(ar))
+}
+
+/// Bin means of the instantaneous frequency (Hz) of the analytic signal `re + i·im` sampled at
+/// `sfreq`: `bin_mean(np.diff(np.unwrap(np.angle(z))) · sfreq / 2π, bin)` with the last difference
+/// repeated (the peer's), `re.len() / bin` values into `out`, to round-off. Computed from the
+/// phase at the bin edges and the unwrap corrections between them (see the module docs).
+pub fn frequency_bins(
+    re: &[f64],
+    im: &[f64],
+    sfreq: f64,
+    bin: usize,
+    out: &mut [f64],
+) -> Result<()> {
+    let n = re.len();
+    if im.len() != n || bin == 0 || out.len() != n / bin {
+        return Err(DecodeError::ShapeMismatch {
+            what: "instantaneous frequency bins".into(),
+            expected: format!("{n} imaginary parts and {} bins of {bin}", n / bin.max(1)),
+            got: format!("{} imaginary parts and {} bins", im.len(), out.len()),
+        });
+    }
+    if n < 2 {
+        return Err(DecodeError::TooFewSamples {
+            what: format!("instantaneous frequency needs 2 samples, got {n}"),
+        });
+    }
+    if !(sfreq.is_finite() && sfreq > 0.0) {
+        return Err(DecodeError::InvalidParameter {
+            name: "sfreq",
+            value: sfreq.to_string(),
+            reason: "must be finite and > 0".into(),
+        });
+    }
+    let to_hz = sfreq / (2.0 * std::f64::consts::PI);
+    let phase = |j: usize| im[j].atan2(re[j]);
+    let correction = |k: usize| step_correction(re[k], im[k], re[k + 1], im[k + 1]);
+    let mut p_start = phase(0);
+    for (b, o) in out.iter_mut().enumerate() {
+        // the bin averages f[s..e]; f[i] = up[i+1] − up[i] for i < n−1 and f[n−1] = f[n−2]
+        let s = b * bin;
+        let e = s + bin;
+        let last = e.min(n - 1);
+        let mut wraps = 0.0;
+        for (r, i) in re[s..=last].windows(2).zip(im[s..=last].windows(2)) {
+            wraps += step_correction(r[0], i[0], r[1], i[1]);
+        }
+        let p_last = phase(last);
+        let mut dphase = (p_last - p_start) + wraps;
+        if e == n {
+            dphase += (p_last - phase(n - 2)) + correction(n - 2);
+        }
+        *o = dphase * to_hz / bin as f64;
+        p_start = p_last;
+    }
     Ok(())
 }
 
@@ -296,8 +458,10 @@ impl HhtFeatures {
             hilbert: HilbertTransform::new(n_times)?,
             signal: vec![0.0; n_times],
             imf: vec![0.0; n_times],
+            imf_b: vec![0.0; n_times],
+            imag: vec![0.0; n_times],
+            imag_b: vec![0.0; n_times],
             amp: vec![0.0; n_times],
-            freq: vec![0.0; n_times],
         })
     }
 
@@ -312,13 +476,7 @@ impl HhtFeatures {
                 .as_slice_mut()
                 .expect("rows of a standard-layout array are contiguous");
             let (amp_block, freq_block) = row.split_at_mut(n_ch * nb);
-            for (c, lane) in epoch.outer_iter().enumerate() {
-                ex.channel_lane(
-                    lane,
-                    &mut amp_block[c * nb..(c + 1) * nb],
-                    &mut freq_block[c * nb..(c + 1) * nb],
-                )?;
-            }
+            ex.epoch(epoch, amp_block, freq_block)?;
         }
         Ok(out)
     }
@@ -332,8 +490,10 @@ pub struct HhtExtractor {
     hilbert: HilbertTransform,
     signal: Vec<f64>,
     imf: Vec<f64>,
+    imf_b: Vec<f64>,
+    imag: Vec<f64>,
+    imag_b: Vec<f64>,
     amp: Vec<f64>,
-    freq: Vec<f64>,
 }
 
 impl HhtExtractor {
@@ -345,37 +505,90 @@ impl HhtExtractor {
         freq_bins: &mut [f64],
     ) -> Result<()> {
         self.emd.first_imf(x, &mut self.imf)?;
-        self.hilbert.amplitude_frequency(
-            &self.imf,
-            self.params.sfreq,
-            &mut self.amp,
-            &mut self.freq,
-        )?;
-        bin_mean_into(&self.amp, self.params.bin, amp_bins)?;
-        bin_mean_into(&self.freq, self.params.bin, freq_bins)
+        self.hilbert.imag(&self.imf, &mut self.imag)?;
+        self.bins(false, amp_bins, freq_bins)
     }
 
-    /// As [`Self::channel`] for a possibly strided lane of an epoch array.
-    pub fn channel_lane(
+    /// The HHT block of one epoch `(n_channels, n_times)`: amplitude bins of every channel
+    /// (channel-major) into `amp_block`, frequency bins into `freq_block`. Channels go through the
+    /// Hilbert transform two at a time ([`HilbertTransform::imag_pair`]).
+    pub fn epoch(
         &mut self,
-        lane: ndarray::ArrayView1<f64>,
-        amp_bins: &mut [f64],
-        freq_bins: &mut [f64],
+        epoch: ndarray::ArrayView2<f64>,
+        amp_block: &mut [f64],
+        freq_block: &mut [f64],
     ) -> Result<()> {
-        if lane.len() != self.signal.len() {
+        let (n_ch, n_t) = epoch.dim();
+        let nb = self.params.n_bins(n_t);
+        if n_t != self.signal.len() || amp_block.len() != n_ch * nb || freq_block.len() != n_ch * nb
+        {
             return Err(DecodeError::ShapeMismatch {
-                what: "HHT channel length".into(),
-                expected: self.signal.len().to_string(),
-                got: lane.len().to_string(),
+                what: "HHT epoch (n_channels × n_times, bins)".into(),
+                expected: format!("{n_ch} × {}, {} bins", self.signal.len(), n_ch * nb),
+                got: format!(
+                    "{n_ch} × {n_t}, {} / {} bins",
+                    amp_block.len(),
+                    freq_block.len()
+                ),
             });
         }
-        let mut signal = std::mem::take(&mut self.signal);
-        for (s, &v) in signal.iter_mut().zip(lane.iter()) {
-            *s = v;
+        let mut c = 0;
+        while c < n_ch {
+            let paired = c + 1 < n_ch;
+            self.first_imf_of(epoch.row(c), false)?;
+            if paired {
+                self.first_imf_of(epoch.row(c + 1), true)?;
+                self.hilbert
+                    .imag_pair(&self.imf, &self.imf_b, &mut self.imag, &mut self.imag_b)?;
+            } else {
+                self.hilbert.imag(&self.imf, &mut self.imag)?;
+            }
+            for (i, second) in [(c, false), (c + 1, true)]
+                .into_iter()
+                .take(1 + paired as usize)
+            {
+                let bins = i * nb..(i + 1) * nb;
+                self.bins(second, &mut amp_block[bins.clone()], &mut freq_block[bins])?;
+            }
+            c += 2;
         }
-        let r = self.channel(&signal, amp_bins, freq_bins);
-        self.signal = signal;
-        r
+        Ok(())
+    }
+
+    /// The first IMF of a possibly strided lane into `imf` (or `imf_b`).
+    fn first_imf_of(&mut self, lane: ndarray::ArrayView1<f64>, second: bool) -> Result<()> {
+        let signal: &[f64] = match lane.as_slice() {
+            Some(s) => s,
+            None => {
+                for (s, &v) in self.signal.iter_mut().zip(lane.iter()) {
+                    *s = v;
+                }
+                &self.signal
+            }
+        };
+        let out = if second {
+            &mut self.imf_b
+        } else {
+            &mut self.imf
+        };
+        self.emd.first_imf(signal, out)?;
+        Ok(())
+    }
+
+    /// Amplitude and frequency bins of the analytic signal `imf + i·imag` (or of the `_b` pair).
+    fn bins(&mut self, second: bool, amp_bins: &mut [f64], freq_bins: &mut [f64]) -> Result<()> {
+        let (re, im) = if second {
+            (&self.imf_b, &self.imag_b)
+        } else {
+            (&self.imf, &self.imag)
+        };
+        // |z| as √(re² + im²): within an ulp of numpy's `hypot`, several times faster, and µV-scale
+        // values can't overflow
+        for ((a, &r), &i) in self.amp.iter_mut().zip(re).zip(im) {
+            *a = (r * r + i * i).sqrt();
+        }
+        bin_mean_into(&self.amp, self.params.bin, amp_bins)?;
+        frequency_bins(re, im, self.params.sfreq, self.params.bin, freq_bins)
     }
 }
 
@@ -424,6 +637,166 @@ mod tests {
         let mut f = vec![0.0; n];
         instantaneous_frequency(&re, &im, 2.0 * std::f64::consts::PI, &mut f).unwrap();
         assert!(f.iter().all(|v| (v - 1.5).abs() < 1e-12), "{f:?}");
+    }
+
+    /// Uniform values in [−0.5, 0.5) from a fixed-seed LCG.
+    fn lcg(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+    }
+
+    fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn a_pair_transform_equals_two_single_ones() {
+        let mut u = lcg(7);
+        for n in [2usize, 3, 8, 9, 64, 128, 205, 256] {
+            let a: Vec<f64> = (0..n).map(|_| 50.0 * u()).collect();
+            let b: Vec<f64> = (0..n)
+                .map(|i| 20.0 * u() + (0.3 * i as f64).sin())
+                .collect();
+            let mut h = HilbertTransform::new(n).unwrap();
+            let (mut sa, mut sb) = (vec![0.0; n], vec![0.0; n]);
+            h.imag(&a, &mut sa).unwrap();
+            h.imag(&b, &mut sb).unwrap();
+            let (mut pa, mut pb) = (vec![0.0; n], vec![0.0; n]);
+            h.imag_pair(&a, &b, &mut pa, &mut pb).unwrap();
+            let (ea, eb) = (max_abs_diff(&pa, &sa), max_abs_diff(&pb, &sb));
+            assert!(
+                ea <= 1e-12 * 50.0 && eb <= 1e-12 * 50.0,
+                "n={n}: {ea:e} {eb:e}"
+            );
+        }
+        let mut h = HilbertTransform::new(8).unwrap();
+        let mut out = vec![0.0; 8];
+        assert!(h
+            .imag_pair(&[0.0; 8], &[0.0; 7], &mut out.clone(), &mut out)
+            .is_err());
+    }
+
+    /// The definition: per-sample phase, numpy's unwrap, first differences, bin means.
+    fn naive_frequency_bins(re: &[f64], im: &[f64], sfreq: f64, bin: usize) -> Vec<f64> {
+        let mut f = vec![0.0; re.len()];
+        instantaneous_frequency(re, im, sfreq, &mut f).unwrap();
+        let mut out = vec![0.0; re.len() / bin];
+        bin_mean_into(&f, bin, &mut out).unwrap();
+        out
+    }
+
+    fn check_bins(re: &[f64], im: &[f64], sfreq: f64, what: &str) {
+        for bin in [1usize, 2, 3, 10] {
+            if re.len() / bin == 0 {
+                continue;
+            }
+            let want = naive_frequency_bins(re, im, sfreq, bin);
+            let mut got = vec![0.0; re.len() / bin];
+            frequency_bins(re, im, sfreq, bin, &mut got).unwrap();
+            let e = max_abs_diff(&got, &want);
+            assert!(
+                e <= 1e-10 * sfreq,
+                "{what}, bin {bin}: {e:e}\n{got:?}\n{want:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn frequency_bins_equal_the_per_sample_definition() {
+        let fs = 256.0;
+        let mut u = lcg(11);
+        // analytic signals of noise and of tones up to Nyquist (many wraps per bin), lengths with
+        // and without a last bin that reaches the final sample
+        for case in 0..400 {
+            let n = 2 + case % 211;
+            let f0 = fs * (case % 13) as f64 / 24.0;
+            let x: Vec<f64> = (0..n)
+                .map(|i| {
+                    let t = i as f64 / fs;
+                    (2.0 * std::f64::consts::PI * f0 * t).cos() + 0.7 * u()
+                })
+                .collect();
+            let mut h = HilbertTransform::new(n).unwrap();
+            let mut im = vec![0.0; n];
+            h.imag(&x, &mut im).unwrap();
+            check_bins(&x, &im, fs, &format!("case {case} (n {n}, {f0} Hz)"));
+        }
+        // the edges: samples on the real axis (signed zeros), neighbours exactly and nearly opposite,
+        // values quantised so that such coincidences are common
+        for case in 0..400 {
+            let n = 2 + case % 37;
+            let q = |v: f64| (v * 4.0).round() / 4.0;
+            let re: Vec<f64> = (0..n).map(|_| q(u())).collect();
+            let im: Vec<f64> = (0..n)
+                .map(|i| match (case + i) % 5 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => 1e-300 * u(),
+                    _ => q(u()),
+                })
+                .collect();
+            check_bins(&re, &im, fs, &format!("edge case {case}"));
+        }
+        // a Nyquist tone: every step rotates by π, give or take round-off in either direction
+        for eps in [0.0, 1e-17, -1e-17, 1e-12, -1e-12, 1e-7, -1e-7] {
+            let n = 40;
+            let re: Vec<f64> = (0..n)
+                .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+                .collect();
+            let im: Vec<f64> = (0..n).map(|i| eps * (i as f64 - 7.5)).collect();
+            check_bins(&re, &im, fs, &format!("Nyquist tone, eps {eps:e}"));
+        }
+    }
+
+    #[test]
+    fn frequency_bins_refuse_bad_shapes() {
+        let mut out = vec![0.0; 2];
+        assert!(frequency_bins(&[1.0; 8], &[1.0; 7], 256.0, 4, &mut out).is_err());
+        assert!(frequency_bins(&[1.0; 8], &[1.0; 8], 256.0, 0, &mut out).is_err());
+        assert!(frequency_bins(&[1.0; 8], &[1.0; 8], 256.0, 5, &mut out).is_err());
+        assert!(frequency_bins(&[1.0; 8], &[1.0; 8], f64::NAN, 4, &mut out).is_err());
+        assert!(frequency_bins(&[1.0], &[1.0], 256.0, 1, &mut out[..1]).is_err());
+    }
+
+    #[test]
+    fn epoch_features_equal_the_channel_by_channel_ones() {
+        let mut u = lcg(3);
+        for n_ch in [1usize, 2, 5, 8] {
+            let n_t = 205;
+            let epoch = ndarray::Array2::from_shape_fn((n_ch, n_t), |(c, t)| {
+                let tt = t as f64 / 256.0;
+                10.0 * (2.0 * std::f64::consts::PI * (3.0 + 2.0 * c as f64) * tt).sin() + 5.0 * u()
+            });
+            let h = HhtFeatures::for_sfreq(256.0).unwrap();
+            let nb = h.n_bins(n_t);
+            let mut ex = h.extractor(n_t).unwrap();
+            let (mut amp, mut freq) = (vec![0.0; n_ch * nb], vec![0.0; n_ch * nb]);
+            ex.epoch(epoch.view(), &mut amp, &mut freq).unwrap();
+            // a channel-last (strided) view gives the same
+            let strided = epoch.t().to_owned();
+            let (mut amp_s, mut freq_s) = (vec![0.0; n_ch * nb], vec![0.0; n_ch * nb]);
+            ex.epoch(strided.t(), &mut amp_s, &mut freq_s).unwrap();
+            assert_eq!((&amp, &freq), (&amp_s, &freq_s));
+            for c in 0..n_ch {
+                let (mut a, mut f) = (vec![0.0; nb], vec![0.0; nb]);
+                let x = epoch.row(c).to_vec();
+                ex.channel(&x, &mut a, &mut f).unwrap();
+                let bins = c * nb..(c + 1) * nb;
+                assert!(
+                    max_abs_diff(&a, &amp[bins.clone()]) <= 1e-11,
+                    "n_ch {n_ch}, c {c}"
+                );
+                assert!(max_abs_diff(&f, &freq[bins]) <= 1e-9, "n_ch {n_ch}, c {c}");
+            }
+        }
     }
 
     #[test]
