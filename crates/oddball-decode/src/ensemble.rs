@@ -6,11 +6,23 @@
 //! the default member type [`Member`] is an enum of this crate's SVM and k-NN, which keeps saved
 //! ensembles self-describing. [`SoftVoteParams::paper`] is the paper's ensemble: an RBF SVM with
 //! 5-fold Platt calibration and a 3-NN, equally weighted. Written here: it is an average.
+//!
+//! Members that score by Euclidean distance to stored rows (the k-NN to its training rows, the RBF
+//! SVM to its support vectors, which are training rows too when both were fitted on the same data)
+//! share one distance computation: on first use the ensemble finds each member's rows among the
+//! largest member's by their exact bits, then measures every query against those rows once
+//! ([`crate::linalg::sq_distances`], the formula both members use alone) and hands each member its
+//! columns. The scores are the members' own, bit for bit (tested); a member whose rows are not all
+//! found scores alone.
 
-use ndarray::{Array1, ArrayView2};
+use std::collections::HashMap;
+use std::sync::OnceLock;
+
+use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::knn::{Knn, KnnParams};
+use crate::scaler::{check_finite, check_n_features};
 use crate::svm::{Svm, SvmParams};
 use crate::DecodeError;
 
@@ -22,6 +34,21 @@ pub trait ProbabilisticClassifier {
     fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>>;
     /// Continuous score per row, larger = more target-like.
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>>;
+    /// The rows a distance-based member measures queries against (see the module docs); `None`
+    /// for any other member.
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        None
+    }
+    /// [`Self::predict_proba`] from the squared distances `(n_samples, n_rows)` to
+    /// [`Self::distance_rows`], as [`crate::linalg::sq_distances`] computes them.
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        let _ = d2;
+        Err(DecodeError::InvalidParameter {
+            name: "member",
+            value: "not distance-based".into(),
+            reason: "this member does not score from distances".into(),
+        })
+    }
 }
 
 impl ProbabilisticClassifier for Svm {
@@ -31,6 +58,12 @@ impl ProbabilisticClassifier for Svm {
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         Svm::decision_function(self, x)
     }
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        self.rbf_support_vectors()
+    }
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        Svm::predict_proba_from_sq_distances(self, d2)
+    }
 }
 
 impl ProbabilisticClassifier for Knn {
@@ -39,6 +72,12 @@ impl ProbabilisticClassifier for Knn {
     }
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         Knn::decision_function(self, x)
+    }
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        Some(self.training_rows())
+    }
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        Knn::predict_proba_from_sq_distances(self, d2.view())
     }
 }
 
@@ -66,18 +105,27 @@ impl MemberParams {
     }
 }
 
-impl ProbabilisticClassifier for Member {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+impl Member {
+    fn inner(&self) -> &dyn ProbabilisticClassifier {
         match self {
-            Member::Svm(m) => m.predict_proba(x),
-            Member::Knn(m) => m.predict_proba(x),
+            Member::Svm(m) => m,
+            Member::Knn(m) => m,
         }
     }
+}
+
+impl ProbabilisticClassifier for Member {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        self.inner().predict_proba(x)
+    }
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        match self {
-            Member::Svm(m) => m.decision_function(x),
-            Member::Knn(m) => m.decision_function(x),
-        }
+        self.inner().decision_function(x)
+    }
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        self.inner().distance_rows()
+    }
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        self.inner().predict_proba_from_sq_distances(d2)
     }
 }
 
@@ -117,6 +165,60 @@ pub struct SoftVote<M = Member> {
     members: Vec<M>,
     /// Normalised weights (sum 1).
     weights: Vec<f64>,
+    /// Which members share one distance computation, found on first use (not saved).
+    #[serde(skip)]
+    shared: OnceLock<Option<SharedDistances>>,
+}
+
+/// Members measuring queries against rows of one member's (see the module docs).
+#[derive(Debug, Clone)]
+struct SharedDistances {
+    /// The member whose rows are measured (the one with the most).
+    base: usize,
+    /// Squared norms of its rows.
+    rows_sq: Array1<f64>,
+    /// Per member, its rows' indices among the base's; `None`: it scores alone.
+    columns: Vec<Option<Vec<usize>>>,
+}
+
+impl SharedDistances {
+    /// The sharing of `members`, if at least two can share.
+    fn plan<M: ProbabilisticClassifier>(members: &[M]) -> Option<Self> {
+        let (_, base) = members
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| m.distance_rows().map(|r| (r.nrows(), i)))
+            .max()?;
+        let rows = members[base].distance_rows()?;
+        // rows indexed by their first and last values, then compared whole, bit for bit
+        let key = |r: ndarray::ArrayView1<f64>| {
+            [r.first(), r.last()].map(|v| v.map_or(0, |v| v.to_bits()))
+        };
+        let mut index: HashMap<[u64; 2], Vec<usize>> = HashMap::new();
+        for (i, r) in rows.outer_iter().enumerate() {
+            index.entry(key(r)).or_default().push(i);
+        }
+        let find = |r: ndarray::ArrayView1<f64>| {
+            index.get(&key(r))?.iter().copied().find(|&i| {
+                rows.row(i)
+                    .iter()
+                    .zip(&r)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+            })
+        };
+        let columns: Vec<Option<Vec<usize>>> = members
+            .iter()
+            .map(|m| {
+                let own = m.distance_rows().filter(|r| r.ncols() == rows.ncols())?;
+                own.outer_iter().map(find).collect()
+            })
+            .collect();
+        (columns.iter().flatten().count() >= 2).then(|| Self {
+            base,
+            rows_sq: crate::linalg::row_sq_norms(rows),
+            columns,
+        })
+    }
 }
 
 impl<M: ProbabilisticClassifier> SoftVote<M> {
@@ -148,6 +250,7 @@ impl<M: ProbabilisticClassifier> SoftVote<M> {
         Ok(Self {
             members,
             weights: w.iter().map(|v| v / total).collect(),
+            shared: OnceLock::new(),
         })
     }
 
@@ -165,11 +268,39 @@ impl<M: ProbabilisticClassifier> SoftVote<M> {
 impl<M: ProbabilisticClassifier> ProbabilisticClassifier for SoftVote<M> {
     /// Weighted mean of the members' P(target).
     fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        let mut acc = Array1::<f64>::zeros(x.nrows());
-        for (m, &w) in self.members.iter().zip(&self.weights) {
-            acc.scaled_add(w, &m.predict_proba(x)?);
+        let shared = self
+            .shared
+            .get_or_init(|| SharedDistances::plan(&self.members));
+        let Some(plan) = shared else {
+            let mut acc = Array1::<f64>::zeros(x.nrows());
+            for (m, &w) in self.members.iter().zip(&self.weights) {
+                acc.scaled_add(w, &m.predict_proba(x)?);
+            }
+            return Ok(acc);
+        };
+        let rows = self.members[plan.base]
+            .distance_rows()
+            .expect("the plan's base member has rows");
+        check_n_features("soft-vote input", rows.ncols(), x.ncols())?;
+        check_finite(x, "soft-vote input")?;
+        let mut out = Vec::with_capacity(x.nrows());
+        for block in x.axis_chunks_iter(Axis(0), 256) {
+            let d2 = crate::linalg::sq_distances(block, rows, &plan.rows_sq);
+            let mut acc = Array1::<f64>::zeros(block.nrows());
+            for ((m, &w), columns) in self.members.iter().zip(&self.weights).zip(&plan.columns) {
+                let p = match columns {
+                    // row-major, as the member's own distances (a product's rounding follows layout)
+                    Some(c) => m.predict_proba_from_sq_distances(Array2::from_shape_fn(
+                        (d2.nrows(), c.len()),
+                        |(i, j)| d2[[i, c[j]]],
+                    ))?,
+                    None => m.predict_proba(block)?,
+                };
+                acc.scaled_add(w, &p);
+            }
+            out.extend(acc);
         }
-        Ok(acc)
+        Ok(Array1::from(out))
     }
 
     /// The ensemble's score is its P(target) (as the peer scores its vote).
@@ -207,6 +338,71 @@ mod tests {
         assert!(SoftVote::from_fitted(Vec::<Fixed>::new(), None).is_err());
         assert!(SoftVote::from_fitted(vec![Fixed(0.1)], Some(vec![0.0])).is_err());
         assert!(SoftVote::from_fitted(vec![Fixed(0.1)], Some(vec![1.0, 1.0])).is_err());
+    }
+
+    /// Two overlapping classes in 12 dimensions, deterministic.
+    fn overlapping(n: usize, seed: usize) -> (Array2<f64>, Vec<bool>) {
+        let y: Vec<bool> = (0..n).map(|i| i % 4 == 0).collect();
+        let x = Array2::from_shape_fn((n, 12), |(i, j)| {
+            let c = if y[i] { 0.6 } else { -0.2 };
+            c + (((i + seed) * 31 + j * 17) as f64 * 0.7).sin() * (1.0 + j as f64 * 0.1)
+        });
+        (x, y)
+    }
+
+    #[test]
+    fn shared_distances_give_the_members_own_scores_bit_for_bit() {
+        let (x, y) = overlapping(200, 0);
+        let v = SoftVoteParams::paper().fit(x.view(), &y).unwrap();
+        let plan = SharedDistances::plan(v.members()).expect("SVM and k-NN share the rows");
+        assert_eq!(plan.base, 1, "the k-NN holds every training row");
+        let n_sv = match &v.members()[0] {
+            Member::Svm(s) => s.n_support(),
+            Member::Knn(_) => unreachable!(),
+        };
+        assert!(n_sv > 10 && n_sv < 200, "{n_sv} support vectors");
+        assert_eq!(plan.columns[0].as_ref().map(Vec::len), Some(n_sv));
+        // one query, a few (one dot product per entry), and more than a block of 256
+        let (q, _) = overlapping(300, 1000);
+        for n in [1usize, 5, 16, 300] {
+            let q = q.slice(ndarray::s![..n, ..]);
+            let got = v.predict_proba(q).unwrap();
+            let mut want = Array1::<f64>::zeros(n);
+            for (m, &w) in v.members().iter().zip(v.weights()) {
+                want.scaled_add(w, &m.predict_proba(q).unwrap());
+            }
+            assert_eq!(got, want, "{n} queries");
+        }
+        assert!(v.predict_proba(Array2::zeros((1, 3)).view()).is_err());
+        assert!(v
+            .predict_proba(Array2::from_elem((1, 12), f64::NAN).view())
+            .is_err());
+    }
+
+    #[test]
+    fn members_fitted_on_other_rows_score_alone() {
+        let (x, y) = overlapping(120, 0);
+        let (x2, y2) = overlapping(120, 7);
+        let svm = MemberParams::Svm(SvmParams::default())
+            .fit(x.view(), &y)
+            .unwrap();
+        let knn = MemberParams::Knn(KnnParams::default())
+            .fit(x2.view(), &y2)
+            .unwrap();
+        let linear = MemberParams::Svm(SvmParams {
+            kernel: crate::svm::Kernel::Linear,
+            ..SvmParams::default()
+        })
+        .fit(x.view(), &y)
+        .unwrap();
+        assert!(SharedDistances::plan(&[svm.clone(), knn.clone()]).is_none());
+        assert!(SharedDistances::plan(&[linear, knn.clone()]).is_none());
+        let v = SoftVote::from_fitted(vec![svm.clone(), knn.clone()], None).unwrap();
+        let (q, _) = overlapping(3, 500);
+        let want =
+            (svm.predict_proba(q.view()).unwrap() + knn.predict_proba(q.view()).unwrap()) / 2.0;
+        let got = v.predict_proba(q.view()).unwrap();
+        assert!(got.iter().zip(&want).all(|(a, b)| (a - b).abs() < 1e-15));
     }
 
     #[test]

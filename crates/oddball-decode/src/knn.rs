@@ -11,7 +11,7 @@
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::scaler::{check_finite, check_labels, check_n_features, dot_transposed};
+use crate::scaler::{check_finite, check_labels, check_n_features};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -88,14 +88,27 @@ impl Knn {
         let x_sq = self
             .x_sq
             .get_or_init(|| crate::linalg::row_sq_norms(self.x.view()));
-        let mut d = dot_transposed(q, self.x.view());
-        for (mut row, qr) in d.outer_iter_mut().zip(q.outer_iter()) {
-            let q_sq = qr.dot(&qr);
-            for (v, s) in row.iter_mut().zip(x_sq) {
-                *v = (q_sq + s - 2.0 * *v).max(0.0);
-            }
-        }
-        d
+        crate::linalg::sq_distances(q, self.x.view(), x_sq)
+    }
+
+    /// The training rows, which [`crate::ensemble::SoftVote`] may measure queries against once for
+    /// several members.
+    pub fn training_rows(&self) -> ArrayView2<'_, f64> {
+        self.x.view()
+    }
+
+    /// [`Self::predict_proba`] from squared distances `(n_queries, n_train)` to the training rows.
+    pub fn predict_proba_from_sq_distances(&self, d2: ArrayView2<f64>) -> Result<Array1<f64>> {
+        check_n_features("k-NN distances", self.x.nrows(), d2.ncols())?;
+        let mut best = Vec::with_capacity(self.k + 1);
+        let k = self.k as f64;
+        Ok(d2
+            .outer_iter()
+            .map(|row| {
+                self.k_smallest(row, &mut best);
+                best.iter().filter(|&&(_, i)| self.y[i]).count() as f64 / k
+            })
+            .collect())
     }
 
     /// The `k` smallest entries of a distance row as (distance, index), ascending; equal distances
@@ -116,15 +129,9 @@ impl Knn {
     pub fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         check_n_features("k-NN input", self.n_features(), x.ncols())?;
         check_finite(x, "k-NN input")?;
-        let mut best = Vec::with_capacity(self.k + 1);
-        let k = self.k as f64;
         let mut out = Vec::with_capacity(x.nrows());
         for block in x.axis_chunks_iter(Axis(0), 256) {
-            let d = self.sq_distances(block);
-            for row in d.outer_iter() {
-                self.k_smallest(row, &mut best);
-                out.push(best.iter().filter(|&&(_, i)| self.y[i]).count() as f64 / k);
-            }
+            out.extend(self.predict_proba_from_sq_distances(self.sq_distances(block).view())?);
         }
         Ok(Array1::from(out))
     }

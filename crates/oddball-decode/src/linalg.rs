@@ -651,6 +651,25 @@ pub(crate) fn contiguous<'s, 'v: 's>(
     }
 }
 
+/// Squared Euclidean distances `(n_queries, n_rows)` from the rows of `q` to the rows of `rows`, as
+/// `‖q‖² + ‖r‖² − 2 q·r` through one matrix product (the formula of scikit-learn's brute-force
+/// neighbours and of libsvm's RBF kernel), clipped at 0. `rows_sq` is [`row_sq_norms`] of `rows`.
+/// The k-NN and the RBF SVM both measure through this, so a soft vote can share it between them.
+pub(crate) fn sq_distances(
+    q: ndarray::ArrayView2<f64>,
+    rows: ndarray::ArrayView2<f64>,
+    rows_sq: &ndarray::Array1<f64>,
+) -> ndarray::Array2<f64> {
+    let mut d = crate::scaler::dot_transposed(q, rows);
+    for (mut row, qr) in d.outer_iter_mut().zip(q.outer_iter()) {
+        let q_sq = qr.dot(&qr);
+        for (v, s) in row.iter_mut().zip(rows_sq) {
+            *v = (q_sq + s - 2.0 * *v).max(0.0);
+        }
+    }
+    d
+}
+
 /// Squared norm of each row of `m`.
 pub(crate) fn row_sq_norms(m: ndarray::ArrayView2<f64>) -> ndarray::Array1<f64> {
     m.outer_iter()

@@ -29,7 +29,7 @@ use linfa::prelude::*;
 use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::scaler::{check_finite, check_labels, check_n_features, dot_transposed};
+use crate::scaler::{check_finite, check_labels, check_n_features};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -380,7 +380,6 @@ fn decision_values(d: &Dual, x: ArrayView2<f64>) -> Array1<f64> {
     if let Some(w) = &d.weights {
         return x.dot(w) + d.intercept;
     }
-    let gamma = d.gamma.unwrap_or(1.0);
     let sv = &d.support_vectors;
     let sv_sq = d
         .sv_sq
@@ -391,17 +390,18 @@ fn decision_values(d: &Dual, x: ArrayView2<f64>) -> Array1<f64> {
         .axis_chunks_iter(Axis(0), BLOCK)
         .zip(out.axis_chunks_iter_mut(Axis(0), BLOCK))
     {
-        let mut k = dot_transposed(xb, sv.view()); // (block, n_sv) inner products
-        for (mut row, xr) in k.outer_iter_mut().zip(xb.outer_iter()) {
-            let xsq = xr.dot(&xr);
-            for (v, s) in row.iter_mut().zip(sv_sq) {
-                let d2 = (xsq + s - 2.0 * *v).max(0.0);
-                *v = (-gamma * d2).exp();
-            }
-        }
-        ob.assign(&(k.dot(&d.dual_coef) + d.intercept));
+        let d2 = crate::linalg::sq_distances(xb, sv.view(), sv_sq); // (block, n_sv)
+        ob.assign(&rbf_decision(d, d2));
     }
     out
+}
+
+/// `Σ yᵢαᵢ exp(−γ d²ᵢ) + intercept` per row of the squared distances `d2` `(n, n_sv)` to the
+/// support vectors.
+fn rbf_decision(d: &Dual, mut d2: Array2<f64>) -> Array1<f64> {
+    let gamma = d.gamma.unwrap_or(1.0);
+    d2.mapv_inplace(|v| (-gamma * v).exp());
+    d2.dot(&d.dual_coef) + d.intercept
 }
 
 impl SvmParams {
@@ -524,12 +524,41 @@ impl Svm {
 
     /// P(target) per row from the Platt sigmoid.
     pub fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        let platt = self.platt.ok_or_else(|| DecodeError::InvalidParameter {
+        let platt = self.calibration()?;
+        Ok(self.decision_function(x)?.mapv(|f| platt.probability(f)))
+    }
+
+    /// The Platt sigmoid, or the error of an SVM fitted without one.
+    fn calibration(&self) -> Result<PlattSigmoid> {
+        self.platt.ok_or_else(|| DecodeError::InvalidParameter {
             name: "calibration",
             value: "None".into(),
             reason: "this SVM was fitted without probability calibration".into(),
-        })?;
-        Ok(self.decision_function(x)?.mapv(|f| platt.probability(f)))
+        })
+    }
+
+    /// The support vectors of an RBF SVM, which [`crate::ensemble::SoftVote`] may measure queries
+    /// against once for several members (`None` for the linear kernel).
+    pub fn rbf_support_vectors(&self) -> Option<ArrayView2<'_, f64>> {
+        self.dual
+            .weights
+            .is_none()
+            .then(|| self.dual.support_vectors.view())
+    }
+
+    /// [`Self::predict_proba`] of an RBF SVM from squared distances `(n_queries, n_support)` to its
+    /// support vectors.
+    pub fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        let platt = self.calibration()?;
+        if self.rbf_support_vectors().is_none() {
+            return Err(DecodeError::InvalidParameter {
+                name: "kernel",
+                value: "linear".into(),
+                reason: "a linear SVM scores inner products, not distances".into(),
+            });
+        }
+        check_n_features("SVM distances", self.n_support(), d2.ncols())?;
+        Ok(rbf_decision(&self.dual, d2).mapv(|f| platt.probability(f)))
     }
 
     /// Target where the decision value is positive.
