@@ -249,7 +249,8 @@ struct PipelineResult {
     speller_choices: Option<usize>,
     /// Characters picked with all repetitions.
     speller_text: Option<String>,
-    /// Fewest repetitions at which every character is right, if any.
+    /// Fewest repetitions from which every character stays right with every further repetition
+    /// (a curve that reaches 100 % and drops again counts from after its last drop), if any.
     reps_for_all_correct: Option<usize>,
     itr_at_best: Option<Itr>,
     fit_s: f64,
@@ -594,7 +595,7 @@ fn score_test(
             .enumerate()
             .map(|(i, &a)| Itr::new(first.n_choices, a, (i + 1) as f64 * per_rep))
             .max_by(|a, b| a.bits_per_minute.total_cmp(&b.bits_per_minute));
-        result.reps_for_all_correct = acc.iter().position(|&a| a >= 1.0).map(|i| i + 1);
+        result.reps_for_all_correct = reps_from_which_all_correct(&acc);
         result.speller_choices = Some(first.n_choices);
         result.speller_text = Some(spellers.iter().map(|s| s.text.as_str()).collect());
         result.speller_accuracy = Some(acc);
@@ -604,6 +605,15 @@ fn score_test(
 
 /// k-fold cross-validation on the training data with `folds` (speller characters kept whole, or
 /// stratified by label). With `--tune`, the grid search runs inside each fold's training part.
+/// The first repetition count (1-based) from which the accuracy stays at 100 % up to the last
+/// repetition scored, if the last is 100 %.
+fn reps_from_which_all_correct(acc: &[f64]) -> Option<usize> {
+    match acc.iter().rposition(|&a| a < 1.0) {
+        None => (!acc.is_empty()).then_some(1),
+        Some(i) => (i + 1 < acc.len()).then_some(i + 2),
+    }
+}
+
 fn cross_validate(
     name: &str,
     data: &Epochs,
@@ -843,4 +853,19 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::reps_from_which_all_correct as reps;
+
+    #[test]
+    fn repetitions_count_from_the_last_miss() {
+        assert_eq!(reps(&[0.5, 1.0, 1.0]), Some(2));
+        assert_eq!(reps(&[1.0, 1.0]), Some(1));
+        // reached at 2, lost at 3 and 4: all right only from 5 on
+        assert_eq!(reps(&[0.0, 1.0, 0.5, 0.5, 1.0, 1.0]), Some(5));
+        assert_eq!(reps(&[1.0, 0.75]), None);
+        assert_eq!(reps(&[]), None);
+    }
 }
