@@ -13,12 +13,12 @@
 //! EMD_BENCH_ONCE=eeg3_1 valgrind --tool=callgrind --toggle-collect='*Emd*first_imf*' <bench binary>
 //! ```
 
-use std::path::PathBuf;
-
 use criterion::{criterion_group, Criterion, Throughput};
 use oddball_decode::emd::{Emd, EmdParams};
 use oddball_decode::pipeline::Preprocess;
-use oddball_signal::detrend::{detrend, DetrendKind};
+
+mod speller;
+use speller::speller_epochs;
 
 const N: usize = 205;
 const FS: f64 = 256.0;
@@ -70,25 +70,7 @@ fn synthetic() -> Vec<Vec<f64>> {
 }
 
 fn eeg() -> Option<Vec<Vec<f64>>> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    let path = dir.join("bci2000-samplefiles-p300").join("eeg3_1.dat");
-    if !path.is_file() {
-        eprintln!("skipping the eeg3_1 set: {} not found", path.display());
-        return None;
-    }
-    let pre = Preprocess::peer();
-    let mut raw = oddball_io::read(&path).expect("the speller file reads").raw;
-    detrend(raw.data_mut(), DetrendKind::Constant);
-    pre.band
-        .design(raw.sfreq())
-        .unwrap()
-        .apply_raw(&mut raw)
-        .unwrap();
-    let epochs = pre.epochs_params().cut(&raw).unwrap().0;
+    let epochs = speller_epochs("eeg3_1.dat", &Preprocess::peer())?;
     let data = epochs.data();
     let mut out = Vec::new();
     for e in 0..40.min(data.shape()[0]) {

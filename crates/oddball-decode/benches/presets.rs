@@ -3,38 +3,12 @@
 //! The real recordings are read from `../shared/data` (or `ODDBALL_DATA`); without them the
 //! benchmark says so and measures nothing.
 
-use std::path::PathBuf;
-
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use ndarray::Axis;
 use oddball_decode::pipeline::{PipelineParams, Preprocess};
-use oddball_signal::detrend::{detrend, DetrendKind};
-use oddball_signal::Epochs;
 
-fn speller_epochs(name: &str, pre: &Preprocess) -> Option<Epochs> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    let path = dir.join("bci2000-samplefiles-p300").join(name);
-    if !path.is_file() {
-        eprintln!(
-            "skipping the preset benchmarks: {} not found",
-            path.display()
-        );
-        return None;
-    }
-    let rec = oddball_io::read(&path).expect("the speller file reads");
-    let mut raw = rec.raw;
-    detrend(raw.data_mut(), DetrendKind::Constant);
-    pre.band
-        .design(raw.sfreq())
-        .unwrap()
-        .apply_raw(&mut raw)
-        .unwrap();
-    Some(pre.epochs_params().cut(&raw).unwrap().0)
-}
+mod speller;
+use speller::speller_epochs;
 
 fn presets(c: &mut Criterion) {
     let pre = Preprocess::peer();

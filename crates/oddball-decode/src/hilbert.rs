@@ -246,9 +246,8 @@ pub fn instantaneous_frequency(re: &[f64], im: &[f64], sfreq: f64, out: &mut [f6
     phase_to_frequency(out, sfreq)
 }
 
-/// Wrapped phase (in place) → instantaneous frequency, as `numpy.unwrap` then `numpy.diff`.
-fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
-    let n = p.len();
+/// An instantaneous frequency needs 2 samples and a finite, positive `sfreq`.
+fn check_frequency_args(n: usize, sfreq: f64) -> Result<()> {
     if n < 2 {
         return Err(DecodeError::TooFewSamples {
             what: format!("instantaneous frequency needs 2 samples, got {n}"),
@@ -261,6 +260,13 @@ fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
             reason: "must be finite and > 0".into(),
         });
     }
+    Ok(())
+}
+
+/// Wrapped phase (in place) → instantaneous frequency, as `numpy.unwrap` then `numpy.diff`.
+fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
+    let n = p.len();
+    check_frequency_args(n, sfreq)?;
     let pi = std::f64::consts::PI;
     let to_hz = |d: f64| d * sfreq / (2.0 * pi);
     // numpy.unwrap: up[i] = p[i] + cumsum(correction)[i-1]
@@ -344,18 +350,7 @@ pub fn frequency_bins(
             got: format!("{} imaginary parts and {} bins", im.len(), out.len()),
         });
     }
-    if n < 2 {
-        return Err(DecodeError::TooFewSamples {
-            what: format!("instantaneous frequency needs 2 samples, got {n}"),
-        });
-    }
-    if !(sfreq.is_finite() && sfreq > 0.0) {
-        return Err(DecodeError::InvalidParameter {
-            name: "sfreq",
-            value: sfreq.to_string(),
-            reason: "must be finite and > 0".into(),
-        });
-    }
+    check_frequency_args(n, sfreq)?;
     let to_hz = sfreq / (2.0 * std::f64::consts::PI);
     let phase = |j: usize| im[j].atan2(re[j]);
     let correction = |k: usize| step_correction(re[k], im[k], re[k + 1], im[k + 1]);
