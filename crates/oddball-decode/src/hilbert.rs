@@ -2,10 +2,11 @@
 //! features.
 //!
 //! [`HilbertTransform`] computes scipy's `signal.hilbert` — FFT, zero the negative frequencies, double
-//! the positive ones (DC and, for even lengths, Nyquist kept once), inverse FFT — with the `realfft`
-//! crate. Because that analytic signal's real part is the input itself, only its imaginary part (the
-//! Hilbert transform) is computed, as one real-to-complex and one complex-to-real FFT of the signal's
-//! own length; the real part returned is the input, where scipy's is the input plus FFT round-off.
+//! the positive ones (DC and, for even lengths, Nyquist kept once), inverse FFT — with `rustfft`.
+//! Because that analytic signal's real part is the input itself, only its imaginary part (the
+//! Hilbert transform) is computed, as the multiplier −i·sgn k between a forward and an inverse
+//! complex FFT of the signal's own length; the real part returned is the input, where scipy's is the
+//! input plus FFT round-off.
 //!
 //! The instantaneous frequency is the peer's (`shared/peer/peer_eval.py`): `numpy.unwrap` of the
 //! phase `atan2(im, re)`, its first difference times `sfreq / 2π`, and the last difference repeated so
@@ -20,8 +21,7 @@
 //! (tests below, and the peer's values in `tests/paper_golden.rs`):
 //! * [`HilbertTransform::imag_pair`] transforms two real channels at once: the Hilbert transform is a
 //!   complex-linear Fourier multiplier (−i·sgn k), so the transform of `a + i·b` is `H(a) + i·H(b)`:
-//!   one complex FFT pair of length n instead of two real ones (which `realfft` runs as complex FFTs
-//!   of length n anyway when n is odd, as the speller's 205 samples are).
+//!   one complex FFT pair of length n serves two channels.
 //! * [`frequency_bins`] never forms the per-sample phase: the mean of a bin of first differences is
 //!   the unwrapped phase's change across the bin, so `atan2` is needed only at the bin edges. The
 //!   unwrap corrections in between (numpy adds −2π·sgn(Δ) where |Δ| > π) are read off the signs of
@@ -29,14 +29,13 @@
 //!   disagree with numpy's rounding (a sample exactly on the real axis, or two neighbours within
 //!   1e-6 rad of opposite), the correction is numpy's own, computed from both phases.
 //!
-//! The FFTs and their plans come from `realfft` and `rustfft`; the rest is written here (a few lines,
-//! and it must follow scipy's and numpy's conventions exactly).
+//! The FFTs and their plans come from `rustfft`; the rest is written here (a few lines, and it must
+//! follow scipy's and numpy's conventions exactly).
 
 use std::sync::Arc;
 
 use ndarray::{Array2, ArrayView3};
-use realfft::num_complex::Complex;
-use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
+use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
@@ -50,16 +49,11 @@ type Result<T> = std::result::Result<T, DecodeError>;
 #[derive(Clone)]
 pub struct HilbertTransform {
     n: usize,
-    r2c: Arc<dyn RealToComplex<f64>>,
-    c2r: Arc<dyn ComplexToReal<f64>>,
-    input: Vec<f64>,
-    spectrum: Vec<Complex<f64>>,
-    scratch: Vec<Complex<f64>>,
-    /// Complex plans of length n for [`Self::imag_pair`], and its buffers.
+    /// Complex FFT plans of length n.
     fwd: Arc<dyn Fft<f64>>,
     inv: Arc<dyn Fft<f64>>,
-    pair: Vec<Complex<f64>>,
-    pair_scratch: Vec<Complex<f64>>,
+    buf: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
 }
 
 impl std::fmt::Debug for HilbertTransform {
@@ -78,31 +72,21 @@ impl HilbertTransform {
                 what: "Hilbert transform of an empty signal".into(),
             });
         }
-        let mut planner = RealFftPlanner::<f64>::new();
-        let r2c = planner.plan_fft_forward(n);
-        let c2r = planner.plan_fft_inverse(n);
-        let scratch =
-            vec![Complex::new(0.0, 0.0); r2c.get_scratch_len().max(c2r.get_scratch_len())];
-        let mut complex = FftPlanner::<f64>::new();
-        let fwd = complex.plan_fft_forward(n);
-        let inv = complex.plan_fft_inverse(n);
+        let mut planner = FftPlanner::<f64>::new();
+        let fwd = planner.plan_fft_forward(n);
+        let inv = planner.plan_fft_inverse(n);
         let zero = Complex::new(0.0, 0.0);
-        let pair_scratch = vec![
+        let scratch = vec![
             zero;
             fwd.get_inplace_scratch_len()
                 .max(inv.get_inplace_scratch_len())
         ];
         Ok(Self {
             n,
-            input: vec![0.0; n],
-            spectrum: r2c.make_output_vec(),
-            r2c,
-            c2r,
-            scratch,
             fwd,
             inv,
-            pair: vec![zero; n],
-            pair_scratch,
+            buf: vec![zero; n],
+            scratch,
         })
     }
 
@@ -115,26 +99,14 @@ impl HilbertTransform {
     pub fn imag(&mut self, x: &[f64], out: &mut [f64]) -> Result<()> {
         self.check_len("Hilbert input", x.len())?;
         self.check_len("Hilbert output", out.len())?;
-        self.input.copy_from_slice(x);
-        self.r2c
-            .process_with_scratch(&mut self.input, &mut self.spectrum, &mut self.scratch)
-            .map_err(fft_error)?;
-        // -i·X_k for 0 < k < n/2 (doubled positive frequencies, the negative ones dropped); DC and
-        // Nyquist carry no imaginary part.
-        let half = self.spectrum.len();
-        let nyquist = if self.n % 2 == 0 { half - 1 } else { half };
-        for (k, c) in self.spectrum.iter_mut().enumerate() {
-            *c = if k == 0 || k >= nyquist {
-                Complex::new(0.0, 0.0)
-            } else {
-                Complex::new(c.im, -c.re)
-            };
+        for (z, &re) in self.buf.iter_mut().zip(x) {
+            *z = Complex::new(re, 0.0);
         }
-        self.c2r
-            .process_with_scratch(&mut self.spectrum, out, &mut self.scratch)
-            .map_err(fft_error)?;
+        self.transform_buf();
         let scale = 1.0 / self.n as f64;
-        out.iter_mut().for_each(|v| *v *= scale);
+        for (o, z) in out.iter_mut().zip(&self.buf) {
+            *o = z.re * scale;
+        }
         Ok(())
     }
 
@@ -151,16 +123,27 @@ impl HilbertTransform {
         self.check_len("Hilbert input", b.len())?;
         self.check_len("Hilbert output", out_a.len())?;
         self.check_len("Hilbert output", out_b.len())?;
-        for ((z, &re), &im) in self.pair.iter_mut().zip(a).zip(b) {
+        for ((z, &re), &im) in self.buf.iter_mut().zip(a).zip(b) {
             *z = Complex::new(re, im);
         }
+        self.transform_buf();
+        let scale = 1.0 / self.n as f64;
+        for ((oa, ob), z) in out_a.iter_mut().zip(out_b.iter_mut()).zip(&self.buf) {
+            *oa = z.re * scale;
+            *ob = z.im * scale;
+        }
+        Ok(())
+    }
+
+    /// `buf` ← n·H(`buf`): forward FFT, −i·sgn(k), inverse FFT (unscaled). Positive frequencies
+    /// 1 ≤ k < (n+1)/2 are multiplied by −i, negative ones by +i; DC and (n even) Nyquist dropped —
+    /// scipy's doubled positive half, seen from the imaginary part.
+    fn transform_buf(&mut self) {
         self.fwd
-            .process_with_scratch(&mut self.pair, &mut self.pair_scratch);
-        // −i·sgn(k): positive frequencies 1 ≤ k < (n+1)/2 times −i, negative ones times +i; DC and
-        // (n even) Nyquist dropped — scipy's doubled positive half, seen from the imaginary part.
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
         let n = self.n;
         let first_negative = n / 2 + 1;
-        for (k, z) in self.pair.iter_mut().enumerate() {
+        for (k, z) in self.buf.iter_mut().enumerate() {
             *z = if k == 0 || (n % 2 == 0 && k == n / 2) {
                 Complex::new(0.0, 0.0)
             } else if k < first_negative {
@@ -170,13 +153,7 @@ impl HilbertTransform {
             };
         }
         self.inv
-            .process_with_scratch(&mut self.pair, &mut self.pair_scratch);
-        let scale = 1.0 / n as f64;
-        for ((oa, ob), z) in out_a.iter_mut().zip(out_b.iter_mut()).zip(&self.pair) {
-            *oa = z.re * scale;
-            *ob = z.im * scale;
-        }
-        Ok(())
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
     }
 
     /// Instantaneous amplitude `|z|` and frequency (Hz, the peer's convention, see the module docs)
@@ -190,11 +167,7 @@ impl HilbertTransform {
     ) -> Result<()> {
         self.check_len("instantaneous amplitude output", amp.len())?;
         self.imag(x, freq)?;
-        // |z| as √(re² + im²): within an ulp of numpy's `hypot`, several times faster, and µV-scale
-        // values can't overflow
-        for ((a, &re), &im) in amp.iter_mut().zip(x).zip(freq.iter()) {
-            *a = (re * re + im * im).sqrt();
-        }
+        magnitude_into(x, freq, amp);
         // the imaginary part sits in `freq`; turn it into phase in place, then into frequency
         for (f, &re) in freq.iter_mut().zip(x) {
             *f = f.atan2(re);
@@ -211,14 +184,6 @@ impl HilbertTransform {
             });
         }
         Ok(())
-    }
-}
-
-fn fft_error(e: realfft::FftError) -> DecodeError {
-    DecodeError::ShapeMismatch {
-        what: "FFT buffers".into(),
-        expected: "planned lengths".into(),
-        got: e.to_string(),
     }
 }
 
@@ -283,6 +248,14 @@ fn phase_to_frequency(p: &mut [f64], sfreq: f64) -> Result<()> {
     }
     p[n - 1] = p[n - 2];
     Ok(())
+}
+
+/// `|re + i·im|` per sample into `out`, as √(re² + im²): within an ulp of numpy's `hypot`, several
+/// times faster, and µV-scale values can't overflow.
+fn magnitude_into(re: &[f64], im: &[f64], out: &mut [f64]) {
+    for ((a, &r), &i) in out.iter_mut().zip(re).zip(im) {
+        *a = (r * r + i * i).sqrt();
+    }
 }
 
 /// numpy's `unwrap` correction of one phase step `dd` (`ph_correct`): 0 unless |dd| reaches π
@@ -527,25 +500,27 @@ impl HhtExtractor {
                 ),
             });
         }
-        let mut c = 0;
-        while c < n_ch {
-            let paired = c + 1 < n_ch;
+        let (mut amp_rows, mut freq_rows) = (amp_block.chunks_mut(nb), freq_block.chunks_mut(nb));
+        let mut bins = |ex: &mut Self, second| -> Result<()> {
+            let (a, f) = (amp_rows.next(), freq_rows.next());
+            ex.bins(
+                second,
+                a.expect("a row per channel"),
+                f.expect("a row per channel"),
+            )
+        };
+        for c in (0..n_ch).step_by(2) {
             self.first_imf_of(epoch.row(c), false)?;
-            if paired {
+            if c + 1 < n_ch {
                 self.first_imf_of(epoch.row(c + 1), true)?;
                 self.hilbert
                     .imag_pair(&self.imf, &self.imf_b, &mut self.imag, &mut self.imag_b)?;
+                bins(self, false)?;
+                bins(self, true)?;
             } else {
                 self.hilbert.imag(&self.imf, &mut self.imag)?;
+                bins(self, false)?;
             }
-            for (i, second) in [(c, false), (c + 1, true)]
-                .into_iter()
-                .take(1 + paired as usize)
-            {
-                let bins = i * nb..(i + 1) * nb;
-                self.bins(second, &mut amp_block[bins.clone()], &mut freq_block[bins])?;
-            }
-            c += 2;
         }
         Ok(())
     }
@@ -577,11 +552,7 @@ impl HhtExtractor {
         } else {
             (&self.imf, &self.imag)
         };
-        // |z| as √(re² + im²): within an ulp of numpy's `hypot`, several times faster, and µV-scale
-        // values can't overflow
-        for ((a, &r), &i) in self.amp.iter_mut().zip(re).zip(im) {
-            *a = (r * r + i * i).sqrt();
-        }
+        magnitude_into(re, im, &mut self.amp);
         bin_mean_into(&self.amp, self.params.bin, amp_bins)?;
         frequency_bins(re, im, self.params.sfreq, self.params.bin, freq_bins)
     }
