@@ -23,7 +23,15 @@ fn presets(c: &mut Criterion) {
         .iter()
         .map(|e| e.target == Some(true))
         .collect();
-    for name in ["lda", "riemann", "lda+riemann", "paper-svm", "paper"] {
+    for name in [
+        "lda",
+        "toeplitz-lda",
+        "riemann",
+        "lda+riemann",
+        "stack",
+        "paper-svm",
+        "paper",
+    ] {
         let params = PipelineParams::preset(name, train.sfreq()).unwrap();
         let mut group = c.benchmark_group(format!("preset_{name}"));
         group.sample_size(10);

@@ -28,6 +28,7 @@ pub mod scaler;
 pub mod svm;
 #[cfg(test)]
 mod testutil;
+pub mod toeplitz_lda;
 pub mod tuning;
 pub mod wavelet;
 pub mod xdawn;

@@ -25,6 +25,7 @@ use crate::pca::{Pca, PcaParams};
 use crate::riemann::{Mdm, MdmParams, TangentSpace, TangentSpaceParams};
 use crate::scaler::{StandardScaler, StandardScalerParams};
 use crate::svm::{Calibration, Gamma, Kernel, Svm, SvmParams};
+use crate::toeplitz_lda::{ToeplitzLda, ToeplitzLdaParams};
 use crate::xdawn::{XdawnCovariances, XdawnCovariancesParams};
 use crate::DecodeError;
 
@@ -88,6 +89,15 @@ fn unflatten_square(x: ArrayView2<f64>) -> Result<Array3<f64>> {
     Ok(Array3::from_shape_fn((rows, n, n), |(e, i, j)| {
         x[[e, i * n + j]]
     }))
+}
+
+impl ProbabilisticClassifier for ToeplitzLda {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        ToeplitzLda::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        ToeplitzLda::decision_function(self, x)
+    }
 }
 
 impl ProbabilisticClassifier for Logistic {
@@ -255,6 +265,9 @@ impl Features {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum ClassifierParams {
     Lda(LdaParams),
+    /// Block-Toeplitz shrinkage LDA on channel-major spatio-temporal features (amplitudes); the
+    /// channel count is the epochs' (after channel selection).
+    ToeplitzLda(ToeplitzLdaParams),
     Logistic(LogisticParams),
     Svm(SvmParams),
     Knn(KnnParams),
@@ -269,6 +282,7 @@ pub enum ClassifierParams {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum Classifier {
     Lda(Lda),
+    ToeplitzLda(ToeplitzLda),
     Logistic(Logistic),
     Svm(Svm),
     Knn(Knn),
@@ -328,9 +342,11 @@ impl ClassifierParams {
         })
     }
 
-    fn fit(&self, x: ArrayView2<f64>, y: &[bool]) -> Result<Classifier> {
+    /// Fits on feature rows `x` of epochs with `n_channels` channels.
+    fn fit(&self, x: ArrayView2<f64>, y: &[bool], n_channels: usize) -> Result<Classifier> {
         Ok(match self {
             ClassifierParams::Lda(p) => Classifier::Lda(p.fit(x, y)?),
+            ClassifierParams::ToeplitzLda(p) => Classifier::ToeplitzLda(p.fit(x, y, n_channels)?),
             ClassifierParams::Logistic(p) => Classifier::Logistic(p.fit(x, y)?),
             ClassifierParams::Svm(p) => Classifier::Svm(p.fit(x, y)?),
             ClassifierParams::Knn(p) => Classifier::Knn(p.fit(x, y)?),
@@ -344,6 +360,7 @@ impl Classifier {
     fn inner(&self) -> &dyn ProbabilisticClassifier {
         match self {
             Classifier::Lda(m) => m,
+            Classifier::ToeplitzLda(m) => m,
             Classifier::Logistic(m) => m,
             Classifier::Svm(m) => m,
             Classifier::Knn(m) => m,
@@ -363,11 +380,13 @@ pub struct PipelineParams {
     pub scaler: Option<StandardScalerParams>,
     pub pca: Option<PcaParams>,
     pub classifier: ClassifierParams,
-    /// Score fusion: further pipelines fitted on the same epochs, whose scores are added to this
-    /// one's. Each pipeline's decision value is divided by its standard deviation over the
-    /// training epochs (so each counts equally), then all are summed. Empty for one pipeline.
+    /// Score fusion: further pipelines fitted on the same epochs, whose scores are combined with
+    /// this one's as [`fusion`](Self::fusion) says. Empty for one pipeline.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fused: Vec<PipelineParams>,
+    /// How the scores of a fusion are combined (ignored without [`fused`](Self::fused)).
+    #[serde(default, skip_serializing_if = "Fusion::is_standardised")]
+    pub fusion: Fusion,
     /// Multiplies the RBF SVMs' `γ = 'scale'`: 1 is scikit-learn's `'scale'`; otherwise the
     /// γ is resolved once on the training features (the Platt-calibration folds inside share it).
     #[serde(default = "one")]
@@ -378,11 +397,36 @@ fn one() -> f64 {
     1.0
 }
 
+/// How a score fusion combines its pipelines' decision values `s_i`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Fusion {
+    /// `Σ s_i / σ_i`, `σ_i` the standard deviation of `s_i` over the training epochs: each
+    /// pipeline counts equally, nothing is fitted.
+    #[default]
+    Standardised,
+    /// Stacking (scikit-learn's `StackingClassifier` with `cv`, a logistic-regression final
+    /// estimator on standardised scores): each pipeline is fitted on the training part of
+    /// `n_folds` inner folds ([`crate::tuning::cv_folds`]: speller characters kept whole when the
+    /// fit is given groups, otherwise stratified) and scores the held-out part; a logistic
+    /// regression (`C = 1`) on those out-of-fold scores, each standardised by its mean and
+    /// standard deviation, learns the weights. The pipelines are then fitted on all the epochs,
+    /// and the fused score is `b + Σ w_i (s_i − m_i) / σ_i` (log-odds of target).
+    Stacked { n_folds: usize },
+}
+
+impl Fusion {
+    fn is_standardised(&self) -> bool {
+        *self == Fusion::Standardised
+    }
+}
+
 /// The names [`PipelineParams::preset`] knows.
-pub const PRESETS: [&str; 7] = [
+pub const PRESETS: [&str; 9] = [
     "lda",
+    "toeplitz-lda",
     "riemann",
     "lda+riemann",
+    "stack",
     "mdm",
     "paper",
     "paper-svm",
@@ -402,6 +446,11 @@ impl PipelineParams {
     /// * `lda+riemann`: score fusion of `lda` and `riemann` (each pipeline's decision value
     ///   divided by its standard deviation on the training epochs, then summed; no weights to
     ///   tune).
+    /// * `toeplitz-lda`: block-Toeplitz shrinkage LDA ([`crate::toeplitz_lda`]) on the `lda`
+    ///   preset's amplitudes;
+    /// * `stack`: `toeplitz-lda`, `riemann` and `mdm` stacked ([`Fusion::Stacked`], 5 inner
+    ///   folds): a logistic regression learns their weights from out-of-fold scores on the
+    ///   training epochs.
     pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
         let paper_front = |classifier| -> Result<Self> {
             Ok(Self {
@@ -413,6 +462,7 @@ impl PipelineParams {
                 classifier,
                 svm_gamma_scale: 1.0,
                 fused: Vec::new(),
+                fusion: Fusion::Standardised,
             })
         };
         let xdawn_step = crate::amplitude::samples_per(sfreq, 64.0);
@@ -426,6 +476,7 @@ impl PipelineParams {
                 classifier: ClassifierParams::Lda(LdaParams::default()),
                 svm_gamma_scale: 1.0,
                 fused: Vec::new(),
+                fusion: Fusion::Standardised,
             }),
             "riemann" => Ok(Self {
                 name: name.to_string(),
@@ -440,6 +491,7 @@ impl PipelineParams {
                 classifier: ClassifierParams::Logistic(LogisticParams::default()),
                 svm_gamma_scale: 1.0,
                 fused: Vec::new(),
+                fusion: Fusion::Standardised,
             }),
             "mdm" => Ok(Self {
                 name: name.to_string(),
@@ -453,6 +505,7 @@ impl PipelineParams {
                 classifier: ClassifierParams::Mdm(MdmParams::default()),
                 svm_gamma_scale: 1.0,
                 fused: Vec::new(),
+                fusion: Fusion::Standardised,
             }),
             "paper" => paper_front(ClassifierParams::Vote(SoftVoteParams::paper())),
             // Alone, the SVM's decision value is the score: no probability calibration needed.
@@ -465,6 +518,19 @@ impl PipelineParams {
                 let mut p = Self::preset("lda", sfreq)?;
                 p.name = name.to_string();
                 p.fused = vec![Self::preset("riemann", sfreq)?];
+                Ok(p)
+            }
+            "toeplitz-lda" => {
+                let mut p = Self::preset("lda", sfreq)?;
+                p.name = name.to_string();
+                p.classifier = ClassifierParams::ToeplitzLda(ToeplitzLdaParams::default());
+                Ok(p)
+            }
+            "stack" => {
+                let mut p = Self::preset("toeplitz-lda", sfreq)?;
+                p.name = name.to_string();
+                p.fused = vec![Self::preset("riemann", sfreq)?, Self::preset("mdm", sfreq)?];
+                p.fusion = Fusion::Stacked { n_folds: 5 };
                 Ok(p)
             }
             other => Err(DecodeError::InvalidParameter {
@@ -485,7 +551,111 @@ impl PipelineParams {
     }
 
     /// Fits every step on training `epochs` `(n_epochs, n_channels, n_times)` with labels `y`.
+    /// A stacked fusion's inner folds are stratified by label ([`fit_grouped`](Self::fit_grouped)
+    /// keeps groups whole).
     pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Pipeline> {
+        self.fit_grouped(epochs, y, None)
+    }
+
+    /// [`fit`](Self::fit) where epochs belong to `groups` (one id per epoch, e.g. the speller
+    /// character): a stacked fusion's inner folds keep each group whole, as
+    /// [`crate::tuning::cv_folds`] does. Only a stacked fusion reads the groups.
+    pub fn fit_grouped(
+        &self,
+        epochs: ArrayView3<f64>,
+        y: &[bool],
+        groups: Option<&[usize]>,
+    ) -> Result<Pipeline> {
+        let mut pipeline = self.fit_single(epochs, y)?;
+        if self.fused.is_empty() {
+            return Ok(pipeline);
+        }
+        let mut members = Vec::with_capacity(self.fused.len());
+        for p in &self.fused {
+            members.push(p.fit_single(epochs, y)?);
+        }
+        match self.fusion {
+            Fusion::Standardised => {
+                pipeline.score_scale = training_score_sd(&pipeline, epochs)?;
+                for m in &mut members {
+                    m.score_scale = training_score_sd(m, epochs)?;
+                }
+            }
+            Fusion::Stacked { n_folds } => {
+                let stack = self.fit_stacker(epochs, y, groups, n_folds)?;
+                for (k, m) in std::iter::once(&mut pipeline)
+                    .chain(members.iter_mut())
+                    .enumerate()
+                {
+                    m.score_center = stack.center[k];
+                    m.score_scale = stack.scale[k];
+                    m.score_weight = stack.weight[k];
+                }
+                pipeline.fusion_intercept = stack.intercept;
+            }
+        }
+        pipeline.fused = members;
+        Ok(pipeline)
+    }
+
+    /// This pipeline and its fused ones, each alone (without fusion).
+    fn members(&self) -> Vec<PipelineParams> {
+        let mut head = self.clone();
+        head.fused = Vec::new();
+        std::iter::once(head)
+            .chain(self.fused.iter().cloned())
+            .collect()
+    }
+
+    /// Stacking weights from out-of-fold scores (see [`Fusion::Stacked`]).
+    fn fit_stacker(
+        &self,
+        epochs: ArrayView3<f64>,
+        y: &[bool],
+        groups: Option<&[usize]>,
+        n_folds: usize,
+    ) -> Result<Stacker> {
+        let folds = crate::tuning::cv_folds(y, groups, n_folds)?;
+        let members = self.members();
+        let n = y.len();
+        let per_fold = (0..folds.n_folds())
+            .into_par_iter()
+            .map(|f| {
+                let (tr, te) = folds.split(f);
+                let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+                let etr = epochs.select(Axis(0), &tr);
+                let ete = epochs.select(Axis(0), &te);
+                let scores = members
+                    .iter()
+                    .map(|p| {
+                        p.fit_single(etr.view(), &ytr)?
+                            .own_decision_function(ete.view())
+                    })
+                    .collect::<Result<Vec<Array1<f64>>>>()?;
+                Ok((te, scores))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut oof = Array2::zeros((n, members.len()));
+        for (te, scores) in per_fold {
+            for (k, s) in scores.iter().enumerate() {
+                for (&i, &v) in te.iter().zip(s) {
+                    oof[[i, k]] = v;
+                }
+            }
+        }
+        let scaler = StandardScalerParams::default().fit(oof.view())?;
+        let z = scaler.transform(oof.view())?;
+        let lr = LogisticParams::default().fit(z.view(), y)?;
+        Ok(Stacker {
+            center: scaler.mean.to_vec(),
+            scale: scaler.scale.to_vec(),
+            weight: lr.coef().to_vec(),
+            intercept: lr.intercept(),
+        })
+    }
+
+    /// Fits this pipeline's own steps (its fusion left out).
+    fn fit_single(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Pipeline> {
         let (n_epochs, n_channels, n_times) = epochs.dim();
         if y.len() != n_epochs {
             return Err(DecodeError::LabelCount {
@@ -501,12 +671,13 @@ impl PipelineParams {
             });
         }
         let (Front { channels, features }, x) = self.fit_front(epochs, y)?;
+        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
         let Head {
             scaler,
             pca,
             classifier,
-        } = self.fit_head(x, y)?;
-        let mut pipeline = Pipeline {
+        } = self.fit_head(x, y, n_front)?;
+        Ok(Pipeline {
             name: self.name.clone(),
             n_channels,
             n_times,
@@ -518,16 +689,10 @@ impl PipelineParams {
             params: Some(self.clone()),
             fused: Vec::new(),
             score_scale: 1.0,
-        };
-        if !self.fused.is_empty() {
-            pipeline.score_scale = training_score_sd(&pipeline, epochs)?;
-            for p in &self.fused {
-                let mut member = p.fit(epochs, y)?;
-                member.score_scale = training_score_sd(&member, epochs)?;
-                pipeline.fused.push(member);
-            }
-        }
-        Ok(pipeline)
+            score_center: 0.0,
+            score_weight: 1.0,
+            fusion_intercept: 0.0,
+        })
     }
 
     /// Fits the channel selection and the features on `epochs`; returns them with the features
@@ -560,8 +725,14 @@ impl PipelineParams {
         self.channel_selection == other.channel_selection && self.features == other.features
     }
 
-    /// Fits the steps after the features (scaler, PCA, classifier) on feature rows `x`.
-    pub(crate) fn fit_head(&self, mut x: Array2<f64>, y: &[bool]) -> Result<Head> {
+    /// Fits the steps after the features (scaler, PCA, classifier) on feature rows `x` of epochs
+    /// with `n_channels` channels (after channel selection).
+    pub(crate) fn fit_head(
+        &self,
+        mut x: Array2<f64>,
+        y: &[bool],
+        n_channels: usize,
+    ) -> Result<Head> {
         let scaler = match &self.scaler {
             Some(p) => {
                 let s = p.fit(x.view())?;
@@ -581,7 +752,7 @@ impl PipelineParams {
         let classifier = self
             .classifier
             .with_gamma_factor(x.view(), self.svm_gamma_scale)?
-            .fit(x.view(), y)?;
+            .fit(x.view(), y, n_channels)?;
         Ok(Head {
             scaler,
             pca,
@@ -624,6 +795,14 @@ fn training_score_sd(pipeline: &Pipeline, epochs: ArrayView3<f64>) -> Result<f64
     }
 }
 
+/// A stacked fusion's learned combination, one entry per pipeline (this one first).
+struct Stacker {
+    center: Vec<f64>,
+    scale: Vec<f64>,
+    weight: Vec<f64>,
+    intercept: f64,
+}
+
 /// The fitted channel selection and features.
 #[derive(Debug)]
 pub(crate) struct Front {
@@ -632,6 +811,13 @@ pub(crate) struct Front {
 }
 
 impl Front {
+    /// Channels the features see, of `n_channels` given.
+    pub(crate) fn n_channels(&self, n_channels: usize) -> usize {
+        self.channels
+            .as_ref()
+            .map_or(n_channels, |c| c.selected.len())
+    }
+
     /// Features `(n_epochs, n_features)` of `epochs`.
     pub(crate) fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
         match &self.channels {
@@ -681,10 +867,19 @@ pub struct Pipeline {
     /// [`PipelineParams::fused`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     fused: Vec<Pipeline>,
-    /// Standard deviation of the decision values on the training epochs: a fused score adds
-    /// each pipeline's decision value divided by this.
+    /// In a fusion, this pipeline adds `score_weight · (s − score_center) / score_scale` to the
+    /// fused score (see [`Fusion`]). Standardised: the standard deviation of the decision values
+    /// on the training epochs, centre 0, weight 1; stacked: the out-of-fold scores' mean and
+    /// standard deviation and the logistic regression's weight.
     #[serde(default = "unit_scale")]
     score_scale: f64,
+    #[serde(default)]
+    score_center: f64,
+    #[serde(default = "unit_scale")]
+    score_weight: f64,
+    /// The fused score's offset (the stacking regression's intercept; 0 when standardised).
+    #[serde(default)]
+    fusion_intercept: f64,
 }
 
 fn unit_scale() -> f64 {
@@ -758,23 +953,41 @@ impl Pipeline {
     }
 
     /// Continuous target evidence per epoch (larger = more target-like). For a score fusion,
-    /// the sum of every pipeline's decision value in units of its training spread.
+    /// the fused score (see [`Fusion`]).
     pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
         let own = self.own_decision_function(epochs)?;
         if self.fused.is_empty() {
             return Ok(own);
         }
-        let mut total = own / self.score_scale;
+        let mut total = self.fusion_term(own);
         for m in &self.fused {
-            total += &(m.decision_function(epochs)? / m.score_scale);
+            total += &m.fusion_term(m.own_decision_function(epochs)?);
+        }
+        if self.fusion_intercept != 0.0 {
+            total += self.fusion_intercept;
         }
         Ok(total)
+    }
+
+    /// This pipeline's share `w · (s − c) / σ` of a fused score (`s / σ` when standardised).
+    fn fusion_term(&self, s: Array1<f64>) -> Array1<f64> {
+        let (c, sd, w) = (self.score_center, self.score_scale, self.score_weight);
+        if c == 0.0 && w == 1.0 {
+            s / sd
+        } else {
+            s.mapv(|v| w * ((v - c) / sd))
+        }
     }
 
     /// A fusion's score scales are finite and positive (a file could say anything).
     fn check_fusion(&self) -> Result<()> {
         if self.fused.is_empty() {
             return Ok(());
+        }
+        if !self.fusion_intercept.is_finite() {
+            return Err(DecodeError::ModelFormat {
+                reason: format!("fusion intercept {} must be finite", self.fusion_intercept),
+            });
         }
         for p in std::iter::once(self).chain(&self.fused) {
             let nested = !std::ptr::eq(p, self) && !p.fused.is_empty();
@@ -783,6 +996,14 @@ impl Pipeline {
                     reason: format!(
                         "fused pipeline {}: score scale {} (must be finite and > 0, one level of fusion)",
                         p.name, p.score_scale
+                    ),
+                });
+            }
+            if !(p.score_center.is_finite() && p.score_weight.is_finite()) {
+                return Err(DecodeError::ModelFormat {
+                    reason: format!(
+                        "fused pipeline {}: score centre {} and weight {} must be finite",
+                        p.name, p.score_center, p.score_weight
                     ),
                 });
             }
@@ -826,11 +1047,12 @@ impl Pipeline {
 /// Version of the saved-model format written; a file of a version not in
 /// [`READABLE_MODEL_VERSIONS`] is refused at load. Version 2 added score fusion (a model of
 /// version 1 reads the same under 2; a binary that knows only 1 refuses a fused model rather
-/// than scoring half of it).
-pub const MODEL_FORMAT_VERSION: u32 = 2;
+/// than scoring half of it). Version 3 added stacked fusion (weights, centres, intercept) and the
+/// block-Toeplitz LDA; older files read the same under 3.
+pub const MODEL_FORMAT_VERSION: u32 = 3;
 
 /// Saved-model versions this build reads.
-pub const READABLE_MODEL_VERSIONS: [u32; 2] = [1, 2];
+pub const READABLE_MODEL_VERSIONS: [u32; 3] = [1, 2, 3];
 
 /// A channel whose band-passed epoch spans less than this (µV) is flat: no electrode signal.
 pub const FLAT_UV: f64 = 1e-3;
@@ -1080,7 +1302,10 @@ mod tests {
             .unwrap();
         let v1 = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], single)
             .to_json()
-            .replace("\"format_version\":2", "\"format_version\":1");
+            .replace(
+                &format!("\"format_version\":{MODEL_FORMAT_VERSION}"),
+                "\"format_version\":1",
+            );
         assert!(v1.contains("\"format_version\":1"));
         assert!(Model::from_json(&v1).is_ok());
         // A fused model whose score scale is not a positive number is refused at load.
@@ -1101,6 +1326,74 @@ mod tests {
                 "{bad}"
             );
         }
+    }
+
+    #[test]
+    fn a_stacked_fusion_is_a_logistic_regression_on_out_of_fold_scores() {
+        let (xtr, ytr) = synthetic(200, 6);
+        let (xte, _) = synthetic(30, 7);
+        let groups: Vec<usize> = (0..200).map(|i| i / 25).collect();
+        let stack = PipelineParams::preset("stack", 64.0).unwrap();
+        assert_eq!(stack.fusion, Fusion::Stacked { n_folds: 5 });
+        let fused = stack.fit_grouped(xtr.view(), &ytr, Some(&groups)).unwrap();
+        assert_eq!(fused.fused().len(), 2);
+        // Independently: the three presets alone, scored out of fold on folds keeping the
+        // groups whole, then scikit-learn's recipe (StandardScaler → LogisticRegression).
+        let names = ["toeplitz-lda", "riemann", "mdm"];
+        let folds = crate::tuning::cv_folds(&ytr, Some(&groups), 5).unwrap();
+        assert!(folds.grouped());
+        let fold_of = folds.fold_of();
+        assert!((0..200).all(|i| fold_of[i] == fold_of[25 * groups[i]]));
+        let mut oof = Array2::<f64>::zeros((200, 3));
+        for f in 0..folds.n_folds() {
+            let (tr, te) = folds.split(f);
+            let y: Vec<bool> = tr.iter().map(|&i| ytr[i]).collect();
+            for (k, name) in names.iter().enumerate() {
+                let m = PipelineParams::preset(name, 64.0)
+                    .unwrap()
+                    .fit(xtr.select(Axis(0), &tr).view(), &y)
+                    .unwrap();
+                let s = m
+                    .decision_function(xtr.select(Axis(0), &te).view())
+                    .unwrap();
+                for (&i, &v) in te.iter().zip(&s) {
+                    oof[[i, k]] = v;
+                }
+            }
+        }
+        let scaler = StandardScalerParams::default().fit(oof.view()).unwrap();
+        let lr = LogisticParams::default()
+            .fit(scaler.transform(oof.view()).unwrap().view(), &ytr)
+            .unwrap();
+        let mut expected = Array1::from_elem(30, lr.intercept());
+        for (k, name) in names.iter().enumerate() {
+            let m = PipelineParams::preset(name, 64.0)
+                .unwrap()
+                .fit(xtr.view(), &ytr)
+                .unwrap();
+            let s = m.decision_function(xte.view()).unwrap();
+            expected += &s.mapv(|v| lr.coef()[k] * (v - scaler.mean[k]) / scaler.scale[k]);
+        }
+        let got = fused.decision_function(xte.view()).unwrap();
+        for (g, e) in got.iter().zip(expected.iter()) {
+            assert!((g - e).abs() < 1e-9 * e.abs().max(1.0), "{g} vs {e}");
+        }
+        // The learned combination survives saving; a non-finite weight is refused at load.
+        let text = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], fused).to_json();
+        let back = Model::from_json(&text).unwrap();
+        assert_eq!(back.pipeline.decision_function(xte.view()).unwrap(), got);
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let w = format!("\"score_weight\":{}", v["pipeline"]["score_weight"]);
+        assert!(text.contains(&w), "{w}");
+        let broken = text.replacen(&w, "\"score_weight\":1e999", 1);
+        assert!(Model::from_json(&broken).is_err());
+        // Without groups the inner folds are stratified: a different, still valid, fit.
+        let plain = stack.fit(xtr.view(), &ytr).unwrap();
+        assert!(plain
+            .decision_function(xte.view())
+            .unwrap()
+            .iter()
+            .all(|v| v.is_finite()));
     }
 
     #[test]
@@ -1205,14 +1498,15 @@ mod tests {
             .fit(x.view(), &y)
             .unwrap();
         let model = Model::new(Preprocess::peer(), 64.0, vec!["Cz".into(); 4], m);
-        let text = model
-            .to_json()
-            .replace("\"format_version\":2", "\"format_version\":99");
+        let text = model.to_json().replace(
+            &format!("\"format_version\":{MODEL_FORMAT_VERSION}"),
+            "\"format_version\":99",
+        );
         assert!(matches!(
             Model::from_json(&text),
             Err(DecodeError::ModelVersion {
                 found: Some(99),
-                expected: 2
+                expected: MODEL_FORMAT_VERSION
             })
         ));
         assert!(matches!(

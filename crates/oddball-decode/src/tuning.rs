@@ -1,8 +1,9 @@
 //! Choosing a pipeline's hyper-parameters by cross-validation on the training data only.
 //!
 //! * [`preset_grid`]: a small grid of settings around each preset (its defaults included):
-//!   - `lda`: the amplitude bin width, round(sfreq/32), round(sfreq/25) (the default) and
-//!     round(sfreq/20) samples;
+//!   - `lda`, `toeplitz-lda`: the amplitude bin width, round(sfreq/32), round(sfreq/25) (the
+//!     default) and round(sfreq/20) samples;
+//!   - `lda+riemann`, `stack`: none (the stack learns its weights by its own inner folds);
 //!   - `riemann`: xDAWN filters per class {2, 4, 6} × logistic-regression `C` {0.1, 1, 10};
 //!   - `mdm`: xDAWN filters per class {2, 4, 6};
 //!   - `paper`, `paper-svm`: the RBF SVM's `C` {1, 10} × γ {1, 0.5} × scikit-learn's `'scale'`;
@@ -48,7 +49,7 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
     let base = PipelineParams::preset(name, sfreq)?;
     let mut out = Vec::new();
     match name {
-        "lda" => {
+        "lda" | "toeplitz-lda" => {
             let mut bins: Vec<usize> = [32.0, 25.0, 20.0]
                 .iter()
                 .map(|&f| crate::amplitude::samples_per(sfreq, f))
@@ -114,6 +115,11 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
         // Equal-weight score fusion has nothing to tune: its members keep their presets' settings.
         "lda+riemann" => out.push(Candidate {
             label: "lda + riemann, equal weights (no grid)".into(),
+            params: base.clone(),
+        }),
+        // Stacking learns its weights by its own inner cross-validation.
+        "stack" => out.push(Candidate {
+            label: "toeplitz-lda + riemann + mdm, stacked (no grid)".into(),
             params: base.clone(),
         }),
         "paper-knn" => {
@@ -311,7 +317,12 @@ pub fn grid_search_with(
             for (f, (tr, te)) in (0..folds.n_folds).map(|f| folds.split(f)).enumerate() {
                 let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
                 let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-                let m = candidates[i].fit(epochs.select(Axis(0), &tr).view(), &ytr)?;
+                let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&e| g[e]).collect());
+                let m = candidates[i].fit_grouped(
+                    epochs.select(Axis(0), &tr).view(),
+                    &ytr,
+                    gtr.as_deref(),
+                )?;
                 let scores = m.decision_function(epochs.select(Axis(0), &te).view())?;
                 fold_auc[i][f] = roc_auc(&scores.to_vec(), &yte)?;
                 on_fit();
@@ -330,17 +341,18 @@ pub fn grid_search_with(
         for (f, (tr, te)) in (0..folds.n_folds).map(|f| folds.split(f)).enumerate() {
             let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
             let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-            let (xtr, xte) = match &shared {
-                Some(x) => (x.select(Axis(0), &tr), x.select(Axis(0), &te)),
+            let n_in = epochs.dim().1;
+            let (xtr, xte, n_front) = match &shared {
+                Some(x) => (x.select(Axis(0), &tr), x.select(Axis(0), &te), n_in),
                 None => {
                     let etr = epochs.select(Axis(0), &tr);
                     let (front, xtr) = candidates[i].fit_front(etr.view(), &ytr)?;
                     let xte = front.transform(epochs.select(Axis(0), &te).view())?;
-                    (xtr, xte)
+                    (xtr, xte, front.n_channels(n_in))
                 }
             };
             for &j in &members {
-                let head = candidates[j].fit_head(xtr.clone(), &ytr)?;
+                let head = candidates[j].fit_head(xtr.clone(), &ytr, n_front)?;
                 let scores = head.decision_function(xte.view())?;
                 fold_auc[j][f] = roc_auc(&scores.to_vec(), &yte)?;
                 on_fit();
@@ -475,8 +487,12 @@ mod tests {
     fn every_preset_has_a_grid_holding_its_defaults() {
         for name in PRESETS {
             let grid = preset_grid(name, 256.0).unwrap();
-            // The equal-weight fusion has nothing of its own to tune.
-            let least = if name == "lda+riemann" { 1 } else { 3 };
+            // The fusions have nothing of their own to tune.
+            let least = if name == "lda+riemann" || name == "stack" {
+                1
+            } else {
+                3
+            };
             assert!(grid.len() >= least, "{name}: {} candidates", grid.len());
             let default = PipelineParams::preset(name, 256.0).unwrap();
             assert!(

@@ -768,7 +768,8 @@ pub(crate) fn fit_session_model(
             continue;
         }
         let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
-        let m = params.fit(x.select(Axis(0), &train).view(), &ytr)?;
+        let gtr: Vec<usize> = train.iter().map(|&i| groups[i]).collect();
+        let m = params.fit_grouped(x.select(Axis(0), &train).view(), &ytr, Some(&gtr))?;
         let s = m.decision_function(x.select(Axis(0), &test).view())?;
         for (&i, &v) in test.iter().zip(s.iter()) {
             oof[i] = v;
@@ -780,7 +781,7 @@ pub(crate) fn fit_session_model(
         preprocess,
         sfreq,
         ch_names.to_vec(),
-        params.fit(x.view(), y)?,
+        params.fit_grouped(x.view(), y, Some(groups))?,
     );
     model.decision = Some(DecisionModel { scores, rule });
     Ok((model, cv_auc, scores.d_prime()))

@@ -22,8 +22,8 @@ pub struct TrainArgs {
     /// Training recordings (targets flagged).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// Pipeline preset: lda, riemann, lda+riemann (score fusion), mdm, paper, paper-svm,
-    /// paper-knn.
+    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
+    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
     #[arg(long, default_value = "riemann")]
     pub pipeline: String,
     /// Where to write the model (JSON).
@@ -177,9 +177,9 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     let (recs, eps) = load_epochs(&args.files, &pre)?;
     let epochs = Epochs::concatenate(&eps)?;
     let y = labels(&epochs)?;
+    let groups = character_groups(&recs, &eps);
     let (params, tuning) = if args.tune {
         let grid = preset_grid(&args.pipeline, epochs.sfreq())?;
-        let groups = character_groups(&recs, &eps);
         let folds = cv_folds(&y, groups.as_deref(), args.folds)?;
         let pb = progress((grid.len() * folds.n_folds()) as u64, &args.pipeline);
         let (params, report) = tune(
@@ -201,7 +201,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
         )
     };
     let t0 = Instant::now();
-    let pipeline = params.fit(epochs.data().view(), &y)?;
+    let pipeline = params.fit_grouped(epochs.data().view(), &y, groups.as_deref())?;
     let fit_s = t0.elapsed().as_secs_f64();
     let mut model = Model::new(
         pre,
@@ -364,7 +364,14 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
                 } else {
                     (PipelineParams::preset(name, train.sfreq())?, None)
                 };
-                let mut r = held_out(&params, &train, &ytr, &test_recs, &test_eps)?;
+                let mut r = held_out(
+                    &params,
+                    &train,
+                    &ytr,
+                    groups.as_deref(),
+                    &test_recs,
+                    &test_eps,
+                )?;
                 pb.inc(1);
                 r.tuning = tuning;
                 r
@@ -446,11 +453,12 @@ fn held_out(
     params: &PipelineParams,
     train: &Epochs,
     ytr: &[bool],
+    groups: Option<&[usize]>,
     test_recs: &[Recording],
     test_eps: &[Epochs],
 ) -> Result<PipelineResult> {
     let t0 = Instant::now();
-    let model = params.fit(train.data().view(), ytr)?;
+    let model = params.fit_grouped(train.data().view(), ytr, groups)?;
     let fit_s = t0.elapsed().as_secs_f64();
     score_test(&model, fit_s, test_recs, test_eps)
 }
@@ -633,8 +641,8 @@ fn cross_validate(
         let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
         let yte: Vec<bool> = te.iter().map(|&i| y[i]).collect();
         let train = data.select(&tr);
+        let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
         let params = if args.tune {
-            let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
             let grid = preset_grid(name, data.sfreq())?;
             let (params, report) = tune(
                 &grid,
@@ -655,7 +663,7 @@ fn cross_validate(
             PipelineParams::preset(name, data.sfreq())?
         };
         let t0 = Instant::now();
-        let model = params.fit(train.data().view(), &ytr)?;
+        let model = params.fit_grouped(train.data().view(), &ytr, gtr.as_deref())?;
         fit_s += t0.elapsed().as_secs_f64();
         pb.inc(1);
         let t1 = Instant::now();

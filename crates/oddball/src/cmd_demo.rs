@@ -54,8 +54,8 @@ pub struct SessionOptions {
     /// Most rounds per decision with dynamic stopping.
     #[arg(long, default_value_t = 5)]
     pub max_rounds: usize,
-    /// Pipeline preset: lda, riemann, lda+riemann (score fusion), mdm, paper, paper-svm,
-    /// paper-knn.
+    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
+    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
     #[arg(long, default_value = "lda")]
     pub pipeline: String,
     /// Calibration decisions per bulb (simulated subjects).
