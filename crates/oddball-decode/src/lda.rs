@@ -24,7 +24,9 @@ use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use crate::covariance::{estimate_columns, shrink_in_place, CovEstimator};
-use crate::linalg::{check_finite, check_labels, sigmoid, sym_eigen, to_array2};
+use crate::linalg::{
+    check_finite, check_labels, sigmoid, standardise_columns, sym_eigen, to_array2,
+};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -134,8 +136,7 @@ impl LdaParams {
 
 /// One class's (shrunk) covariance from its data `(n_k, p)`.
 fn class_covariance(mut data: DMatrix<f64>, shrinkage: Shrinkage) -> DMatrix<f64> {
-    let (n, p) = data.shape();
-    let nf = n as f64;
+    let p = data.ncols();
     let mut cov = DMatrix::zeros(p, p);
     match shrinkage {
         Shrinkage::Fixed(s) => {
@@ -143,19 +144,7 @@ fn class_covariance(mut data: DMatrix<f64>, shrinkage: Shrinkage) -> DMatrix<f64
             shrink_in_place(&mut cov, s);
         }
         Shrinkage::Auto => {
-            // StandardScaler: population variance; near-constant features (var ≤ n·ε·var +
-            // (n·mean·ε)²) keep scale 1.
-            let mut scale = vec![1.0; p];
-            for (j, mut col) in data.column_iter_mut().enumerate() {
-                let mean = col.sum() / nf;
-                let var = col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / nf;
-                let bound = nf * f64::EPSILON * var + (nf * mean * f64::EPSILON).powi(2);
-                if var > bound {
-                    scale[j] = var.sqrt();
-                }
-                let sj = scale[j];
-                col.apply(|v| *v = (*v - mean) / sj);
-            }
+            let scale = standardise_columns(&mut data);
             estimate_columns(CovEstimator::LedoitWolf, &mut data, &mut cov);
             for j in 0..p {
                 for i in 0..p {

@@ -78,6 +78,25 @@ pub(crate) fn check_labels(n_samples: usize, y: &[bool]) -> Result<(usize, usize
     Ok((n_targets, n_nontargets))
 }
 
+/// scikit-learn's `StandardScaler` in place on the columns of `x` `(n_samples, n_features)`:
+/// centred and divided by the population standard deviation, which is returned per column
+/// (near-constant columns, variance ≤ n·ε·var + (n·mean·ε)², keep scale 1).
+pub(crate) fn standardise_columns(x: &mut DMatrix<f64>) -> Vec<f64> {
+    let nf = x.nrows() as f64;
+    let mut scale = vec![1.0; x.ncols()];
+    for (j, mut col) in x.column_iter_mut().enumerate() {
+        let mean = col.sum() / nf;
+        let var = col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / nf;
+        let bound = nf * f64::EPSILON * var + (nf * mean * f64::EPSILON).powi(2);
+        if var > bound {
+            scale[j] = var.sqrt();
+        }
+        let sj = scale[j];
+        col.apply(|v| *v = (*v - mean) / sj);
+    }
+    scale
+}
+
 /// Numerically stable logistic function `1 / (1 + e^(−z))`.
 pub(crate) fn sigmoid(z: f64) -> f64 {
     if z >= 0.0 {

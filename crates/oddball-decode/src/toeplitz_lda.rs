@@ -32,7 +32,7 @@ use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
 use crate::lda::linear_decision;
-use crate::linalg::{check_finite, check_labels, sigmoid, to_array2};
+use crate::linalg::{check_finite, check_labels, sigmoid, standardise_columns, to_array2};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -132,20 +132,11 @@ impl ToeplitzLdaParams {
 fn standardised_ledoit_wolf(mut x: DMatrix<f64>) -> (DMatrix<f64>, f64) {
     let (n, p) = x.shape();
     let nf = n as f64;
-    let mut scale = vec![1.0; p];
-    for (j, mut col) in x.column_iter_mut().enumerate() {
-        // StandardScaler: centre, divide by the population sd (near-constant features keep 1)…
+    let scale = standardise_columns(&mut x);
+    // `shrinkage` centres the standardised rows once more.
+    for mut col in x.column_iter_mut() {
         let mean = col.sum() / nf;
-        let var = col.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / nf;
-        let bound = nf * f64::EPSILON * var + (nf * mean * f64::EPSILON).powi(2);
-        if var > bound {
-            scale[j] = var.sqrt();
-        }
-        let sj = scale[j];
-        col.apply(|v| *v = (*v - mean) / sj);
-        // …then `shrinkage` centres the standardised rows once more.
-        let mean2 = col.sum() / nf;
-        col.apply(|v| *v -= mean2);
+        col.apply(|v| *v -= mean);
     }
     let s = x.tr_mul(&x);
     let nu = s.diagonal().sum() / p as f64;
