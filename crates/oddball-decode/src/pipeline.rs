@@ -670,8 +670,9 @@ impl PipelineParams {
                 n_nontargets: n_epochs - n_targets,
             });
         }
-        let (Front { channels, features }, x) = self.fit_front(epochs, y)?;
-        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
+        let (front, x) = self.fit_front(epochs, y)?;
+        let n_front = front.n_channels(n_channels);
+        let Front { channels, features } = front;
         let Head {
             scaler,
             pca,
@@ -963,20 +964,13 @@ impl Pipeline {
         for m in &self.fused {
             total += &m.fusion_term(m.own_decision_function(epochs)?);
         }
-        if self.fusion_intercept != 0.0 {
-            total += self.fusion_intercept;
-        }
-        Ok(total)
+        Ok(total + self.fusion_intercept)
     }
 
     /// This pipeline's share `w · (s − c) / σ` of a fused score (`s / σ` when standardised).
     fn fusion_term(&self, s: Array1<f64>) -> Array1<f64> {
         let (c, sd, w) = (self.score_center, self.score_scale, self.score_weight);
-        if c == 0.0 && w == 1.0 {
-            s / sd
-        } else {
-            s.mapv(|v| w * ((v - c) / sd))
-        }
+        s.mapv_into(|v| w * ((v - c) / sd))
     }
 
     /// A fusion's score scales are finite and positive (a file could say anything).
