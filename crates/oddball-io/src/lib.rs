@@ -25,6 +25,8 @@ pub mod csv;
 pub mod easy;
 pub mod edf;
 mod error;
+pub mod events;
+pub mod manifest;
 pub mod speller;
 mod tempfile;
 mod units;
@@ -50,6 +52,8 @@ pub use edf::{
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
 };
 pub use error::{IoError, StateProblem};
+pub use events::{EventKey, EventMapError, EventMapping, MappingReport};
+pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use speller::Speller;
 pub use xdf::{
     parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,

@@ -1,0 +1,332 @@
+//! Data sets as files: a TOML manifest naming subjects, their runs and roles, the event mapping
+//! and the speller geometry.
+//!
+//! ```toml
+//! name = "bnci-like"
+//! [events]                 # codes or annotation texts; not needed when the files flag targets
+//! target = [2]
+//! nontarget = [1]
+//! [speller]                # optional
+//! matrix = ["ABCDEF", "GHIJKL", "MNOPQR", "STUVWX", "YZ1234", "56789_"]
+//! columns = [1, 2, 3, 4, 5, 6]
+//! rows = [7, 8, 9, 10, 11, 12]
+//! repetitions = 15         # sequences per character
+//! [[subject]]
+//! id = "s1"
+//! train = ["s1_train.bdf"] # paths relative to the manifest
+//! test = ["s1_test.bdf"]
+//! test_text = ["WATER"]    # optional, one per test file without labels
+//! ```
+//!
+//! [`Manifest::load`] checks everything that can be checked before any EEG is read: unknown keys
+//! (a typo is an error, not a silently ignored setting), every file present, subject ids unique,
+//! the speller's codes distinct and matching its matrix, one `test_text` per test file. serde +
+//! `toml` do the parsing; the checks are ours.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use thiserror::Error;
+
+use crate::events::{EventMapError, EventMapping};
+
+/// A speller's geometry: its matrix and which stimulus codes flash which rows and columns.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpellerSpec {
+    /// Rows of one-character symbols, top to bottom.
+    pub matrix: Vec<String>,
+    /// The code that flashes each column, left to right.
+    pub columns: Vec<u32>,
+    /// The code that flashes each row, top to bottom.
+    pub rows: Vec<u32>,
+    /// Sequences (each row and column flashed once) per character.
+    pub repetitions: Option<usize>,
+}
+
+impl SpellerSpec {
+    /// Flashes per character: `repetitions × (n_rows + n_cols)`, when the repetitions are given.
+    pub fn flashes_per_character(&self) -> Option<usize> {
+        self.repetitions
+            .map(|r| r * (self.rows.len() + self.columns.len()))
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let n_rows = self.matrix.len();
+        if n_rows == 0 {
+            return Err("speller.matrix has no rows".into());
+        }
+        let n_cols = self.matrix[0].chars().count();
+        if let Some((i, r)) = self
+            .matrix
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.chars().count() != n_cols)
+        {
+            return Err(format!(
+                "speller.matrix row {} ({r:?}) has {} symbols, row 1 has {n_cols}",
+                i + 1,
+                r.chars().count()
+            ));
+        }
+        if self.rows.len() != n_rows {
+            return Err(format!(
+                "speller.rows lists {} codes for a matrix of {n_rows} rows",
+                self.rows.len()
+            ));
+        }
+        if self.columns.len() != n_cols {
+            return Err(format!(
+                "speller.columns lists {} codes for a matrix of {n_cols} columns",
+                self.columns.len()
+            ));
+        }
+        let mut seen = BTreeSet::new();
+        for c in self.rows.iter().chain(&self.columns) {
+            if !seen.insert(*c) {
+                return Err(format!("speller code {c} is listed twice"));
+            }
+        }
+        if self.repetitions == Some(0) {
+            return Err("speller.repetitions must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+/// One subject's runs. Paths are resolved against the manifest's folder by [`Manifest::load`].
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Subject {
+    pub id: String,
+    /// Labelled runs to fit on.
+    #[serde(default)]
+    pub train: Vec<PathBuf>,
+    /// Runs to test on (labelled, or unlabelled with `test_text`).
+    #[serde(default)]
+    pub test: Vec<PathBuf>,
+    /// The text spelled in each test run whose file carries no labels, in the order of `test`.
+    pub test_text: Option<Vec<String>>,
+}
+
+impl Subject {
+    /// Every run, training runs first.
+    pub fn runs(&self) -> impl Iterator<Item = &PathBuf> {
+        self.train.iter().chain(&self.test)
+    }
+}
+
+/// A data set: subjects and runs, how to read their events.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Manifest {
+    pub name: String,
+    /// Which events are targets; `None` when the files flag targets themselves.
+    pub events: Option<EventMapping>,
+    pub speller: Option<SpellerSpec>,
+    #[serde(rename = "subject")]
+    pub subjects: Vec<Subject>,
+    /// The manifest file (set by [`Manifest::load`]).
+    #[serde(skip)]
+    pub path: PathBuf,
+}
+
+/// A manifest that cannot be used, with the file and the field at fault.
+#[derive(Debug, Error)]
+pub enum ManifestError {
+    #[error("{path}: cannot read the manifest: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: {source}")]
+    Parse {
+        path: PathBuf,
+        source: Box<toml::de::Error>,
+    },
+    #[error("{path}: [events]: {source}")]
+    Events {
+        path: PathBuf,
+        source: EventMapError,
+    },
+    #[error("{path}: {what}")]
+    Invalid { path: PathBuf, what: String },
+    #[error("{path}: subject {subject:?}: run {run} does not exist")]
+    MissingRun {
+        path: PathBuf,
+        subject: String,
+        run: PathBuf,
+    },
+}
+
+impl Manifest {
+    /// Reads and checks a manifest; run paths become paths relative to the manifest's folder
+    /// (absolute paths are kept).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ManifestError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut m = Self::parse(&text, path)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        for s in &mut m.subjects {
+            for run in s.train.iter_mut().chain(s.test.iter_mut()) {
+                *run = dir.join(&*run);
+                if !run.is_file() {
+                    return Err(ManifestError::MissingRun {
+                        path: path.to_path_buf(),
+                        subject: s.id.clone(),
+                        run: run.clone(),
+                    });
+                }
+            }
+        }
+        Ok(m)
+    }
+
+    /// Parses and checks manifest text; `path` names it in errors. Run paths are left as written.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, ManifestError> {
+        let mut m: Manifest = toml::from_str(text).map_err(|e| ManifestError::Parse {
+            path: path.to_path_buf(),
+            source: Box::new(e),
+        })?;
+        m.path = path.to_path_buf();
+        m.validate()?;
+        Ok(m)
+    }
+
+    fn invalid(&self, what: impl Into<String>) -> ManifestError {
+        ManifestError::Invalid {
+            path: self.path.clone(),
+            what: what.into(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), ManifestError> {
+        if self.name.trim().is_empty() {
+            return Err(self.invalid("name is empty"));
+        }
+        if let Some(events) = &self.events {
+            events.validate().map_err(|source| ManifestError::Events {
+                path: self.path.clone(),
+                source,
+            })?;
+        }
+        if let Some(sp) = &self.speller {
+            sp.validate().map_err(|w| self.invalid(w))?;
+        }
+        if self.subjects.is_empty() {
+            return Err(self.invalid("no [[subject]] entries"));
+        }
+        let mut ids = BTreeSet::new();
+        for s in &self.subjects {
+            if s.id.trim().is_empty() {
+                return Err(self.invalid("a subject has an empty id"));
+            }
+            if !ids.insert(s.id.as_str()) {
+                return Err(self.invalid(format!("subject id {:?} is used twice", s.id)));
+            }
+            if s.train.is_empty() && s.test.is_empty() {
+                return Err(self.invalid(format!("subject {:?} has no runs", s.id)));
+            }
+            if let Some(texts) = &s.test_text {
+                if texts.len() != s.test.len() {
+                    return Err(self.invalid(format!(
+                        "subject {:?}: test_text has {} entries for {} test runs",
+                        s.id,
+                        texts.len(),
+                        s.test.len()
+                    )));
+                }
+                if self.speller.is_none() {
+                    return Err(self.invalid(format!(
+                        "subject {:?}: test_text needs a [speller] table",
+                        s.id
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::events::EventKey;
+
+    const MINIMAL: &str = r#"
+name = "bnci-like"
+[events]
+target = [2]
+nontarget = [1]
+[speller]
+matrix = ["ABCDEF", "GHIJKL", "MNOPQR", "STUVWX", "YZ1234", "56789_"]
+columns = [1, 2, 3, 4, 5, 6]
+rows = [7, 8, 9, 10, 11, 12]
+repetitions = 15
+[[subject]]
+id = "s1"
+train = ["s1_train.bdf"]
+test = ["s1_test.bdf"]
+test_text = ["WATER"]
+"#;
+
+    #[test]
+    fn the_minimal_form_parses() {
+        let m = Manifest::parse(MINIMAL, Path::new("m.toml")).unwrap();
+        assert_eq!(m.name, "bnci-like");
+        assert_eq!(m.events.as_ref().unwrap().target, vec![EventKey::Code(2)]);
+        let sp = m.speller.as_ref().unwrap();
+        assert_eq!(sp.flashes_per_character(), Some(180));
+        assert_eq!(
+            m.subjects[0].test_text.as_deref(),
+            Some(&["WATER".to_string()][..])
+        );
+        assert_eq!(m.subjects[0].runs().count(), 2);
+    }
+
+    #[test]
+    fn load_resolves_runs_and_refuses_missing_ones() {
+        let dir = std::env::temp_dir().join(format!("oddball-manifest-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("s1_train.bdf"), b"x").unwrap();
+        std::fs::write(dir.join("m.toml"), MINIMAL).unwrap();
+        let err = Manifest::load(dir.join("m.toml")).unwrap_err();
+        assert!(
+            matches!(&err, ManifestError::MissingRun { run, .. } if run.ends_with("s1_test.bdf")),
+            "{err}"
+        );
+        std::fs::write(dir.join("s1_test.bdf"), b"x").unwrap();
+        let m = Manifest::load(dir.join("m.toml")).unwrap();
+        assert_eq!(m.subjects[0].train[0], dir.join("s1_train.bdf"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn mistakes_are_named() {
+        let bad = |from: &str, to: &str| {
+            let text = MINIMAL.replace(from, to);
+            Manifest::parse(&text, Path::new("m.toml"))
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(bad("repetitions", "repetitons").contains("repetitons"));
+        assert!(bad("rows = [7, 8, 9, 10, 11, 12]", "rows = [7, 8, 9]").contains("3 codes"));
+        assert!(bad(
+            "rows = [7, 8, 9, 10, 11, 12]",
+            "rows = [1, 8, 9, 10, 11, 12]"
+        )
+        .contains("code 1 is listed twice"));
+        assert!(bad("\"YZ1234\"", "\"YZ123\"").contains("row 5"));
+        assert!(bad("test_text = [\"WATER\"]", "test_text = [\"A\", \"B\"]").contains("2 entries"));
+        assert!(bad("nontarget = [1]", "nontarget = [2]").contains("both as a target"));
+        let twice = format!("{MINIMAL}\n[[subject]]\nid = \"s1\"\ntrain = [\"x.bdf\"]\n");
+        assert!(Manifest::parse(&twice, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string()
+            .contains("used twice"));
+    }
+}
