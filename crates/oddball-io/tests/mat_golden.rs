@@ -146,7 +146,7 @@ fn check(g: &Value, a: &MatArray, at: &str) {
 fn every_fixture_reads_as_scipy_reads_it() {
     let gold = golden("mat/golden.json");
     let files = gold["files"].as_object().unwrap();
-    assert_eq!(files.len(), 4);
+    assert_eq!(files.len(), 5);
     for (name, g) in files {
         let file = read_mat_file(fixture(&format!("mat/{name}"))).unwrap();
         assert_eq!(file.header.text, g["header"].as_str().unwrap().trim_end());
@@ -166,7 +166,11 @@ fn every_fixture_reads_as_scipy_reads_it() {
         }
         assert_eq!(file.header.big_endian, name == "narrow_be.mat");
         let compressed = file.variables.iter().filter(|v| v.compressed).count();
-        let want = if name == "v7.mat" { order.len() } else { 0 };
+        let want = if name == "v7.mat" || name == "bci_small.mat" {
+            order.len()
+        } else {
+            0
+        };
         assert_eq!(compressed, want, "{name}: compressed variables");
     }
 }
@@ -186,6 +190,37 @@ fn narrow_storage_keeps_the_stored_type_and_the_class() {
         v5.get("text2").unwrap().array.char_rows().unwrap(),
         ["ab", "cd"]
     );
+}
+
+/// The tiny BCI Competition layout file: events at `Flashing` 0 → 1, columns-first codes, the
+/// targets spell "BZ".
+#[test]
+fn bci_layout_fixture_reads_as_a_speller_recording() {
+    let rec = oddball_io::read(fixture("mat/bci_small.mat")).unwrap();
+    let raw = &rec.raw;
+    assert_eq!(raw.ch_names(), ["ch1", "ch2", "ch3"]);
+    assert_eq!(raw.sfreq(), 240.0);
+    assert_eq!(raw.n_times(), 700);
+    assert_eq!(raw.events().len(), 48);
+    assert_eq!(raw.events().n_targets(), 8);
+    let g = &golden("mat/golden.json")["files"]["bci_small.mat"]["variables"];
+    let signal: Vec<f64> = g["signal"]["values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    // Column-major n_times × n_channels is the (n_channels, n_times) data row by row.
+    assert_eq!(raw.data().iter().copied().collect::<Vec<_>>(), signal);
+    let flashing = g["Flashing"]["values"].as_array().unwrap();
+    for e in raw.events().iter() {
+        assert_eq!(flashing[e.onset].as_u64(), Some(1));
+        assert_eq!(flashing[e.onset - 1].as_u64(), Some(0));
+    }
+    let sp = rec.speller.as_ref().unwrap();
+    assert_eq!(sp.flashes_per_character, Some(24));
+    assert_eq!(sp.decode(raw.events()), "BZ");
+    assert_eq!(rec.mat().unwrap().strings["filename"], "bci_small.mat");
 }
 
 #[test]

@@ -14,6 +14,7 @@ Fixtures:
 * narrow.mat — written byte by byte here, as MATLAB writes: class double stored as miINT16 and
   miUINT8 (the BCI Competition files' layout), class single stored as miINT16, small data elements
   (4-byte name, 1x1 dims), a char array stored as miUTF8, and a big-endian twin narrow_be.mat.
+* bci_small.mat — a tiny recording in the BCI Competition layout (compressed), spelling "BZ".
 * v73.mat — the 512-byte user block of a v7.3 (HDF5) file and the HDF5 signature; scipy refuses it.
 
 For each variable golden.json holds: class (the numpy dtype with mat_dtype=True, i.e. MATLAB's
@@ -212,6 +213,33 @@ def real_checks(data: Path):
     return out
 
 
+def bci_small(path: Path) -> None:
+    """A tiny file in the BCI Competition layout: 3 channels, 2 characters ("B", "Z") of two
+    sequences of 12 flashes (5 samples on, 10 apart), a 60-sample pause between characters,
+    codes 1-6 columns and 7-12 rows, StimulusType 1 on the target's row and column."""
+    matrix6 = ["ABCDEF", "GHIJKL", "MNOPQR", "STUVWX", "YZ1234", "56789_"]
+    rng = np.random.default_rng(0)
+    n = 700
+    code = np.zeros((n, 1), dtype=np.uint8)
+    flashing = np.zeros((n, 1), dtype=np.uint8)
+    stype = np.zeros((n, 1), dtype=np.uint8)
+    t = 20
+    for ch in "BZ":
+        r = next(i for i, row in enumerate(matrix6) if ch in row)
+        c = matrix6[r].index(ch)
+        for _ in range(2):
+            for k in rng.permutation(12) + 1:
+                code[t:t + 5] = k
+                flashing[t:t + 5] = 1
+                stype[t:t + 5] = int(k == c + 1 or k == r + 7)
+                t += 10
+        t += 60
+    signal = rng.integers(-500, 500, size=(n, 3)).astype(np.int16)
+    sio.savemat(path, {"signal": signal, "StimulusCode": code, "Flashing": flashing,
+                       "StimulusType": stype, "filename": "bci_small.mat"},
+                format="5", do_compression=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--data", type=Path, default=REPO.parent / "shared/data")
@@ -222,6 +250,7 @@ def main() -> None:
     sio.savemat(OUT / "v7.mat", v, format="5", do_compression=True)
     narrow_file(OUT / "narrow.mat", big_endian=False)
     narrow_file(OUT / "narrow_be.mat", big_endian=True)
+    bci_small(OUT / "bci_small.mat")
     v73 = (b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Wed Nov 25 12:00:00 2026 HDF5 schema 1.00 ."
            .ljust(116, b" ") + b"\0" * 8 + b"\x00\x02IM").ljust(512, b"\0") + b"\x89HDF\r\n\x1a\n"
     (OUT / "v73.mat").write_bytes(v73)
@@ -233,11 +262,11 @@ def main() -> None:
     gold = {
         "versions": {"scipy": scipy.__version__, "numpy": np.__version__},
         "files": {n: read_golden(OUT / n) for n in
-                  ["v5.mat", "v7.mat", "narrow.mat", "narrow_be.mat"]},
+                  ["v5.mat", "v7.mat", "narrow.mat", "narrow_be.mat", "bci_small.mat"]},
         "v73_scipy": v73_scipy,
         "real": real_checks(args.data),
     }
-    (OUT / "golden.json").write_text(json.dumps(gold, indent=1, ensure_ascii=False) + "\n")
+    (OUT / "golden.json").write_text(json.dumps(gold, ensure_ascii=False) + "\n")
     for p in sorted(OUT.iterdir()):
         print(f"{p.stat().st_size:8d}  {p.relative_to(REPO)}")
 
