@@ -147,3 +147,59 @@ fn every_prefix_of_a_compressed_file() {
         check(&b[..cut]);
     }
 }
+
+/// A MAT file of one hand-built `miMATRIX` holding `body` (little-endian).
+fn one_matrix(body: &[u8]) -> Vec<u8> {
+    let mut b = b"MATLAB 5.0 MAT-file, hand-made".to_vec();
+    b.resize(116, b' ');
+    b.extend_from_slice(&[0; 8]);
+    b.extend_from_slice(&[0x00, 0x01, b'I', b'M']);
+    b.extend_from_slice(&14u32.to_le_bytes());
+    b.extend_from_slice(&(body.len() as u32).to_le_bytes());
+    b.extend_from_slice(body);
+    b
+}
+
+fn words(w: &[u32]) -> Vec<u8> {
+    w.iter().flat_map(|x| x.to_le_bytes()).collect()
+}
+
+/// A struct with no fields claiming 2³¹−1 × 2³¹−1 elements reads at once as an empty struct
+/// (it once looped over every element); a cell of that size is an error at its first cell.
+#[test]
+fn absurd_sizes_without_data_are_quick() {
+    let head = |class: u32| {
+        words(&[
+            6,
+            8,
+            class,
+            0,
+            5,
+            8,
+            0x7fff_ffff,
+            0x7fff_ffff,
+            (1 << 16) | 1,
+            u32::from(b's'),
+        ])
+    };
+    let mut st = head(2);
+    st.extend(words(&[(4 << 16) | 5, 1, 1, 0]));
+    let file = parse_mat_file(&one_matrix(&st), Path::new("s.mat")).unwrap();
+    let v = &file.get("s").unwrap().array;
+    assert_eq!(v.dims, [0x7fff_ffff, 0x7fff_ffff]);
+    assert!(
+        matches!(&v.value, oddball_io::mat::MatValue::Struct { fields, values }
+        if fields.is_empty() && values.is_empty())
+    );
+
+    let cell = one_matrix(&head(1));
+    let err = parse_mat_file(&cell, Path::new("c.mat")).unwrap_err();
+    assert_eq!(err.offset(), Some(128 + 8 + 40), "{err}");
+    assert!(err.to_string().contains("cell 1"), "{err}");
+
+    // The same size as doubles with no bytes: an error, no allocation.
+    let mut num = head(6);
+    num.extend(words(&[9, 0]));
+    let err = parse_mat_file(&one_matrix(&num), Path::new("n.mat")).unwrap_err();
+    assert!(err.to_string().contains("number of values"), "{err}");
+}

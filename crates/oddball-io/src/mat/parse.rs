@@ -628,7 +628,9 @@ fn parse_matrix(
                 .collect();
             at = fe.next;
             let mut values = Vec::new();
-            for i in 0..n {
+            // A struct without fields has no values, whatever its (possibly absurd) size.
+            let n_with_values = if fields.is_empty() { 0 } else { n };
+            for i in 0..n_with_values {
                 for f in &fields {
                     let fw = format!("{what}: element {}, field {f:?}", i + 1);
                     let ve = sub.element(at, &fw)?;
