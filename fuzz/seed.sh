@@ -25,7 +25,15 @@ printf '{"t":"on","id":7,"code":2,"on_ms":1000.0}' > "$corpus/panel/on"
 printf '{"t":"off","id":7,"off_ms":1100.2}' > "$corpus/panel/off"
 printf '{"t":"hello","frame_ms":16.7,"agent":"HeadlessChrome"}' > "$corpus/panel/hello"
 
-for t in bci2000 csv edf easy nic model xdf panel; do mkdir -p "$corpus/$t"; done
+for t in bci2000 csv edf easy nic model xdf panel mat; do mkdir -p "$corpus/$t"; done
+
+# ---------------------------------------------------------------- mat
+# The MAT fixtures (v5, v7 compressed, narrow types, big-endian, BCI layout, v7.3 header) and the
+# first 64 KiB of a real BCI Competition run (header and the first variables, cut mid-variable).
+cp "$fixtures"/mat/*.mat "$corpus/mat/"
+if [ -f "$data/bci-competition-ii-iib/AAS010R01.mat" ]; then
+    head -c 65536 "$data/bci-competition-ii-iib/AAS010R01.mat" > "$corpus/mat/AAS010R01_head.mat"
+fi
 
 # ---------------------------------------------------------------- bci2000
 # A BCI2000 v1.1 file: 2 channels of `fmt` (each sample the bytes `sample`, printf escapes),
@@ -132,6 +140,6 @@ if [ "${SKIP_MODEL:-0}" != 1 ]; then
         -- --exact write_model_seeds --nocapture
 fi
 
-for t in bci2000 csv edf easy nic model xdf panel; do
+for t in bci2000 csv edf easy nic model xdf panel mat; do
     printf '%-8s %3d seeds\n' "$t" "$(ls "$corpus/$t" | wc -l)"
 done

@@ -72,7 +72,7 @@ pub enum IoError {
     Unsupported { path: PathBuf, what: String },
 
     /// The file extension does not name a format [`crate::read`] knows.
-    #[error("{path}: unknown file type (extension {extension:?}); known: .dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL)")]
+    #[error("{path}: unknown file type (extension {extension:?}); known: .dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7)")]
     UnknownFormat {
         path: PathBuf,
         extension: Option<String>,

@@ -12,9 +12,10 @@
 //! | `.csv` | [`csv`]: time / channel / marker columns ([`CsvOptions::detect`]) | non-zero marker |
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
+//! | `.mat` | [`mat`]: MATLAB v5/v7 (uncompressed and zlib); a recording from the BCI Competition layout (`signal` + BCI2000 states, 240 Hz unless given) | `Flashing` 0 → 1 (else `StimulusCode` 0 → non-zero), target from `StimulusType` |
 //! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
-//! All five readers are written from scratch in this crate (each module says why). They share
+//! All six readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
@@ -27,6 +28,7 @@ pub mod edf;
 mod error;
 pub mod events;
 pub mod manifest;
+pub mod mat;
 pub mod speller;
 mod tempfile;
 mod units;
@@ -54,7 +56,10 @@ pub use edf::{
 pub use error::{IoError, StateProblem};
 pub use events::{EventKey, EventMapError, EventMapping, MappingReport};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
-pub use speller::Speller;
+pub use mat::{
+    parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,
+};
+pub use speller::{CodeOrder, Speller};
 pub use xdf::{
     parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,
     XdfFile, XdfFormat, XdfInfo, XdfMarker, XdfOptions, XdfStream, XdfStreamData, XdfStreamInfo,
@@ -75,6 +80,8 @@ pub enum Format {
     Easy,
     /// Lab Streaming Layer XDF.
     Xdf,
+    /// MATLAB MAT v5/v7 (BCI Competition layout).
+    Mat,
 }
 
 /// The format-specific contents of a recording.
@@ -85,6 +92,7 @@ pub enum Details {
     Edf(Box<EdfInfo>),
     Easy(EasyInfo),
     Xdf(Box<XdfInfo>),
+    Mat(Box<MatInfo>),
 }
 
 /// A recording read from a file.
@@ -140,11 +148,20 @@ impl Recording {
             _ => None,
         }
     }
+
+    /// Header, variables, states and sampling-rate source, for MAT files.
+    pub fn mat(&self) -> Option<&MatInfo> {
+        match &self.details {
+            Details::Mat(m) => Some(m),
+            _ => None,
+        }
+    }
 }
 
 /// Reads a recording, choosing the reader by extension (case-insensitive): `.dat` → BCI2000,
 /// `.csv` → CSV with [`CsvOptions::detect`], `.edf`/`.bdf` → EDF/BDF (the header decides which),
-/// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]); a file
+/// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]),
+/// `.mat` → MAT in the BCI Competition layout ([`read_mat`], 240 Hz); a file
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
@@ -158,6 +175,7 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         Some("edf") | Some("bdf") => read_edf(path),
         Some("easy") => read_easy(path),
         Some("xdf") => read_xdf(path),
+        Some("mat") => read_mat(path),
         Some("xdfz") => Err(IoError::Unsupported {
             path: path.to_path_buf(),
             what: "gzip-compressed XDF (.xdfz); decompress it to .xdf first".into(),

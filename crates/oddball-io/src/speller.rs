@@ -1,9 +1,10 @@
 //! The row/column P300 speller layout of a recording, and decoding spelled text from target events.
 //!
-//! Stimulus codes follow BCI2000's P3Speller: rows are flashed with codes `1..=n_rows` (top to
-//! bottom), columns with `n_rows + 1..=n_rows + n_cols` (left to right). For the BCI2000 sample
-//! files eeg3_* that is rows 1–6 and columns 7–12. (BCI Competition II/III files use the opposite
-//! order; build a [`Speller`] by hand for those.)
+//! Stimulus codes follow BCI2000's P3Speller by default ([`CodeOrder::RowsFirst`]): rows are
+//! flashed with codes `1..=n_rows` (top to bottom), columns with `n_rows + 1..=n_rows + n_cols`
+//! (left to right). For the BCI2000 sample files eeg3_* that is rows 1–6 and columns 7–12. BCI
+//! Competition II/III files use the opposite order ([`CodeOrder::ColumnsFirst`]: columns 1–6,
+//! rows 7–12).
 
 use std::collections::BTreeMap;
 
@@ -12,6 +13,16 @@ use serde::{Deserialize, Serialize};
 
 /// The character written by [`Speller::decode`] for a block whose target row or column is unknown.
 pub const UNDECIDED: char = '\u{FFFD}';
+
+/// Which stimulus codes flash rows and which flash columns.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CodeOrder {
+    /// BCI2000's P3Speller: rows `1..=n_rows`, then columns `n_rows + 1..=n_rows + n_cols`.
+    #[default]
+    RowsFirst,
+    /// BCI Competition II/III: columns `1..=n_cols`, then rows `n_cols + 1..=n_cols + n_rows`.
+    ColumnsFirst,
+}
 
 /// A speller matrix (`n_rows × n_cols` symbols) and how a recording flashed it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -23,6 +34,9 @@ pub struct Speller {
     /// `None` when the recording does not say; [`Speller::decode`] then treats all events as
     /// one character.
     pub flashes_per_character: Option<usize>,
+    /// Which codes are rows and which columns.
+    #[serde(default)]
+    pub code_order: CodeOrder,
 }
 
 impl Speller {
@@ -41,6 +55,7 @@ impl Speller {
             matrix,
             text_to_spell,
             flashes_per_character,
+            code_order: CodeOrder::RowsFirst,
         })
     }
 
@@ -66,26 +81,39 @@ impl Speller {
         self.matrix[0].len()
     }
 
-    /// The stimulus code that flashes row `row` (0-based): `row + 1`.
-    pub fn code_of_row(&self, row: usize) -> u32 {
-        row as u32 + 1
+    /// The code of the first row and of the first column.
+    fn first_codes(&self) -> (usize, usize) {
+        match self.code_order {
+            CodeOrder::RowsFirst => (1, self.n_rows() + 1),
+            CodeOrder::ColumnsFirst => (self.n_cols() + 1, 1),
+        }
     }
 
-    /// The stimulus code that flashes column `col` (0-based): `n_rows + col + 1`.
+    /// The stimulus code that flashes row `row` (0-based): `row + 1` (rows first), or
+    /// `n_cols + row + 1` (columns first).
+    pub fn code_of_row(&self, row: usize) -> u32 {
+        (self.first_codes().0 + row) as u32
+    }
+
+    /// The stimulus code that flashes column `col` (0-based): `n_rows + col + 1` (rows first),
+    /// or `col + 1` (columns first).
     pub fn code_of_col(&self, col: usize) -> u32 {
-        (self.n_rows() + col) as u32 + 1
+        (self.first_codes().1 + col) as u32
     }
 
     /// The row (0-based) a stimulus code flashes, if it is a row code.
     pub fn row_of_code(&self, code: u32) -> Option<usize> {
         let c = code as usize;
-        (1..=self.n_rows()).contains(&c).then(|| c - 1)
+        let first = self.first_codes().0;
+        (first..first + self.n_rows())
+            .contains(&c)
+            .then(|| c - first)
     }
 
     /// The column (0-based) a stimulus code flashes, if it is a column code.
     pub fn col_of_code(&self, code: u32) -> Option<usize> {
         let c = code as usize;
-        let first = self.n_rows() + 1;
+        let first = self.first_codes().1;
         (first..first + self.n_cols())
             .contains(&c)
             .then(|| c - first)
@@ -216,6 +244,24 @@ mod tests {
             .collect();
         assert_eq!(s.decode(&ev), format!("{UNDECIDED}{UNDECIDED}"));
         assert_eq!(s.decode(&Events::default()), "");
+    }
+
+    #[test]
+    fn columns_first_codes() {
+        let mut s = speller();
+        s.code_order = CodeOrder::ColumnsFirst;
+        assert_eq!(s.code_of_col(0), 1);
+        assert_eq!(s.code_of_col(5), 6);
+        assert_eq!(s.code_of_row(0), 7);
+        assert_eq!(s.code_of_row(5), 12);
+        assert_eq!(s.col_of_code(6), Some(5));
+        assert_eq!(s.col_of_code(7), None);
+        assert_eq!(s.row_of_code(7), Some(0));
+        assert_eq!(s.row_of_code(13), None);
+        assert_eq!(s.row_of_code(0), None);
+        for text in ["T3OF", "6MK?", "AB"] {
+            assert_eq!(s.decode(&events_for(&s, text)), text);
+        }
     }
 
     #[test]
