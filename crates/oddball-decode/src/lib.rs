@@ -25,6 +25,7 @@ pub mod pca;
 pub mod pipeline;
 pub mod riemann;
 pub mod scaler;
+pub mod stats;
 pub mod svm;
 #[cfg(test)]
 mod testutil;
