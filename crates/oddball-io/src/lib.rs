@@ -25,6 +25,7 @@ pub mod csv;
 pub mod easy;
 pub mod edf;
 mod error;
+pub mod nic;
 pub mod speller;
 mod tempfile;
 mod units;

@@ -9,11 +9,11 @@
 
 pub mod engine;
 mod error;
-pub mod nic;
 pub mod online;
 pub mod paradigm;
 pub mod record;
 pub mod replay;
+pub mod roles;
 pub mod subject;
 pub mod task;
 
