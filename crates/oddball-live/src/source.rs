@@ -103,7 +103,8 @@ pub struct OpenOptions {
 /// An open live source.
 #[derive(Debug)]
 pub enum AnySource {
-    Sim(SimSource),
+    /// The simulated subject is large (its processes' state): boxed.
+    Sim(Box<SimSource>),
     Nic(NicSource),
     Playback(PlaybackSource),
     #[cfg(feature = "lsl")]
@@ -124,7 +125,7 @@ impl SourceSpec {
                 } else {
                     SimSource::unpaced(opts.subject, clock)
                 };
-                Ok((AnySource::Sim(source), None))
+                Ok((AnySource::Sim(Box::new(source)), None))
             }
             Self::Nic(addr) => {
                 let data = resolve(addr)?;

@@ -9,14 +9,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use oddball_arm::config::TransitionConfig;
-use oddball_arm::{parse_commands, ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
+use oddball_arm::{ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
 
 /// Options of `oddball arm`.
 #[derive(Debug, clap::Args)]
 pub struct ArmArgs {
     /// Comma-separated commands: up, down, left, right (or u, d, l, r).
-    #[arg(long, default_value = "up,left,down,right,up,left")]
-    pub commands: String,
+    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg)]
+    pub commands: std::vec::Vec<oddball_arm::Command>,
     /// TOML model of the arm, board, controller and simulation (default: the built-in desk arm;
     /// see --print-config).
     #[arg(long, value_name = "FILE")]
@@ -59,11 +59,10 @@ pub fn run(args: &ArmArgs) -> Result<()> {
         print!("{}", config.to_toml_string());
         return Ok(());
     }
-    let commands = parse_commands(&args.commands).context("parsing --commands")?;
     let mut sim = ArmSim::from_config(&config).context("setting up the arm simulation")?;
     let start = sim.pen();
 
-    let report = sim.run_program(&commands);
+    let report = sim.run_program(&args.commands);
 
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let csv_path = args.out.join("trajectory.csv");
