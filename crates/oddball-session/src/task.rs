@@ -158,17 +158,28 @@ impl Pilot for ReplayPilot {
     }
 }
 
-/// The copy task (`oddball demo`): the person intends `commands` in turn, then the arm
-/// settles for `settle_s`. With `cycle`, the commands repeat until the pilot has no more data
-/// (a replayed recording used up); otherwise each is intended once (and a pilot out of data
-/// stops the task early). `each` sees every step as it is made.
+/// What a copy task did.
+#[derive(Debug)]
+pub struct CopyRun {
+    pub steps: Vec<Step>,
+    /// The error that ended the task early (one `stop` accepted: a played-back recording
+    /// that ran out, say), and whether it came during a decision (else while the arm settled).
+    pub stopped: Option<(SessionError, bool)>,
+}
+
+/// The copy task (`oddball demo`, `oddball online`): the person intends `commands` in turn,
+/// then the arm settles for `settle_s`. With `cycle`, the commands repeat until the pilot has
+/// no more data (a replayed recording used up); otherwise each is intended once (and a pilot out
+/// of data stops the task early). An error for which `stop` says yes ends the task early with
+/// what was done; any other is returned. `each` sees every step as it is made.
 pub fn run_copy<P: Pilot>(
     pilot: &mut P,
     commands: &[Command],
     cycle: bool,
     settle_s: f64,
+    stop: impl Fn(&SessionError) -> bool,
     mut each: impl FnMut(usize, &Step),
-) -> Result<Vec<Step>, SessionError> {
+) -> Result<CopyRun, SessionError> {
     if commands.is_empty() {
         return Err(SessionError::InvalidParameter {
             name: "commands",
@@ -178,14 +189,26 @@ pub fn run_copy<P: Pilot>(
     }
     let mut steps = Vec::new();
     while cycle || steps.len() < commands.len() {
-        let Some(step) = pilot.decide(commands[steps.len() % commands.len()])? else {
-            break;
+        let step = match pilot.decide(commands[steps.len() % commands.len()]) {
+            Ok(Some(step)) => step,
+            Ok(None) => break,
+            Err(e) if stop(&e) => {
+                return Ok(CopyRun {
+                    steps,
+                    stopped: Some((e, true)),
+                })
+            }
+            Err(e) => return Err(e),
         };
         each(steps.len(), &step);
         steps.push(step);
     }
-    pilot.wait(settle_s)?;
-    Ok(steps)
+    let stopped = match pilot.wait(settle_s) {
+        Ok(()) => None,
+        Err(e) if stop(&e) => Some((e, false)),
+        Err(e) => return Err(e),
+    };
+    Ok(CopyRun { steps, stopped })
 }
 
 /// The direction that shrinks the larger remaining error (x first on ties); `None` on target.

@@ -211,7 +211,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 // The same subject and calibration (same seed), online with fixed rounds.
                 let subject = live_subject(opts, &args.source, false, Clock::new())?;
                 let (mut quiet, _, _) = opts.calibrated(subject, fixed, false)?;
-                let steps = run_copy(&mut quiet, commands, false, 1.5, |_, _| {})?;
+                let steps = run_copy(&mut quiet, commands, false, 1.5, |_| false, |_, _| {})?.steps;
                 let rows: Vec<Row> = steps
                     .iter()
                     .enumerate()
@@ -247,9 +247,17 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     })?;
     // A replayed recording cycles the commands until its decisions are used up.
     let cycle = replay_files.is_some();
-    let steps = run_copy(&mut prep.pilot, commands, cycle, 1.5, |i, s| {
-        println!("{}", row_text(&Row::of(i + 1, s)));
-    })?;
+    let steps = run_copy(
+        &mut prep.pilot,
+        commands,
+        cycle,
+        1.5,
+        |_| false,
+        |i, s| {
+            println!("{}", row_text(&Row::of(i + 1, s)));
+        },
+    )?
+    .steps;
     let rows: Vec<Row> = steps
         .iter()
         .enumerate()

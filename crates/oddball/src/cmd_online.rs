@@ -20,6 +20,7 @@ use oddball_live::LiveError;
 use oddball_session::engine::{Session, ShownFlash};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
+use oddball_session::task::run_copy;
 use serde::Serialize;
 
 use crate::args::{
@@ -247,54 +248,54 @@ fn run_with(
             }
         }
     }
-    let mut rows = Vec::new();
-    let p = session.params().paradigm;
-    let mut ended = None;
-    for (i, &command) in commands.iter().enumerate() {
-        let t = match session.decide(Some(command)) {
-            Ok(t) => t,
-            Err(e) => match recording_ended(&e) {
-                Some(end) => {
-                    println!("decision {}: {end}", i + 1);
-                    ended = Some(end);
-                    break;
-                }
-                None => return Err(e).with_context(|| format!("decision {}", i + 1)),
-            },
-        };
-        let decided = t.decided().and_then(|c| p.command_of(c));
-        let row = DecisionRow {
+    let run = run_copy(
+        &mut session,
+        commands,
+        false,
+        1.5,
+        is_recording_end,
+        |i, s| {
+            println!(
+                "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
+                i + 1,
+                s.intended,
+                s.decided.map_or("abstain", |c| c.name()),
+                match s.decided {
+                    Some(d) if d == s.intended => " ✓",
+                    Some(_) => " ✗",
+                    None => "",
+                },
+                s.confidence,
+                s.rounds,
+                s.seconds
+            );
+            if let Some(r) = &s.arm_refusal {
+                println!("  the arm refused: {r}");
+            }
+        },
+    )
+    .context("running the commands")?;
+    let rows: Vec<DecisionRow> = run
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(i, s)| DecisionRow {
             index: i + 1,
-            intended: command.name().to_string(),
-            decided: decided.map(|c| c.name().to_string()),
-            rounds: t.rounds,
-            confidence: t.confidence(),
-            seconds: (t.end - t.start) as f64 / session.sfreq(),
-        };
-        println!(
-            "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
-            row.index,
-            row.intended,
-            row.decided.as_deref().unwrap_or("abstain"),
-            match decided {
-                Some(d) if d == command => " ✓",
-                Some(_) => " ✗",
-                None => "",
-            },
-            row.confidence,
-            row.rounds,
-            row.seconds
-        );
-        if let Some(r) = &t.arm_refusal {
-            println!("  the arm refused: {r}");
+            intended: s.intended.name().to_string(),
+            decided: s.decided.map(|c| c.name().to_string()),
+            rounds: s.rounds,
+            confidence: s.confidence,
+            seconds: s.seconds,
+        })
+        .collect();
+    let ended = run.stopped.map(|(e, deciding)| {
+        // The live source's own words (the recording's end), not the engine's wrapper.
+        let end = LiveError::from_session(&e).map_or_else(|| e.to_string(), |l| l.to_string());
+        if deciding {
+            println!("decision {}: {end}", rows.len() + 1);
         }
-        rows.push(row);
-    }
-    if ended.is_none() {
-        if let Err(e) = session.idle(1.5) {
-            ended = Some(recording_ended(&e).ok_or(e)?);
-        }
-    }
+        end
+    });
     let correct = rows
         .iter()
         .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
@@ -365,12 +366,12 @@ fn run_with(
     Ok(())
 }
 
-/// The replayed file's end, when that is what stopped the session.
-fn recording_ended(e: &oddball_session::SessionError) -> Option<String> {
-    match LiveError::from_session(e) {
-        Some(e @ LiveError::RecordingEnded { .. }) => Some(e.to_string()),
-        _ => None,
-    }
+/// The replayed file's end: what stops a session cleanly.
+fn is_recording_end(e: &oddball_session::SessionError) -> bool {
+    matches!(
+        LiveError::from_session(e),
+        Some(LiveError::RecordingEnded { .. })
+    )
 }
 
 fn summary_samples(path: &std::path::Path) -> String {
