@@ -164,7 +164,8 @@ impl SourceSpec {
                 let source = LslSource::resolve(&query, 30.0, clock)?;
                 // Markers pushed before anyone listens are lost (the first cue, say).
                 markers.wait_for_consumers(10.0);
-                Ok((AnySource::Lsl(source), Some(Box::new(markers))))
+                let markers: Box<dyn MarkerSink> = Box::new(markers);
+                Ok((AnySource::Lsl(source), Some(markers)))
             }
             #[cfg(not(feature = "lsl"))]
             Self::Lsl(_) => Err(LiveError::InvalidParameter {
