@@ -8,7 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use oddball_session::nic::{NicDecoder, NicFormat, NicMode, NicSample};
+use oddball_io::nic::{NicDecoder, NicFormat, NicMode, NicSample};
 
 const ABSURD_CHANNELS: [usize; 4] = [usize::MAX, usize::MAX / 4 + 1, 1 << 62, 1 << 30];
 

@@ -51,7 +51,8 @@ pub use error::{ArmError, ConfigError, RefusalReason};
 pub use integrate::{rk4_step, rk4_step_hold, rk4_step_trig, ArmState};
 pub use model::{ArmModel, Elbow, LinkParams, Trig};
 pub use reference::{
-    parse_commands, Command, ReferenceSample, Transition, TransitionKind, UnknownCommand,
+    parse_commands, planned_path, Command, ReferenceSample, Transition, TransitionKind,
+    UnknownCommand,
 };
 pub use sim::{
     ArmSim, ControlUpdate, ProgramReport, Sample, SegmentStats, SimSettings, StepInfo, StepOutcome,

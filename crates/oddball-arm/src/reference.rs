@@ -59,6 +59,21 @@ impl Command {
     }
 }
 
+/// The planned path of `commands` from `start`: `start`, then the target each command reaches
+/// from the previous one, steps of `step_m` (m).
+pub fn planned_path(
+    start: Vector2<f64>,
+    commands: impl IntoIterator<Item = Command>,
+    step_m: f64,
+) -> Vec<Vector2<f64>> {
+    let mut path = vec![start];
+    for c in commands {
+        let next = c.apply(path.last().expect("non-empty"), step_m);
+        path.push(next);
+    }
+    path
+}
+
 impl fmt::Display for Command {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())

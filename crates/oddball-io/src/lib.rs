@@ -29,6 +29,7 @@ mod error;
 pub mod events;
 pub mod manifest;
 pub mod mat;
+pub mod nic;
 pub mod speller;
 mod tempfile;
 mod units;

@@ -23,10 +23,35 @@ pub enum LiveError {
         n_times: usize,
         seconds: f64,
     },
+    #[error("cannot connect to {addr}: {reason}")]
+    Connect { addr: String, reason: String },
+    #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]
+    Reconnect { addr: String, attempts: usize },
+    #[error(transparent)]
+    Nic(#[from] oddball_io::nic::NicError),
     #[error("LSL: {0}")]
     Lsl(String),
     #[error(transparent)]
     Session(#[from] oddball_session::SessionError),
     #[error(transparent)]
     Io(#[from] oddball_io::IoError),
+}
+
+/// A live source's error reaches the session engine as its typed cause
+/// ([`oddball_session::SessionError::Source`]); find it again with
+/// [`LiveError::from_session`].
+impl From<LiveError> for oddball_session::SessionError {
+    fn from(e: LiveError) -> Self {
+        oddball_session::SessionError::Source(Box::new(e))
+    }
+}
+
+impl LiveError {
+    /// The live error behind a session error, if a live source caused it.
+    pub fn from_session(e: &oddball_session::SessionError) -> Option<&LiveError> {
+        match e {
+            oddball_session::SessionError::Source(cause) => cause.downcast_ref(),
+            _ => None,
+        }
+    }
 }

@@ -4,19 +4,28 @@
 //! * [`panel`]: the stimulus panel, a web page served by the binary, live over a WebSocket.
 //! * [`live`]: the live session's subject: a live EEG source, the panel, the marker stream and
 //!   the recording on one clock; the simulated subject as a live source.
+//! * [`clock`]: the session clock (ms) the panel, the sources and the recording share, and the
+//!   one [`clock::Pacer`] that paces simulated and played-back EEG by it.
+//! * [`source`]: every live source behind one type, as `--source` names it
+//!   (`sim`, `nic:HOST:PORT`, `lsl:NAME`, `replay:FILE`).
+//! * [`nic`]: Neuroelectrics NIC's TCP stream as a live source (reconnecting), and a simulated
+//!   Starstim serving one; the byte codec is `oddball_io::nic`.
 //! * [`playback`]: a recording played back as a live source (`--source replay:FILE`).
 //! * [`record`]: the recording, XDF flushed per block.
 //! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
 //!   decisions out) and the simulated subject as a live LSL amplifier.
 
+pub mod clock;
 mod error;
 pub mod live;
 #[cfg(feature = "lsl")]
 pub mod lsl;
 #[cfg(feature = "lsl")]
 pub mod lsl_live;
+pub mod nic;
 pub mod panel;
 pub mod playback;
 pub mod record;
+pub mod source;
 
 pub use error::LiveError;

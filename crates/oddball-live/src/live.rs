@@ -1,7 +1,7 @@
-//! A live session's [`Subject`]: a live EEG source, the panel a person looks at, the marker
+//! A live session's subject ([`LiveSubject`]: an `EegStream`, `Presenter` and `Observer`): a live EEG source, the panel a person looks at, the marker
 //! stream, and the recording, on one clock.
 //!
-//! The session engine announces each flash [`Subject::lead`] ahead (half a second) so the page
+//! The session engine announces each flash [`Presenter::lead`] ahead (half a second) so the page
 //! has it before it must draw it. The page stamps the frame that drew it; that stamp, mapped to
 //! the EEG's sample clock, becomes the flash's marker (and is sent on the marker stream and
 //! recorded). A flash the page never drew within [`UNDRAWN_AFTER_MS`] of its planned onset (no
@@ -13,11 +13,13 @@ use std::time::{Duration, Instant};
 
 use ndarray::Array2;
 use oddball_arm::ArmSim;
-use oddball_session::engine::{Drawn, Phase, Subject, TrialOutcome, TrialRecord};
+use oddball_session::engine::{Phase, TrialOutcome, TrialRecord};
 use oddball_session::paradigm::FourBulbParams;
+use oddball_session::roles::{Drawn, EegStream, Observer, Presenter};
 use oddball_session::{SessionError, SimulatedSubject};
 
-use crate::panel::{Clock, DrawnReport, PanelServer, ServerMsg};
+use crate::clock::{Clock, Pacer};
+use crate::panel::{DrawnReport, PanelServer, ServerMsg};
 use crate::record::Recorder;
 use crate::LiveError;
 
@@ -37,10 +39,10 @@ pub trait EegSource: Send {
     /// Session-clock time (ms) of sample `i` (extrapolated at the nominal rate beyond the
     /// samples received).
     fn time_of(&self, sample: u64) -> f64;
-    /// The person saw a flash at sample `onset` (a simulated source renders the response; a
-    /// real one ignores it). `false` when it came too late to be rendered.
-    fn saw(&mut self, _onset: u64, _attended: bool) -> bool {
-        true
+    /// The person saw a flash of stimulus `code` at sample `onset` (a simulated source renders
+    /// the response, a simulated amplifier in another process is told; a real one ignores it).
+    fn saw(&mut self, _onset: u64, _code: u32, _attended: bool) -> Result<(), LiveError> {
+        Ok(())
     }
     /// The session starts now (after waiting for a page, say): a simulated source starts its
     /// clock here instead of racing to catch up. Live streams keep theirs.
@@ -69,10 +71,8 @@ pub trait MarkerSink: Send {
 #[derive(Debug)]
 pub struct SimSource {
     sim: SimulatedSubject,
-    clock: Clock,
-    start_ms: f64,
+    pacer: Pacer,
     latency_ms: f64,
-    paced: bool,
     /// Samples that arrived too late to carry their flash's response.
     pub late_flashes: u64,
 }
@@ -80,11 +80,9 @@ pub struct SimSource {
 impl SimSource {
     pub fn new(sim: SimulatedSubject, clock: Clock, latency_ms: f64) -> Self {
         Self {
-            start_ms: clock.now_ms(),
+            pacer: Pacer::new(clock, sim.sfreq(), true),
             sim,
-            clock,
             latency_ms,
-            paced: true,
             late_flashes: 0,
         }
     }
@@ -92,17 +90,16 @@ impl SimSource {
     /// From now on paced by the wall clock, the next sample acquired now (after an unpaced
     /// calibration, say).
     pub fn pace_from_now(&mut self, latency_ms: f64) {
-        self.paced = true;
+        self.pacer.paced = true;
         self.latency_ms = latency_ms;
-        self.start_ms = self.clock.now_ms() - self.sim.position() as f64 * 1e3 / self.sim.sfreq();
+        self.pacer.restart_at(self.sim.position());
     }
 
     /// As fast as it can (tests, and replaying a session's timing without waiting).
     pub fn unpaced(sim: SimulatedSubject, clock: Clock) -> Self {
-        Self {
-            paced: false,
-            ..Self::new(sim, clock, 0.0)
-        }
+        let mut s = Self::new(sim, clock, 0.0);
+        s.pacer.paced = false;
+        s
     }
 }
 
@@ -114,34 +111,26 @@ impl EegSource for SimSource {
         self.sim.ch_names()
     }
     fn wait(&mut self, n: usize) -> Result<(), LiveError> {
-        if !self.paced {
-            return Ok(());
-        }
-        let due = self.time_of(self.sim.position() + n as u64) + self.latency_ms;
-        let at = self.clock.instant(due);
-        let now = Instant::now();
-        if at > now {
-            std::thread::sleep(at - now);
-        }
+        self.pacer
+            .wait_for(self.sim.position() + n as u64, self.latency_ms);
         Ok(())
     }
     fn take(&mut self, n: usize) -> Result<Array2<f64>, LiveError> {
         Ok(self.sim.render(n))
     }
     fn time_of(&self, sample: u64) -> f64 {
-        self.start_ms + sample as f64 * 1e3 / self.sim.sfreq()
+        self.pacer.time_of(sample)
     }
     fn start_now(&mut self) {
-        if self.paced {
+        if self.pacer.paced {
             self.pace_from_now(self.latency_ms);
         }
     }
-    fn saw(&mut self, onset: u64, attended: bool) -> bool {
+    fn saw(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), LiveError> {
         if onset < self.sim.position() || self.sim.flash(onset, attended).is_err() {
             self.late_flashes += 1;
-            return false;
         }
-        true
+        Ok(())
     }
 }
 
@@ -228,7 +217,7 @@ impl FlashTiming {
     }
 }
 
-/// The live [`Subject`].
+/// The live subject: all three of the engine's roles (`oddball_session::roles`).
 pub struct LiveSubject<S: EegSource> {
     source: S,
     panel: Option<PanelServer>,
@@ -252,7 +241,6 @@ pub struct LiveSubject<S: EegSource> {
     /// (the trial's end), ms.
     pub decision_latency_ms: Vec<f64>,
     last_arm_ms: f64,
-    error: Option<LiveError>,
 }
 
 impl<S: EegSource> std::fmt::Debug for LiveSubject<S> {
@@ -286,7 +274,6 @@ impl<S: EegSource> LiveSubject<S> {
             last_block: Instant::now(),
             decision_latency_ms: Vec::new(),
             last_arm_ms: f64::NEG_INFINITY,
-            error: None,
         }
     }
 
@@ -360,7 +347,7 @@ impl<S: EegSource> LiveSubject<S> {
 
     /// A flash seen at sample `onset`: the simulated brain, the marker stream, the recording.
     fn seen(&mut self, a: Announced, onset: u64, on_ms: f64) -> Result<(), LiveError> {
-        self.source.saw(onset, a.attended);
+        self.source.saw(onset, a.code, a.attended)?;
         self.marker(&format!("flash {}", a.code), on_ms)?;
         self.drawn.push(Drawn {
             planned: a.planned,
@@ -435,23 +422,9 @@ impl<S: EegSource> LiveSubject<S> {
         }
         s
     }
-
-    /// Keeps a live error for [`LiveSubject::take_error`]; the engine gets its text.
-    fn lift<T>(&mut self, r: Result<T, LiveError>) -> Result<T, SessionError> {
-        r.map_err(|e| {
-            let text = e.to_string();
-            self.error = Some(e);
-            SessionError::Source(text)
-        })
-    }
-
-    /// The live error behind the last failed call, if any (the engine only sees its text).
-    pub fn take_error(&mut self) -> Option<LiveError> {
-        self.error.take()
-    }
 }
 
-impl<S: EegSource> Subject for LiveSubject<S> {
+impl<S: EegSource> EegStream for LiveSubject<S> {
     fn sfreq(&self) -> f64 {
         self.source.sfreq()
     }
@@ -461,6 +434,24 @@ impl<S: EegSource> Subject for LiveSubject<S> {
     fn position(&self) -> u64 {
         self.position
     }
+    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        self.source.wait(n)?;
+        self.collect_stamps()?;
+        let data = self.source.take(n)?;
+        if let Some(rec) = &mut self.recorder {
+            let t0 = self.source.time_of(self.position);
+            rec.eeg(t0, self.source.sfreq(), data.view())?;
+        }
+        self.position += n as u64;
+        self.last_block = Instant::now();
+        Ok(data)
+    }
+    fn stream_health(&self) -> Option<String> {
+        self.source.health()
+    }
+}
+
+impl<S: EegSource> Presenter for LiveSubject<S> {
     fn lead(&self) -> u64 {
         // A page, or a marker stream's consumer (a remote simulated subject), needs flashes
         // ahead of time; on schedule in this process they need none.
@@ -490,33 +481,11 @@ impl<S: EegSource> Subject for LiveSubject<S> {
                 self.announced.push(a);
                 Ok(())
             }
-            _ => {
-                let r = self.seen(a, onset, a.at_ms);
-                self.lift(r)
-            }
+            _ => Ok(self.seen(a, onset, a.at_ms)?),
         }
-    }
-    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
-        let r = self.source.wait(n);
-        self.lift(r)?;
-        let r = self.collect_stamps();
-        self.lift(r)?;
-        let r = self.source.take(n);
-        let data = self.lift(r)?;
-        if let Some(rec) = &mut self.recorder {
-            let t0 = self.source.time_of(self.position);
-            let r = rec.eeg(t0, self.source.sfreq(), data.view());
-            self.lift(r)?;
-        }
-        self.position += n as u64;
-        self.last_block = Instant::now();
-        Ok(data)
     }
     fn drawn(&mut self) -> Vec<Drawn> {
         std::mem::take(&mut self.drawn)
-    }
-    fn stream_health(&self) -> Option<String> {
-        self.source.health()
     }
     fn trial_started(
         &mut self,
@@ -539,9 +508,11 @@ impl<S: EegSource> Subject for LiveSubject<S> {
                 countdown_s: self.paradigm.countdown_s,
             });
         }
-        let r = self.marker(&format!("cue {}", intended.unwrap_or(0)), at_ms);
-        self.lift(r)
+        Ok(self.marker(&format!("cue {}", intended.unwrap_or(0)), at_ms)?)
     }
+}
+
+impl<S: EegSource> Observer for LiveSubject<S> {
     fn trial_ended(&mut self, t: &TrialRecord) -> Result<(), SessionError> {
         let now = self.clock.now_ms();
         // Flashes announced for this trial and not drawn yet are void.
@@ -575,12 +546,10 @@ impl<S: EegSource> Subject for LiveSubject<S> {
                 _ => "abstain".to_string(),
             };
             let at = self.source.time_of(t.end);
-            let r = self.marker(&text, at);
-            self.lift(r)?;
+            self.marker(&text, at)?;
             if let Some(rec) = &mut self.recorder {
                 let json = serde_json::to_string(t).expect("trial records serialise");
-                let r = rec.decision(&json, at);
-                self.lift(r)?;
+                rec.decision(&json, at)?;
             }
         }
         if let Some(p) = &self.panel {
@@ -596,8 +565,7 @@ impl<S: EegSource> Subject for LiveSubject<S> {
         let elbow = arm.plant().elbow_position(&q);
         let pen = arm.pen();
         if let Some(rec) = &mut self.recorder {
-            let r = rec.arm(t_ms, [pen[0], pen[1], q[0], q[1]]);
-            self.lift(r)?;
+            rec.arm(t_ms, [pen[0], pen[1], q[0], q[1]])?;
         }
         // The page needs no more than ~30 frames a second of arm.
         if t_ms - self.last_arm_ms >= 33.0 {

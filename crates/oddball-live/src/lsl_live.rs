@@ -11,9 +11,9 @@ use std::collections::VecDeque;
 
 use ndarray::Array2;
 
+use crate::clock::Clock;
 use crate::live::{EegSource, MarkerSink};
 use crate::lsl::{local_clock, EegInlet, MarkerOutlet, StreamQuery};
-use crate::panel::Clock;
 use crate::LiveError;
 
 /// A forward jump of the timestamps longer than this is an error, not a gap to fill, s.

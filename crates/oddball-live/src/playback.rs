@@ -19,8 +19,8 @@ use std::time::Instant;
 use ndarray::{s, Array2};
 use oddball_signal::Event;
 
+use crate::clock::Clock;
 use crate::live::EegSource;
-use crate::panel::Clock;
 use crate::LiveError;
 
 /// A recording as a live EEG source.

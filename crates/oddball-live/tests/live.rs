@@ -3,13 +3,14 @@
 //! recording holds what the session received.
 
 use oddball_arm::{ArmConfig, ArmSim, Command};
+use oddball_live::clock::Clock;
 use oddball_live::live::{LiveSubject, SimSource};
-use oddball_live::panel::Clock;
 use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
 use oddball_live::LiveError;
-use oddball_session::engine::{Session, SessionParams, Subject};
+use oddball_session::engine::{Session, SessionParams};
 use oddball_session::paradigm::FourBulbParams;
+use oddball_session::roles::EegStream;
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
 fn params() -> SessionParams {
@@ -149,9 +150,9 @@ fn a_recorded_session_played_back_decides_the_same_and_stops_at_the_end_of_the_f
     assert_eq!(source.coincidence(&shifted, 0), 0);
     assert_eq!(source.coincidence(&shifted, 1), shown.len());
     // A third decision runs past the end of the file: a clear error, nothing invented.
-    assert!(replay.decide(Some(Command::Down)).is_err());
-    match replay.subject_mut().take_error() {
-        Some(LiveError::RecordingEnded { n_times, .. }) => assert_eq!(n_times, n),
+    let err = replay.decide(Some(Command::Down)).unwrap_err();
+    match LiveError::from_session(&err) {
+        Some(LiveError::RecordingEnded { n_times, .. }) => assert_eq!(*n_times, n),
         other => panic!("expected RecordingEnded, got {other:?}"),
     }
 }

@@ -5,7 +5,8 @@ use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use oddball_live::panel::{Clock, PanelConfig, PanelServer};
+use oddball_live::clock::Clock;
+use oddball_live::panel::{PanelConfig, PanelServer};
 use oddball_live::LiveError;
 
 fn config() -> PanelConfig {

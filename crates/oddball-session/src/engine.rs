@@ -1,7 +1,9 @@
 //! The session engine: calibration, training, and online control of the arm.
 //!
-//! A [`Session`] drives a [`Subject`] (anything that sees flashes and yields EEG: the simulated
-//! subject here, a live amplifier later) through the four-bulb paradigm:
+//! A [`Session`] drives a [`Subject`] (an EEG stream, a stimulus presenter and an observer in
+//! one, see [`crate::roles`]: the simulated subject here, a live source in `oddball_live`)
+//! through the four-bulb paradigm. It runs on the EEG's sample clock, as fast as the stream
+//! delivers; pacing by the wall clock is the live sources' job:
 //!
 //! 1. **Calibration**: `calibration_per_bulb` labelled decisions per bulb, in seeded random
 //!    order, each with the paradigm's full rounds. Every epoch comes from the same causal
@@ -30,82 +32,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::online::{Marker, OnlineEpocher};
 use crate::paradigm::FourBulbParams;
+pub use crate::roles::{Drawn, EegStream, Observer, Presenter, Subject};
 use crate::SessionError;
-
-/// A source of EEG that sees the flashes: the person in front of the panel.
-pub trait Subject {
-    fn sfreq(&self) -> f64;
-    fn ch_names(&self) -> &[String];
-    /// Samples produced so far.
-    fn position(&self) -> u64;
-    /// A flash of stimulus `code` at sample `onset` (≥ `position()`); `attended` when it is the
-    /// stimulus the person attends.
-    fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError>;
-    /// The next `n` samples `(n_channels, n)`, µV; an error when the source is gone.
-    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError>;
-    /// For live streams: samples lost, reconnections (`None` for simulated sources).
-    fn stream_health(&self) -> Option<String> {
-        None
-    }
-    /// Samples ahead of the stream at which flashes are announced with [`Subject::show`]: a
-    /// live panel needs its schedule before it draws (0: when the stream reaches the onset's
-    /// chunk).
-    fn lead(&self) -> u64 {
-        0
-    }
-    /// Flashes whose real onset has been measured since the last call (a panel stamps the frame
-    /// that drew each one). The engine moves their markers there before their epochs complete;
-    /// a flash reported as never drawn loses its epoch. Simulated subjects draw on schedule.
-    fn drawn(&mut self) -> Vec<Drawn> {
-        Vec::new()
-    }
-    /// A trial begins at sample `start` (its countdown); the person is cued to attend
-    /// `intended` (`None`: nothing).
-    fn trial_started(
-        &mut self,
-        _start: u64,
-        _phase: Phase,
-        _intended: Option<u32>,
-    ) -> Result<(), SessionError> {
-        Ok(())
-    }
-    /// A trial ended (a calibration trial's last epoch arrived, or an online decision was made
-    /// and its command issued). Flashes announced for it but not yet drawn are void.
-    fn trial_ended(&mut self, _trial: &TrialRecord) -> Result<(), SessionError> {
-        Ok(())
-    }
-    /// After every chunk while the arm runs: its state at sample `position`.
-    fn arm_state(&mut self, _position: u64, _arm: &ArmSim) -> Result<(), SessionError> {
-        Ok(())
-    }
-}
-
-/// A flash's measured onset: the one announced at sample `planned` with stimulus `code` was
-/// drawn at sample `onset` (`None`: never drawn).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Drawn {
-    pub planned: u64,
-    pub code: u32,
-    pub onset: Option<u64>,
-}
-
-impl Subject for crate::subject::SimulatedSubject {
-    fn sfreq(&self) -> f64 {
-        crate::subject::SimulatedSubject::sfreq(self)
-    }
-    fn ch_names(&self) -> &[String] {
-        crate::subject::SimulatedSubject::ch_names(self)
-    }
-    fn position(&self) -> u64 {
-        crate::subject::SimulatedSubject::position(self)
-    }
-    fn show(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), SessionError> {
-        self.flash(onset, attended)
-    }
-    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
-        Ok(crate::subject::SimulatedSubject::render(self, n))
-    }
-}
 
 /// Settings of a session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -208,6 +136,17 @@ pub enum TrialOutcome {
     Abstained,
 }
 
+impl TrialOutcome {
+    /// The decision's confidence given the posterior per bulb (`posterior[code − 1]`): the
+    /// posterior of the chosen bulb, or, abstaining, of the best one (0 with none).
+    pub fn confidence(&self, posterior: &[f64]) -> f64 {
+        match *self {
+            TrialOutcome::Chosen { code } => posterior[code as usize - 1],
+            _ => posterior.iter().copied().fold(0.0, f64::max),
+        }
+    }
+}
+
 /// One trial (a calibration decision or an online decision).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrialRecord {
@@ -242,10 +181,7 @@ impl TrialRecord {
 
     /// Confidence: the posterior of the decided (or, abstaining, the best) bulb.
     pub fn confidence(&self) -> f64 {
-        match self.outcome {
-            TrialOutcome::Chosen { code } => self.posterior[code as usize - 1],
-            _ => self.posterior.iter().copied().fold(0.0, f64::max),
-        }
+        self.outcome.confidence(&self.posterior)
     }
 }
 
@@ -300,8 +236,6 @@ pub struct Session<S: Subject> {
     arm: Option<ArmSim>,
     /// The arm runs from the first online decision on (it holds still during calibration).
     arm_running: bool,
-    /// Pace the stream in real time: (wall-clock start, sample position at that instant).
-    realtime: Option<(std::time::Instant, u64)>,
 }
 
 impl<S: Subject> Session<S> {
@@ -329,13 +263,7 @@ impl<S: Subject> Session<S> {
             model: None,
             arm,
             arm_running: false,
-            realtime: None,
         })
-    }
-
-    /// Paces the session in real time (a simulated subject otherwise runs as fast as it can).
-    pub fn set_realtime(&mut self, on: bool) {
-        self.realtime = on.then(|| (std::time::Instant::now(), self.subject.position()));
     }
 
     pub fn params(&self) -> &SessionParams {
@@ -560,13 +488,6 @@ impl<S: Subject> Session<S> {
         if let (Some(arm), true) = (&mut self.arm, self.arm_running) {
             arm.run_for(n as f64 / self.subject.sfreq())?;
             self.subject.arm_state(self.subject.position(), arm)?;
-        }
-        if let Some((t0, p0)) = self.realtime {
-            let due = (self.subject.position() - p0) as f64 / self.subject.sfreq();
-            let ahead = due - t0.elapsed().as_secs_f64();
-            if ahead > 0.0 {
-                std::thread::sleep(std::time::Duration::from_secs_f64(ahead));
-            }
         }
         for e in ready {
             let f = &mut self.flashes[e.marker.tag];

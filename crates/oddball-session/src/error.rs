@@ -19,16 +19,10 @@ pub enum SessionError {
     NotASpeller { path: String },
     #[error("{path} is not an oddball session file: no {missing}")]
     NotASession { path: String, missing: String },
-    #[error("NIC stream, byte {offset}: {reason}")]
-    NicProtocol { offset: u64, reason: String },
-    #[error("cannot connect to {addr}: {reason}")]
-    Connect { addr: String, reason: String },
-    #[error("the stream from {addr} sent nothing for {seconds} s: stopped")]
-    StreamStalled { addr: String, seconds: f64 },
-    #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]
-    StreamLost { addr: String, attempts: usize },
+    /// A live source failed (`oddball_live::LiveError`, say): the cause is kept, typed, for
+    /// callers to downcast.
     #[error("live source: {0}")]
-    Source(String),
+    Source(#[source] Box<dyn std::error::Error + Send + Sync + 'static>),
     #[error(transparent)]
     Signal(#[from] oddball_signal::SignalError),
     #[error(transparent)]

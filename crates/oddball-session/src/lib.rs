@@ -6,14 +6,18 @@
 //! * [`subject`]: a simulated subject who attends one stimulus and produces 8-channel EEG: 1/f
 //!   background, alpha, mains, drift, blinks, a visual response to every flash and a P300 to the
 //!   attended ones (presets easy, typical, hard).
+//! * [`roles`]: what a session talks to, one trait per role: the EEG stream, the stimulus
+//!   presenter, the observer (a [`roles::Subject`] is all three).
+//! * [`engine`]: the session: calibration, training, online decisions driving the arm.
+//! * [`task`]: tasks people do with a pilot (copy, tracking, drawing).
 
 pub mod engine;
 mod error;
-pub mod nic;
 pub mod online;
 pub mod paradigm;
 pub mod record;
 pub mod replay;
+pub mod roles;
 pub mod subject;
 pub mod task;
 

@@ -103,6 +103,43 @@ pub fn stream_epochs(
     Ok(out)
 }
 
+/// The accepted epochs of a recording's events, streamed causally as
+/// [`stream_epochs`] cuts them, as [`oddball_signal::Epochs`] (targets flagged; `tmin` 0): what
+/// a report's ERP plot shows of a replayed subject's calibration.
+pub fn accepted_epochs(
+    rec: &Recording,
+    pre: &Preprocess,
+    chunk: usize,
+) -> Result<oddball_signal::Epochs, SessionError> {
+    let epochs = stream_epochs(rec, pre, chunk)?;
+    let kept: Vec<(usize, &ReadyEpoch)> = epochs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| e.as_ref().filter(|e| e.accepted).map(|e| (i, e)))
+        .collect();
+    let (n_ch, n_t) = kept
+        .first()
+        .map_or((rec.raw.n_channels(), 0), |(_, e)| e.data.dim());
+    let mut x = Array3::zeros((kept.len(), n_ch, n_t));
+    for (j, (_, e)) in kept.iter().enumerate() {
+        x.index_axis_mut(Axis(0), j).assign(&e.data);
+    }
+    let events = kept
+        .iter()
+        .map(|&(i, _)| rec.raw.events().as_slice()[i].clone())
+        .collect();
+    Ok(oddball_signal::Epochs::new(
+        x,
+        rec.raw.sfreq(),
+        0.0,
+        rec.raw.ch_names().to_vec(),
+        events,
+    )?)
+}
+
+/// What a replayed subject's report says about its decisions.
+pub const REPLAY_NOTE: &str = "replayed speller flashes: the four bulbs of each decision are the target and three non-target rows (or columns) of one spelled character; seconds and ITR use the four-bulb panel's timing; the raw EEG is the source file itself, so no session.dat is written";
+
 /// The recording's speller layout, or the error saying it has none.
 fn speller_of(rec: &Recording) -> Result<&oddball_io::Speller, SessionError> {
     rec.speller
@@ -212,6 +249,11 @@ pub struct ReplayDecision {
 }
 
 impl ReplayDecision {
+    /// Confidence: the posterior of the decided (or, abstaining, the best) bulb.
+    pub fn confidence(&self) -> f64 {
+        self.outcome.confidence(&self.posterior)
+    }
+
     pub fn decided(&self, paradigm: &FourBulbParams) -> Option<Command> {
         match self.outcome {
             TrialOutcome::Chosen { code } => paradigm.command_of(code),

@@ -46,6 +46,9 @@ pub struct Step {
     pub seconds: f64,
     /// The arm refused the decided command (it would leave the board).
     pub arm_refusal: Option<String>,
+    /// Pen (x, z) in metres when the decision was made, before its command (not in reports).
+    #[serde(skip)]
+    pub pen_m: Option<[f64; 2]>,
 }
 
 impl Step {
@@ -78,6 +81,7 @@ impl<S: Subject> Pilot for Session<S> {
             confidence: t.confidence(),
             seconds: (t.end - t.start) as f64 / self.sfreq(),
             arm_refusal: t.arm_refusal.clone(),
+            pen_m: t.pen_m,
         }))
     }
 
@@ -122,23 +126,21 @@ impl Pilot for ReplayPilot {
             return Ok(None);
         };
         self.arm.run_for(d.seconds)?;
+        let pen_m = Some([self.arm.pen()[0], self.arm.pen()[1]]);
         let decided = d.decided(&self.paradigm);
         let arm_refusal = match decided {
             Some(c) => self.arm.issue(c).err().map(|e| e.to_string()),
             None => None,
-        };
-        let confidence = match d.outcome {
-            TrialOutcome::Chosen { code } => d.posterior[code as usize - 1],
-            _ => d.posterior.iter().copied().fold(0.0, f64::max),
         };
         Ok(Some(Step {
             intended,
             decided,
             abstained: d.outcome == TrialOutcome::Abstained,
             rounds: d.rounds,
-            confidence,
+            confidence: d.confidence(),
             seconds: d.seconds,
             arm_refusal,
+            pen_m,
         }))
     }
 
@@ -154,6 +156,59 @@ impl Pilot for ReplayPilot {
     fn time_s(&self) -> f64 {
         self.arm.time_s()
     }
+}
+
+/// What a copy task did.
+#[derive(Debug)]
+pub struct CopyRun {
+    pub steps: Vec<Step>,
+    /// The error that ended the task early (one `stop` accepted: a played-back recording
+    /// that ran out, say), and whether it came during a decision (else while the arm settled).
+    pub stopped: Option<(SessionError, bool)>,
+}
+
+/// The copy task (`oddball demo`, `oddball online`): the person intends `commands` in turn,
+/// then the arm settles for `settle_s`. With `cycle`, the commands repeat until the pilot has
+/// no more data (a replayed recording used up); otherwise each is intended once (and a pilot out
+/// of data stops the task early). An error for which `stop` says yes ends the task early with
+/// what was done; any other is returned. `each` sees every step as it is made.
+pub fn run_copy<P: Pilot>(
+    pilot: &mut P,
+    commands: &[Command],
+    cycle: bool,
+    settle_s: f64,
+    stop: impl Fn(&SessionError) -> bool,
+    mut each: impl FnMut(usize, &Step),
+) -> Result<CopyRun, SessionError> {
+    if commands.is_empty() {
+        return Err(SessionError::InvalidParameter {
+            name: "commands",
+            value: "[]".into(),
+            reason: "at least one command".into(),
+        });
+    }
+    let mut steps = Vec::new();
+    while cycle || steps.len() < commands.len() {
+        let step = match pilot.decide(commands[steps.len() % commands.len()]) {
+            Ok(Some(step)) => step,
+            Ok(None) => break,
+            Err(e) if stop(&e) => {
+                return Ok(CopyRun {
+                    steps,
+                    stopped: Some((e, true)),
+                })
+            }
+            Err(e) => return Err(e),
+        };
+        each(steps.len(), &step);
+        steps.push(step);
+    }
+    let stopped = match pilot.wait(settle_s) {
+        Ok(()) => None,
+        Err(e) if stop(&e) => Some((e, false)),
+        Err(e) => return Err(e),
+    };
+    Ok(CopyRun { steps, stopped })
 }
 
 /// The direction that shrinks the larger remaining error (x first on ties); `None` on target.
@@ -403,13 +458,12 @@ pub fn task_targets(arm: &ArmSim, params: &TrackParams) -> Vec<Vector2<f64>> {
 
 /// The vertices of the path that draws `text` from `arm`'s current target, metres.
 pub fn drawing_path(arm: &ArmSim, text: &str) -> Result<Vec<Vector2<f64>>, SessionError> {
-    let step = arm.settings().step_m;
-    let mut path = vec![arm.target()];
-    for m in stroke_plan(text)? {
-        let last = *path.last().expect("non-empty");
-        path.push(m.command.apply(&last, step));
-    }
-    Ok(path)
+    let moves = stroke_plan(text)?;
+    Ok(oddball_arm::planned_path(
+        arm.target(),
+        moves.iter().map(|m| m.command),
+        arm.settings().step_m,
+    ))
 }
 
 /// Steers the pen to each target in turn.

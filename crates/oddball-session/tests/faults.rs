@@ -4,7 +4,8 @@
 
 use ndarray::Array2;
 use oddball_arm::{ArmConfig, ArmSim, Command};
-use oddball_session::engine::{Session, SessionParams, Subject, TrialOutcome};
+use oddball_session::engine::{Session, SessionParams, TrialOutcome};
+use oddball_session::roles::{EegStream, Observer, Presenter};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 use oddball_session::SessionError;
 
@@ -24,7 +25,15 @@ struct Broken {
     fault: Fault,
 }
 
-impl Subject for Broken {
+impl Presenter for Broken {
+    fn show(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), SessionError> {
+        self.sim.flash(onset, attended)
+    }
+}
+
+impl Observer for Broken {}
+
+impl EegStream for Broken {
     fn sfreq(&self) -> f64 {
         self.sim.sfreq()
     }
@@ -33,9 +42,6 @@ impl Subject for Broken {
     }
     fn position(&self) -> u64 {
         self.sim.position()
-    }
-    fn show(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), SessionError> {
-        self.sim.flash(onset, attended)
     }
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
         let p0 = self.sim.position();
@@ -80,7 +86,7 @@ fn a_broken_channel_is_flagged_its_epochs_rejected_and_the_arm_holds() {
         let mut s = calibrated(fault, 3);
         // The channel breaks now; a jump to the rail rings through the band-pass for a few
         // seconds (those epochs fail the amplitude threshold), then the channel is flat.
-        let now = Subject::position(s.subject());
+        let now = EegStream::position(s.subject());
         s.subject_mut().from = now;
         s.idle(8.0).unwrap();
         let pen = s.arm().unwrap().pen();

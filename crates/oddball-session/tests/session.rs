@@ -121,7 +121,7 @@ fn deciding_before_calibration_is_an_error() {
 /// An amplifier whose true rate is 2 % above the nominal rate it reports.
 struct Fast(SimulatedSubject);
 
-impl oddball_session::engine::Subject for Fast {
+impl oddball_session::roles::EegStream for Fast {
     fn sfreq(&self) -> f64 {
         500.0
     }
@@ -131,6 +131,12 @@ impl oddball_session::engine::Subject for Fast {
     fn position(&self) -> u64 {
         self.0.position()
     }
+    fn render(&mut self, n: usize) -> Result<ndarray::Array2<f64>, oddball_session::SessionError> {
+        Ok(self.0.render(n))
+    }
+}
+
+impl oddball_session::roles::Presenter for Fast {
     fn show(
         &mut self,
         onset: u64,
@@ -139,10 +145,9 @@ impl oddball_session::engine::Subject for Fast {
     ) -> Result<(), oddball_session::SessionError> {
         self.0.flash(onset, attended)
     }
-    fn render(&mut self, n: usize) -> Result<ndarray::Array2<f64>, oddball_session::SessionError> {
-        Ok(self.0.render(n))
-    }
 }
+
+impl oddball_session::roles::Observer for Fast {}
 
 #[test]
 fn a_sample_rate_two_percent_off_nominal_still_draws_the_g() {

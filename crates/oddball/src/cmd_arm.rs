@@ -9,16 +9,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use oddball_arm::config::TransitionConfig;
-use oddball_arm::{
-    parse_commands, ArmConfig, ArmModel, ArmSim, Board, ProgramReport, StepOutcome, Vector2,
-};
+use oddball_arm::{ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
 
 /// Options of `oddball arm`.
 #[derive(Debug, clap::Args)]
 pub struct ArmArgs {
     /// Comma-separated commands: up, down, left, right (or u, d, l, r).
-    #[arg(long, default_value = "up,left,down,right,up,left")]
-    pub commands: String,
+    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg)]
+    pub commands: std::vec::Vec<oddball_arm::Command>,
     /// TOML model of the arm, board, controller and simulation (default: the built-in desk arm;
     /// see --print-config).
     #[arg(long, value_name = "FILE")]
@@ -61,11 +59,10 @@ pub fn run(args: &ArmArgs) -> Result<()> {
         print!("{}", config.to_toml_string());
         return Ok(());
     }
-    let commands = parse_commands(&args.commands).context("parsing --commands")?;
     let mut sim = ArmSim::from_config(&config).context("setting up the arm simulation")?;
     let start = sim.pen();
 
-    let report = sim.run_program(&commands);
+    let report = sim.run_program(&args.commands);
 
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let csv_path = args.out.join("trajectory.csv");
@@ -79,7 +76,7 @@ pub fn run(args: &ArmArgs) -> Result<()> {
     }
     let expected = expected_path(start, &report);
     let keys = key_configurations(&sim, &report);
-    draw(&sim, &keys, &expected, &plot_path)
+    crate::plot::arm::draw(&sim, &keys, &expected, &plot_path)
         .with_context(|| format!("drawing {}", plot_path.display()))?;
 
     print!("{}", table(&sim, &config, &report, &expected));
@@ -222,314 +219,5 @@ fn key_configurations(sim: &ArmSim, report: &ProgramReport) -> Vec<(f64, Vector2
     let times: Vec<f64> = std::iter::once(0.0)
         .chain(report.outcomes.iter().map(|o| o.stats().t_end_s))
         .collect();
-    configurations_at(sim, &times)
-}
-
-/// Joint angles at the given simulation times (the recorded samples nearest to them).
-pub fn configurations_at(sim: &ArmSim, times: &[f64]) -> Vec<(f64, Vector2<f64>)> {
-    let samples = sim.samples();
-    let dt = sim.settings().dt_s;
-    times
-        .iter()
-        .map(|&t| {
-            let i = (t / dt).round() as usize;
-            (t, samples.get(i).map_or(sim.state().q, |s| s.q))
-        })
-        .collect()
-}
-
-/// Axis ranges around `points` with a margin, widened so that one metre is as long on x as on
-/// z in a `w`×`h` pixel area.
-fn equal_aspect(points: &[Vector2<f64>], margin: f64, w: u32, h: u32) -> ((f64, f64), (f64, f64)) {
-    let (mut x0, mut x1, mut z0, mut z1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for p in points {
-        x0 = x0.min(p[0]);
-        x1 = x1.max(p[0]);
-        z0 = z0.min(p[1]);
-        z1 = z1.max(p[1]);
-    }
-    let (cx, cz) = ((x0 + x1) / 2.0, (z0 + z1) / 2.0);
-    let (mut hw, mut hh) = ((x1 - x0) / 2.0 + margin, (z1 - z0) / 2.0 + margin);
-    let aspect = f64::from(w) / f64::from(h);
-    if hw / hh < aspect {
-        hw = hh * aspect;
-    } else {
-        hh = hw / aspect;
-    }
-    ((cx - hw, cx + hw), (cz - hh, cz + hh))
-}
-
-/// Axis tick text in metres, without a "-0.000".
-fn tick(v: f64) -> String {
-    let v = if v.abs() < 1e-9 { 0.0 } else { v };
-    format!("{v:.3}")
-}
-
-/// Ramer–Douglas–Peucker simplification: drops vertices closer than `tolerance` to the chord
-/// of the kept neighbours, so the drawn line differs from the data by less than `tolerance`.
-fn simplify(points: &[(f64, f64)], tolerance: f64) -> Vec<(f64, f64)> {
-    if points.len() < 3 {
-        return points.to_vec();
-    }
-    let mut keep = vec![false; points.len()];
-    keep[0] = true;
-    keep[points.len() - 1] = true;
-    let mut stack = vec![(0, points.len() - 1)];
-    while let Some((a, b)) = stack.pop() {
-        let (pa, pb) = (points[a], points[b]);
-        let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
-        let len = dx.hypot(dz);
-        let mut worst = (0.0, a);
-        for (i, p) in points.iter().enumerate().take(b).skip(a + 1) {
-            let d = if len > 0.0 {
-                ((p.0 - pa.0) * dz - (p.1 - pa.1) * dx).abs() / len
-            } else {
-                (p.0 - pa.0).hypot(p.1 - pa.1)
-            };
-            if d > worst.0 {
-                worst = (d, i);
-            }
-        }
-        if worst.0 > tolerance {
-            keep[worst.1] = true;
-            stack.push((a, worst.1));
-            stack.push((worst.1, b));
-        }
-    }
-    points
-        .iter()
-        .zip(keep)
-        .filter_map(|(p, k)| k.then_some(*p))
-        .collect()
-}
-
-/// Corner labels "0", "1", … with corners visited more than once labelled together ("0, 4").
-fn corner_labels(corners: &[Vector2<f64>]) -> Vec<(Vector2<f64>, String)> {
-    let mut out: Vec<(Vector2<f64>, String)> = Vec::new();
-    for (i, c) in corners.iter().enumerate() {
-        match out.iter_mut().find(|(p, _)| (p - c).norm() < 1e-9) {
-            Some((_, label)) => {
-                let _ = write!(label, ", {i}");
-            }
-            None => out.push((*c, i.to_string())),
-        }
-    }
-    out
-}
-
-fn arm_points(model: &ArmModel, q: &Vector2<f64>) -> [(f64, f64); 3] {
-    let b = model.base();
-    let e = model.elbow_position(q);
-    let p = model.forward_kinematics(q);
-    [(b[0], b[1]), (e[0], e[1]), (p[0], p[1])]
-}
-
-fn board_rect(board: &Board) -> [(f64, f64); 2] {
-    [
-        (board.x_min_m, board.z_min_m),
-        (board.x_max_m, board.z_max_m),
-    ]
-}
-
-/// Draws the arm at the `keys` instants on its board (left) and the pen trace over the
-/// `expected` path (right, zoomed).
-pub fn draw(
-    sim: &ArmSim,
-    keys: &[(f64, Vector2<f64>)],
-    expected: &[Vector2<f64>],
-    path: &Path,
-) -> Result<()> {
-    const W: u32 = 1500;
-    const H: u32 = 720;
-    let model = *sim.plant();
-    let board = sim.workspace().board;
-    let trace: Vec<(f64, f64)> = sim
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
-    let expected_xy: Vec<(f64, f64)> = expected.iter().map(|p| (p[0], p[1])).collect();
-
-    let mut overview_pts: Vec<Vector2<f64>> = board.corners().to_vec();
-    overview_pts.push(model.base());
-    for (_, q) in keys {
-        overview_pts.push(model.elbow_position(q));
-    }
-    let mut zoom_pts: Vec<Vector2<f64>> = expected.to_vec();
-    zoom_pts.extend(sim.trace().points().iter().map(|p| p.p));
-    let zoom_extent = zoom_pts
-        .iter()
-        .flat_map(|p| {
-            (zoom_pts[0] - p)
-                .iter()
-                .map(|v| v.abs())
-                .collect::<Vec<_>>()
-        })
-        .fold(0.0f64, f64::max);
-    let zoom_margin = (0.15 * zoom_extent).max(0.002);
-    // Head-room above the drawing for the legend.
-    if let Some(top) = zoom_pts.iter().map(|p| p[1]).reduce(f64::max) {
-        zoom_pts.push(Vector2::new(
-            zoom_pts[0][0],
-            top + 0.3 * zoom_extent.max(0.01),
-        ));
-    }
-
-    crate::with_backend!(path, (W, H), |root| {
-        use plotters::prelude::*;
-        let err = |e: &dyn std::fmt::Debug| anyhow::anyhow!("{e:?}");
-        let (left, right) = root.split_horizontally(W / 2);
-        let n_keys = keys.len().max(2);
-        let key_colour = |i: usize| {
-            let f = i as f64 / (n_keys - 1) as f64;
-            HSLColor(0.62 - 0.62 * f, 0.75, 0.42)
-        };
-
-        for (area, title, pts, margin, zoomed) in [
-            (
-                &left,
-                "Arm and board (start and end of each command)",
-                &overview_pts,
-                0.04,
-                false,
-            ),
-            (
-                &right,
-                "Pen trace and expected path (zoom)",
-                &zoom_pts,
-                zoom_margin,
-                true,
-            ),
-        ] {
-            let (xr, zr) = equal_aspect(pts, margin, W / 2 - 90, H - 110);
-            let mut chart = ChartBuilder::on(area)
-                .caption(title, (crate::plot::FONT_FAMILY, 20))
-                .margin(12)
-                .x_label_area_size(40)
-                .y_label_area_size(60)
-                .build_cartesian_2d(xr.0..xr.1, zr.0..zr.1)
-                .map_err(|e| err(&e))?;
-            chart
-                .configure_mesh()
-                .x_desc("x (m)")
-                .y_desc("z (m)")
-                .label_style((crate::plot::FONT_FAMILY, 13))
-                .x_label_formatter(&|v| tick(*v))
-                .y_label_formatter(&|v| tick(*v))
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(|e| err(&e))?;
-            let [b0, b1] = board_rect(&board);
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [b0, b1],
-                    RGBColor(250, 244, 225).filled(),
-                )))
-                .map_err(|e| err(&e))?
-                .label("board")
-                .legend(|(x, y)| {
-                    Rectangle::new(
-                        [(x, y - 5), (x + 14, y + 5)],
-                        RGBColor(250, 244, 225).filled(),
-                    )
-                });
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [b0, b1],
-                    RGBColor(150, 130, 90).stroke_width(2),
-                )))
-                .map_err(|e| err(&e))?;
-            // The expected path as a pale band under the pen trace.
-            let band = RGBColor(240, 140, 60)
-                .mix(0.45)
-                .stroke_width(if zoomed { 12 } else { 6 });
-            chart
-                .draw_series(
-                    expected_xy
-                        .windows(2)
-                        .map(|w| PathElement::new(vec![w[0], w[1]], band)),
-                )
-                .map_err(|e| err(&e))?
-                .label("expected path")
-                .legend(move |(x, y)| PathElement::new([(x, y), (x + 18, y)], band));
-            // The trace, simplified to a quarter of a pixel and drawn segment by segment:
-            // plotters' wide-polyline joins break down at nearly collinear vertices and can drop
-            // whole stretches of the line.
-            let pixel = (xr.1 - xr.0) / f64::from(W / 2);
-            let width = if zoomed { 2 } else { 3 };
-            let drawn = simplify(&trace, 0.25 * pixel);
-            chart
-                .draw_series(
-                    drawn
-                        .windows(2)
-                        .map(|w| PathElement::new(vec![w[0], w[1]], BLACK.stroke_width(width))),
-                )
-                .map_err(|e| err(&e))?
-                .label("pen trace")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 18, y)], BLACK.stroke_width(2)));
-            if zoomed {
-                chart
-                    .draw_series(corner_labels(expected).into_iter().map(|(p, label)| {
-                        EmptyElement::at((p[0], p[1]))
-                            + Circle::new((0, 0), 5, RGBColor(230, 90, 30).stroke_width(2))
-                            + Text::new(label, (7, -18), (crate::plot::FONT_FAMILY, 15))
-                    }))
-                    .map_err(|e| err(&e))?;
-            }
-            for (i, (_, q)) in keys.iter().enumerate() {
-                let c = key_colour(i);
-                let pts = arm_points(&model, q);
-                if zoomed {
-                    // The links reach far outside the zoomed area; mark the pen only.
-                    chart
-                        .draw_series(std::iter::once(Circle::new(pts[2], 3, c.filled())))
-                        .map_err(|e| err(&e))?;
-                } else {
-                    chart
-                        .draw_series(std::iter::once(PathElement::new(
-                            pts.to_vec(),
-                            c.stroke_width(3),
-                        )))
-                        .map_err(|e| err(&e))?;
-                    chart
-                        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))
-                        .map_err(|e| err(&e))?;
-                }
-            }
-            if !zoomed {
-                let b = model.base();
-                chart
-                    .draw_series(std::iter::once(
-                        EmptyElement::at((b[0], b[1]))
-                            + Text::new("shoulder", (8, 6), (crate::plot::FONT_FAMILY, 14)),
-                    ))
-                    .map_err(|e| err(&e))?;
-                let t_last = keys[keys.len() - 1].0;
-                chart
-                    .draw_series(std::iter::once(PathElement::new(vec![], key_colour(0).stroke_width(3))))
-                    .map_err(|e| err(&e))?
-                    .label(format!("arm at the start and end of each command: blue (t = 0) → red (t = {t_last:.1} s)"))
-                    .legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new([(0, 0), (9, 0)], key_colour(0).stroke_width(3))
-                            + PathElement::new([(9, 0), (18, 0)], key_colour(n_keys - 1).stroke_width(3))
-                    });
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.85))
-                .border_style(RGBColor(180, 180, 180))
-                .label_font((crate::plot::FONT_FAMILY, 14))
-                .draw()
-                .map_err(|e| err(&e))?;
-        }
-        Ok(())
-    })
+    crate::plot::arm::configurations_at(sim, &times)
 }

@@ -6,35 +6,32 @@
 //! waits for a page before the first countdown.
 
 use std::fs;
-use std::net::{SocketAddr, ToSocketAddrs};
 use std::path::PathBuf;
-use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use oddball_arm::{parse_commands, ArmConfig, ArmSim};
+use oddball_arm::{planned_path, Command};
 use oddball_decode::pipeline::Model;
-use oddball_live::live::{EegSource, LiveSubject, SimSource, Summary};
-use oddball_live::panel::{Clock, PanelConfig, PanelServer};
-use oddball_live::playback::PlaybackSource;
+use oddball_live::clock::Clock;
+use oddball_live::live::{EegSource, LiveSubject, Summary};
+use oddball_live::panel::PanelConfig;
 use oddball_live::record::Recorder;
+use oddball_live::source::{AnySource, SourceSpec};
 use oddball_live::LiveError;
-use oddball_session::engine::{Session, SessionParams, ShownFlash, Subject};
+use oddball_session::engine::{Session, ShownFlash};
 use oddball_session::paradigm::FourBulbParams;
-use oddball_session::subject::SubjectParams;
+use oddball_session::roles::EegStream;
+use oddball_session::task::run_copy;
 use serde::Serialize;
 
-use crate::cmd_demo::SessionOptions;
+use crate::args::{
+    commands_arg, recording_arm, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
+};
 
 /// Options of `oddball online`.
 #[derive(Debug, clap::Args)]
 pub struct OnlineArgs {
-    /// Where the EEG comes from: `sim` (the simulated subject, paced by the wall clock),
-    /// `lsl:NAME` / `lsl:type=EEG` (a Lab Streaming Layer EEG stream by name or type; needs the
-    /// `lsl` feature) or `replay:FILE` (a recording played back at its own rate from its first
-    /// sample; a session.xdf of `oddball online` replays to the same flashes with the same
-    /// --seed and --commands; the session stops at the end of the file).
-    #[arg(long, default_value = "sim", value_name = "SOURCE")]
-    pub source: String,
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// A model trained in a session (`oddball demo` writes one: out/demo/model.json).
     #[arg(long, value_name = "FILE", required_unless_present = "calibrate")]
     pub model: Option<PathBuf>,
@@ -45,91 +42,18 @@ pub struct OnlineArgs {
     pub panel: PanelOptions,
     /// Comma-separated intended commands (a copy task: the panel cues each); the letter G by
     /// default.
-    #[arg(long, default_value = "up,left,down,right,up,left")]
-    pub commands: String,
-    /// Name of the LSL marker outlet (flashes, cues, decisions) with an LSL source.
-    #[arg(long, default_value = "oddball-markers")]
-    pub markers: String,
+    #[arg(long, default_value = LETTER_G, value_parser = commands_arg)]
+    pub commands: std::vec::Vec<Command>,
     /// With --source replay:FILE, play the file back as fast as it is processed instead of in
     /// real time (re-running a recorded session with another model, say); not with --serve.
     #[arg(long, conflicts_with = "serve")]
     pub fast: bool,
-    /// Latency of the simulated amplifier, ms: how late its samples arrive.
-    #[arg(long, default_value_t = 250.0)]
-    pub sim_latency_ms: f64,
     #[command(flatten)]
     pub session: SessionOptions,
     /// Report folder: session.xdf (written as the session runs; an existing one is kept and the
     /// new one numbered) and summary.json.
     #[arg(long, value_name = "DIR", default_value = "out/online")]
     pub out: PathBuf,
-}
-
-/// The stimulus panel in a browser: shared by `oddball online` and `oddball task`.
-#[derive(Debug, Clone, clap::Args)]
-pub struct PanelOptions {
-    /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one) and
-    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/`.
-    #[arg(long, value_name = "HOST:PORT")]
-    pub serve: Option<String>,
-    /// Let --serve bind a non-loopback address.
-    #[arg(long)]
-    pub allow_remote: bool,
-    /// Seconds to wait for a page to open the panel before the session starts.
-    #[arg(long, default_value_t = 120.0)]
-    pub wait_page: f64,
-}
-
-impl PanelOptions {
-    /// Starts the panel (when --serve) and waits for a page; prints its address first.
-    pub fn start(&self, config: PanelConfig, clock: Clock) -> Result<Option<PanelServer>> {
-        let Some(addr) = &self.serve else {
-            return Ok(None);
-        };
-        let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
-            .context("starting the panel")?;
-        println!("panel: http://{}/", panel.local_addr());
-        if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
-            bail!(
-                "no page opened the panel at http://{}/ within {} s",
-                panel.local_addr(),
-                self.wait_page
-            );
-        }
-        let stats = panel.stats();
-        println!(
-            "panel page connected: frame {:.2} ms, {}",
-            stats.frame_ms.unwrap_or(f64::NAN),
-            stats.agent.as_deref().unwrap_or("?")
-        );
-        Ok(Some(panel))
-    }
-}
-
-/// What the page needs to draw the panel and the arm for `arm` (targets and planned path in
-/// metres).
-pub fn panel_config(
-    arm: &ArmSim,
-    paradigm: &FourBulbParams,
-    targets_m: Vec<[f64; 2]>,
-    plan_m: Vec<[f64; 2]>,
-    title: String,
-) -> PanelConfig {
-    let board = arm.workspace().board;
-    PanelConfig {
-        bulbs: paradigm
-            .bulbs
-            .iter()
-            .map(|c| (paradigm.code_of(*c), c.name().to_string()))
-            .collect(),
-        flash_ms: paradigm.flash_s * 1e3,
-        countdown_s: paradigm.countdown_s,
-        board_m: [board.x_min_m, board.x_max_m, board.z_min_m, board.z_max_m],
-        base_m: [arm.plant().base()[0], arm.plant().base()[1]],
-        targets_m,
-        plan_m,
-        title,
-    }
 }
 
 #[derive(Debug, Serialize)]
@@ -181,88 +105,39 @@ struct OnlineSummary {
     ended: Option<String>,
 }
 
-fn resolve(addr: &str) -> Result<SocketAddr> {
-    addr.to_socket_addrs()
-        .with_context(|| format!("{addr}: expected HOST:PORT"))?
-        .next()
-        .with_context(|| format!("{addr}: no address"))
-}
-
 pub fn run(args: &OnlineArgs) -> Result<()> {
-    let commands = parse_commands(&args.commands).context("parsing --commands")?;
-    if commands.is_empty() {
-        bail!("--commands is empty: give at least one of up, down, left, right");
-    }
     let (_, rule) = args.session.rules()?;
-    if args.fast && !args.source.starts_with("replay:") {
+    let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
+    if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
     }
     let clock = Clock::new();
-    if let Some(name) = args.source.strip_prefix("lsl:") {
-        #[cfg(feature = "lsl")]
-        {
-            use oddball_live::lsl::StreamQuery;
-            use oddball_live::lsl_live::{LslMarkers, LslSource};
-            let markers = LslMarkers::new(&args.markers, clock)
-                .with_context(|| format!("opening the marker outlet {}", args.markers))?;
-            println!("marker outlet: {}", args.markers);
-            let query: StreamQuery = name.parse()?;
-            let source = LslSource::resolve(&query, 30.0, clock)
-                .with_context(|| format!("--source lsl:{name}"))?;
-            // Markers pushed before anyone listens are lost (the first cue, say).
-            if !markers.wait_for_consumers(10.0) {
-                println!("note: nobody reads the marker stream {} yet", args.markers);
-            }
-            return run_with(
-                args,
-                source,
-                Some(Box::new(markers)),
-                clock,
-                rule,
-                &commands,
-                |_, _| None,
-            );
-        }
-        #[cfg(not(feature = "lsl"))]
-        bail!(
-            "--source lsl:{name}: built without the lsl feature: cargo build --release --features lsl"
-        );
+    let sim = args.session.simulated()?;
+    let (source, markers) = args
+        .source
+        .source
+        .open(args.source.open_options(sim, !args.fast)?, clock)
+        .with_context(|| format!("--source {}", args.source.source))?;
+    match &source {
+        AnySource::Playback(p) => println!(
+            "replaying {}: {} channels, {} Hz, {:.1} s, {} events",
+            args.source.source.to_string().trim_start_matches("replay:"),
+            p.ch_names().len(),
+            p.sfreq(),
+            p.n_times() as f64 / p.sfreq(),
+            p.events().len()
+        ),
+        _ if markers.is_some() => println!("marker outlet: {}", args.source.markers),
+        _ => {}
     }
-    if let Some(file) = args.source.strip_prefix("replay:") {
-        let mut source =
-            PlaybackSource::open(file, clock).with_context(|| format!("--source replay:{file}"))?;
-        if args.fast {
-            source = source.unpaced();
-        }
-        println!(
-            "replaying {file}: {} channels, {} Hz, {:.1} s, {} events",
-            source.ch_names().len(),
-            source.sfreq(),
-            source.n_times() as f64 / source.sfreq(),
-            source.events().len()
-        );
-        return run_with(args, source, None, clock, rule, &commands, coincidence);
-    }
-    if args.source != "sim" {
-        bail!(
-            "--source {}: expected sim, lsl:NAME or replay:FILE",
-            args.source
-        );
-    }
-    let preset = args
-        .session
-        .preset()?
-        .context("--subject replay:… is not a live source")?;
-    let sim = SubjectParams::preset(preset)
-        .with_seed(args.session.seed)
-        .build()
-        .context("building the simulated subject")?;
-    let source = SimSource::new(sim, clock, args.sim_latency_ms);
-    run_with(args, source, None, clock, rule, &commands, |_, _| None)
+    run_with(args, source, markers, clock, rule, &args.commands)
 }
 
 /// How many of this session's flashes fall on a flash of the same bulb in the replayed file.
-fn coincidence(source: &PlaybackSource, flashes: &[ShownFlash]) -> Option<String> {
+fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String> {
+    let AnySource::Playback(source) = source else {
+        return None;
+    };
     // A P300 spans hundreds of ms: a page's few ms of onset jitter do not matter.
     let tolerance = (REPLAY_TOLERANCE_S * source.sfreq()).round().max(1.0) as u64;
     let shown: Vec<(u64, u32)> = flashes.iter().map(|f| (f.onset, f.code)).collect();
@@ -282,19 +157,17 @@ fn coincidence(source: &PlaybackSource, flashes: &[ShownFlash]) -> Option<String
 /// Flashes of a replayed session within this of a flash in the file coincide with it, s.
 const REPLAY_TOLERANCE_S: f64 = 0.010;
 
-fn run_with<S: EegSource>(
+fn run_with(
     args: &OnlineArgs,
-    source: S,
+    source: AnySource,
     markers: Option<Box<dyn oddball_live::live::MarkerSink>>,
     clock: Clock,
     rule: oddball_decode::decision::DecisionRule,
-    commands: &[oddball_arm::Command],
-    review: impl FnOnce(&S, &[ShownFlash]) -> Option<String>,
+    commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = FourBulbParams::paper();
-    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
-    arm.set_recording(true);
+    let arm = recording_arm()?;
     let model = match &args.model {
         Some(path) => {
             let text =
@@ -321,12 +194,12 @@ fn run_with<S: EegSource>(
         &record_path,
         source.ch_names(),
         source.sfreq(),
-        &args.source,
+        &args.source.source.to_string(),
     )
     .with_context(|| format!("creating {}", record_path.display()))?;
     let title = format!(
         "{} · {} · {}",
-        args.source,
+        args.source.source,
         model.as_ref().map_or(args.session.pipeline.clone(), |m| m
             .pipeline
             .name()
@@ -341,22 +214,27 @@ fn run_with<S: EegSource>(
     if let Some(m) = markers {
         subject = subject.with_markers(m);
     }
-    let config = panel_config(&arm, &paradigm, Vec::new(), plan(&arm, commands), title);
+    let plan_m = planned_path(
+        arm.target(),
+        commands.iter().copied(),
+        arm.settings().step_m,
+    )
+    .iter()
+    .map(|p| [p[0], p[1]])
+    .collect();
+    let config = PanelConfig::for_arm(&arm, &paradigm, Vec::new(), plan_m, title);
     if let Some(panel) = args.panel.start(config, clock)? {
         subject = subject.with_panel(panel);
     }
     println!(
         "oddball online: source {}, {} commands, recording {}",
-        args.source,
+        args.source.source,
         commands.len(),
         record_path.display()
     );
     subject.source_mut().start_now();
-    let mut params = SessionParams::paper(&args.session.pipeline);
-    params.seed = args.session.seed;
-    params.rule = rule;
-    params.calibration_per_bulb = args.session.calibration_per_bulb;
-    let mut session = Session::new(params, subject, Some(arm)).context("setting up the session")?;
+    let mut session = Session::new(args.session.params(rule), subject, Some(arm))
+        .context("setting up the session")?;
     match model {
         Some(m) => session.set_model(m).context("using the model")?,
         None => {
@@ -370,54 +248,54 @@ fn run_with<S: EegSource>(
             }
         }
     }
-    let mut rows = Vec::new();
-    let p = session.params().paradigm;
-    let mut ended = None;
-    for (i, &command) in commands.iter().enumerate() {
-        let t = match session.decide(Some(command)) {
-            Ok(t) => t,
-            Err(e) => match recording_ended(&mut session) {
-                Some(end) => {
-                    println!("decision {}: {end}", i + 1);
-                    ended = Some(end);
-                    break;
-                }
-                None => return Err(e).with_context(|| format!("decision {}", i + 1)),
-            },
-        };
-        let decided = t.decided().and_then(|c| p.command_of(c));
-        let row = DecisionRow {
+    let run = run_copy(
+        &mut session,
+        commands,
+        false,
+        1.5,
+        is_recording_end,
+        |i, s| {
+            println!(
+                "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
+                i + 1,
+                s.intended,
+                s.decided.map_or("abstain", |c| c.name()),
+                match s.decided {
+                    Some(d) if d == s.intended => " ✓",
+                    Some(_) => " ✗",
+                    None => "",
+                },
+                s.confidence,
+                s.rounds,
+                s.seconds
+            );
+            if let Some(r) = &s.arm_refusal {
+                println!("  the arm refused: {r}");
+            }
+        },
+    )
+    .context("running the commands")?;
+    let rows: Vec<DecisionRow> = run
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(i, s)| DecisionRow {
             index: i + 1,
-            intended: command.name().to_string(),
-            decided: decided.map(|c| c.name().to_string()),
-            rounds: t.rounds,
-            confidence: t.confidence(),
-            seconds: (t.end - t.start) as f64 / session.sfreq(),
-        };
-        println!(
-            "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
-            row.index,
-            row.intended,
-            row.decided.as_deref().unwrap_or("abstain"),
-            match decided {
-                Some(d) if d == command => " ✓",
-                Some(_) => " ✗",
-                None => "",
-            },
-            row.confidence,
-            row.rounds,
-            row.seconds
-        );
-        if let Some(r) = &t.arm_refusal {
-            println!("  the arm refused: {r}");
+            intended: s.intended.name().to_string(),
+            decided: s.decided.map(|c| c.name().to_string()),
+            rounds: s.rounds,
+            confidence: s.confidence,
+            seconds: s.seconds,
+        })
+        .collect();
+    let ended = run.stopped.map(|(e, deciding)| {
+        // The live source's own words (the recording's end), not the engine's wrapper.
+        let end = LiveError::from_session(&e).map_or_else(|| e.to_string(), |l| l.to_string());
+        if deciding {
+            println!("decision {}: {end}", rows.len() + 1);
         }
-        rows.push(row);
-    }
-    if ended.is_none() {
-        if let Err(e) = session.idle(1.5) {
-            ended = Some(recording_ended(&mut session).ok_or(e)?);
-        }
-    }
+        end
+    });
     let correct = rows
         .iter()
         .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
@@ -426,7 +304,7 @@ fn run_with<S: EegSource>(
     if let Some(r) = session.channel_report() {
         println!("{r}");
     }
-    let replay = review(session.subject().source(), session.flashes());
+    let replay = coincidence(session.subject().source(), session.flashes());
     if let Some(r) = &replay {
         println!("{r}");
     }
@@ -463,7 +341,7 @@ fn run_with<S: EegSource>(
     }
     let (log, _, _) = session.finish();
     let summary = OnlineSummary {
-        source: args.source.clone(),
+        source: args.source.source.to_string(),
         decisions: rows,
         correct,
         abstained,
@@ -488,12 +366,12 @@ fn run_with<S: EegSource>(
     Ok(())
 }
 
-/// The replayed file's end, when that is what stopped the session.
-fn recording_ended<S: EegSource>(session: &mut Session<LiveSubject<S>>) -> Option<LiveError> {
-    match session.subject_mut().take_error() {
-        Some(e @ LiveError::RecordingEnded { .. }) => Some(e),
-        _ => None,
-    }
+/// The replayed file's end: what stops a session cleanly.
+fn is_recording_end(e: &oddball_session::SessionError) -> bool {
+    matches!(
+        LiveError::from_session(e),
+        Some(LiveError::RecordingEnded { .. })
+    )
 }
 
 fn summary_samples(path: &std::path::Path) -> String {
@@ -501,15 +379,4 @@ fn summary_samples(path: &std::path::Path) -> String {
         Ok(r) => r.raw.n_times().to_string(),
         Err(e) => format!("unreadable: {e}"),
     }
-}
-
-/// The pen's planned path for `commands` from where it starts.
-fn plan(arm: &ArmSim, commands: &[oddball_arm::Command]) -> Vec<[f64; 2]> {
-    let mut p = arm.target();
-    let mut out = vec![[p[0], p[1]]];
-    for &c in commands {
-        p = c.apply(&p, arm.settings().step_m);
-        out.push([p[0], p[1]]);
-    }
-    out
 }

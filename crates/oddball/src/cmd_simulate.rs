@@ -15,11 +15,13 @@
 //!   t0 + i / sfreq + latency); markers that come later than that are counted and reported. The
 //!   marker stream is looked for in the background: background EEG flows until it appears.
 
-use std::net::{SocketAddr, TcpListener, TcpStream, ToSocketAddrs};
+use std::net::{SocketAddr, TcpListener};
 
 use anyhow::{bail, Context, Result};
-use oddball_session::nic::{serve_simulated, NicFormat, NicMode, NicSource, NicSubject, Reconnect};
+use oddball_live::nic::serve_simulated;
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
+
+use crate::args::{resolve, NicWire};
 
 /// Options of `oddball simulate`.
 #[derive(Debug, clap::Args)]
@@ -50,62 +52,13 @@ pub struct SimulateArgs {
     pub wire: NicWire,
     /// easy, typical or hard.
     #[arg(long, default_value = "typical")]
-    pub subject: String,
+    pub subject: SubjectPreset,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
 
-/// How NIC's stream is framed: shared by the simulator and the session reading it.
-#[derive(Debug, Clone, clap::Args)]
-pub struct NicWire {
-    /// binary or ascii framing.
-    #[arg(long, default_value = "binary")]
-    pub nic_mode: String,
-    /// EEG channels per sample (the simulated Starstim has 8).
-    #[arg(long, default_value_t = 8)]
-    pub nic_channels: usize,
-    /// The stream carries no trigger column.
-    #[arg(long)]
-    pub nic_no_trigger: bool,
-    /// The stream carries no timestamp (lost samples cannot be counted).
-    #[arg(long)]
-    pub nic_no_timestamp: bool,
-}
-
-impl NicWire {
-    pub fn format(&self) -> Result<NicFormat> {
-        if !(1..=64).contains(&self.nic_channels) {
-            bail!("--nic-channels {}: expected 1..=64", self.nic_channels);
-        }
-        Ok(NicFormat {
-            mode: mode(&self.nic_mode)?,
-            n_channels: self.nic_channels,
-            trigger: !self.nic_no_trigger,
-            timestamp: !self.nic_no_timestamp,
-        })
-    }
-}
-
-pub fn mode(name: &str) -> Result<NicMode> {
-    match name {
-        "binary" => Ok(NicMode::Binary),
-        "ascii" => Ok(NicMode::Ascii),
-        other => bail!("NIC mode {other:?}: expected binary or ascii"),
-    }
-}
-
-fn resolve(addr: &str) -> Result<SocketAddr> {
-    addr.to_socket_addrs()
-        .with_context(|| format!("{addr}: expected HOST:PORT"))?
-        .next()
-        .with_context(|| format!("{addr}: no address"))
-}
-
 pub fn run(args: &SimulateArgs) -> Result<()> {
-    let preset: SubjectPreset = args
-        .subject
-        .parse()
-        .map_err(|e| anyhow::anyhow!("--subject {}: {e}", args.subject))?;
+    let preset = args.subject;
     match (&args.nic, &args.lsl) {
         (Some(nic), None) => run_nic(args, nic, preset),
         (None, Some(name)) => run_lsl(args, name, preset),
@@ -164,7 +117,7 @@ fn run_nic(args: &SimulateArgs, nic: &str, preset: SubjectPreset) -> Result<()> 
     }
     println!(
         "serving NIC {} data on {data_addr}, panel on {}",
-        args.wire.nic_mode,
+        args.wire.nic_mode.name(),
         panel.local_addr()?
     );
     let start_ms = 1_700_000_000_000;
@@ -176,26 +129,6 @@ fn run_nic(args: &SimulateArgs, nic: &str, preset: SubjectPreset) -> Result<()> 
         report.flashes
     );
     Ok(())
-}
-
-/// Connects a session subject to a NIC stream at `addr`, with the simulator's panel port
-/// (PORT + 1) when there is one. Channel names: the simulated montage for 8 channels, else
-/// `Ch1..ChN`.
-pub fn connect_nic(addr: &str, wire: &NicWire, preset: SubjectPreset) -> Result<NicSubject> {
-    let data = resolve(addr)?;
-    let format = wire.format()?;
-    let source = NicSource::connect(data, format, STARSTIM_SFREQ, Reconnect::default())
-        .with_context(|| format!("connecting to the NIC stream at {data}"))?;
-    let panel_addr = SocketAddr::new(data.ip(), data.port().wrapping_add(1));
-    let panel = TcpStream::connect(panel_addr)
-        .with_context(|| format!("connecting to the simulator's panel port {panel_addr}"))?;
-    let ch_names = SubjectParams::preset(preset).ch_names;
-    Ok(NicSubject::new(
-        source,
-        Some(panel),
-        STARSTIM_SFREQ,
-        ch_names,
-    ))
 }
 
 /// The simulated subject as a live LSL amplifier that watches the panel's marker stream.

@@ -6,30 +6,23 @@
 //! (tracking: targets, the path taken and the minimal path), and for simulated subjects the raw
 //! session `session.dat`.
 
-use std::fmt::Write as _;
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
-use oddball_live::live::{LiveSubject, SimSource};
-use oddball_live::panel::Clock;
-use oddball_session::engine::{CalibrationReport, Session};
-use oddball_session::paradigm::FourBulbParams;
-use oddball_session::record::save_session;
-use oddball_session::replay::{stream_epochs, ReplaySource};
-use oddball_session::subject::SubjectParams;
+use oddball_arm::{ArmSim, Vector2};
+use oddball_live::panel::PanelConfig;
+use oddball_live::source::AnySource;
+use oddball_session::engine::CalibrationReport;
+use oddball_session::replay::REPLAY_NOTE;
 use oddball_session::task::{
-    drawing_path, run_drawing, run_tracking, task_targets, DrawReport, Pilot, ReplayPilot, Step,
-    TrackParams, TrackReport,
+    drawing_path, run_drawing, run_tracking, task_targets, DrawReport, Pilot, Step, TrackParams,
 };
-use oddball_session::SessionError;
-use oddball_signal::Epochs;
 use serde::Serialize;
 
-use crate::cmd_demo::{calibrated, calibrated_replay, SessionOptions, REPLAY_NOTE};
-use crate::cmd_online::{panel_config, PanelOptions};
+use crate::args::{PanelOptions, SessionOptions, SourceArgs};
+use crate::pilot::{prepare, write_decisions_csv, AnyPilot, Prepared};
 
 /// Options of `oddball task`.
 #[derive(Debug, clap::Args)]
@@ -61,9 +54,11 @@ pub struct TrackArgs {
     pub tolerance_mm: f64,
     #[command(flatten)]
     pub panel: PanelOptions,
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/track")]
-    pub out: PathBuf,
+    pub out: std::path::PathBuf,
 }
 
 #[derive(Debug, clap::Args)]
@@ -75,54 +70,11 @@ pub struct DrawArgs {
     pub text: String,
     #[command(flatten)]
     pub panel: PanelOptions,
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Report folder.
     #[arg(long, value_name = "DIR", default_value = "out/draw")]
-    pub out: PathBuf,
-}
-
-/// A simulated session (its subject a live source: run unpaced, or paced with the browser
-/// panel after calibration) or a replayed recording, as one pilot.
-#[allow(clippy::large_enum_variant)]
-enum AnyPilot {
-    Sim(Session<LiveSubject<SimSource>>),
-    Replay(ReplayPilot),
-}
-
-impl Pilot for AnyPilot {
-    fn decide(&mut self, intended: Command) -> Result<Option<Step>, SessionError> {
-        match self {
-            AnyPilot::Sim(s) => Pilot::decide(s, intended),
-            AnyPilot::Replay(r) => r.decide(intended),
-        }
-    }
-    fn arm(&self) -> &ArmSim {
-        match self {
-            AnyPilot::Sim(s) => Pilot::arm(s),
-            AnyPilot::Replay(r) => r.arm(),
-        }
-    }
-    fn wait(&mut self, seconds: f64) -> Result<(), SessionError> {
-        match self {
-            AnyPilot::Sim(s) => s.wait(seconds),
-            AnyPilot::Replay(r) => r.wait(seconds),
-        }
-    }
-    fn time_s(&self) -> f64 {
-        match self {
-            AnyPilot::Sim(s) => Pilot::time_s(s),
-            AnyPilot::Replay(r) => r.time_s(),
-        }
-    }
-}
-
-/// The calibrated pilot, its calibration, the calibration epochs and the model (JSON).
-struct Prepared {
-    pilot: AnyPilot,
-    calibration: CalibrationReport,
-    erp: Epochs,
-    model_json: String,
-    subject: String,
-    pen_start: Vector2<f64>,
+    pub out: std::path::PathBuf,
 }
 
 /// What a task shows on the panel: its targets and planned path, metres.
@@ -131,93 +83,63 @@ struct TaskView {
     plan_m: Vec<[f64; 2]>,
 }
 
-fn prepare(
+/// The calibrated pilot of a task; with `--serve`, the panel shows the task and the session
+/// runs in real time in front of it (calibration ran unpaced).
+fn prepare_task(
     opts: &SessionOptions,
+    source: &SourceArgs,
     what: &str,
     panel: &PanelOptions,
     view: impl Fn(&ArmSim) -> Result<TaskView>,
 ) -> Result<Prepared> {
     let (_, rule) = opts.rules()?;
-    let preset = opts.preset()?;
-    if panel.serve.is_some() && preset.is_none() {
-        anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
-    }
-    match (opts.replay_files()?, preset) {
+    match (opts.replay_files()?, opts.preset()) {
         (Some((file, cal)), _) => {
+            if panel.serve.is_some() {
+                anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
+            }
             println!(
                 "oddball task {what}: replaying {} (calibration {}), pipeline {}",
                 file.display(),
                 cal.display(),
                 opts.pipeline
             );
-            let r = calibrated_replay(opts, &file, &cal, rule)?;
-            let source = ReplaySource::new(&r.test, &r.model, &r.params)
-                .with_context(|| format!("replaying {}", file.display()))?;
-            println!(
-                "{} decisions available in the recording",
-                source.remaining()
-            );
-            let mut arm = ArmSim::from_config(&ArmConfig::default())?;
-            arm.set_recording(true);
-            let pen_start = arm.pen();
-            let epochs = stream_epochs(&r.calibration_recording, &r.params.preprocess, 20)?;
-            let erp = crate::cmd_demo::epochs_of(&r.calibration_recording, &epochs)?;
-            Ok(Prepared {
-                pilot: AnyPilot::Replay(ReplayPilot::new(source, arm, FourBulbParams::paper())),
-                calibration: r.calibration,
-                erp,
-                model_json: r.model.to_json(),
-                subject: format!("replay:{}", file.display()),
-                pen_start,
-            })
         }
-        (None, preset) => {
-            let preset = preset.expect("a simulated preset when not replaying");
-            println!(
-                "oddball task {what}: {preset} simulated subject (seed {}), pipeline {}",
-                opts.seed, opts.pipeline
-            );
-            let sim = SubjectParams::preset(preset)
-                .with_seed(opts.seed)
-                .build()
-                .context("building the simulated subject")?;
-            let clock = Clock::new();
-            let subject = LiveSubject::new(
-                SimSource::unpaced(sim, clock),
-                FourBulbParams::paper(),
-                clock,
-            );
-            let (mut session, calibration, pen_start) = calibrated(opts, subject, rule, true)?;
-            let arm = Pilot::arm(&session).clone();
-            let v = view(&arm)?;
-            let config = panel_config(
-                &arm,
-                &session.params().paradigm,
-                v.targets_m,
-                v.plan_m,
-                format!("task {what} · {preset} subject · {}", opts.pipeline),
-            );
-            if let Some(p) = panel.start(config, clock)? {
-                // The task runs in real time in front of the page; calibration ran unpaced.
-                let subject = session.subject_mut();
-                subject.source_mut().pace_from_now(250.0);
-                subject.attach_panel(p);
+        (None, preset) => println!(
+            "oddball task {what}: {} simulated subject (seed {}), pipeline {}",
+            preset.expect("a simulated preset when not replaying"),
+            opts.seed,
+            opts.pipeline
+        ),
+    }
+    let mut prep = prepare(opts, source, rule, false, |_, replay| {
+        println!(
+            "{} decisions available in the recording",
+            replay.remaining()
+        );
+        Ok(())
+    })?;
+    if let AnyPilot::Live(session) = &mut prep.pilot {
+        let arm = Pilot::arm(session).clone();
+        let v = view(&arm)?;
+        let config = PanelConfig::for_arm(
+            &arm,
+            &session.params().paradigm,
+            v.targets_m,
+            v.plan_m,
+            format!("task {what} · {} subject · {}", prep.subject, opts.pipeline),
+        );
+        let clock = session.subject().clock();
+        if let Some(p) = panel.start(config, clock)? {
+            // The task runs in real time in front of the page; calibration ran unpaced.
+            let subject = session.subject_mut();
+            if let AnySource::Sim(sim) = subject.source_mut() {
+                sim.pace_from_now(source.sim_latency_ms);
             }
-            let erp = session.calibration_epochs()?;
-            let model_json = session
-                .model()
-                .map(|m| m.to_json())
-                .context("the session has no model")?;
-            Ok(Prepared {
-                pilot: AnyPilot::Sim(session),
-                calibration,
-                erp,
-                model_json,
-                subject: preset.to_string(),
-                pen_start,
-            })
+            subject.attach_panel(p);
         }
     }
+    Ok(prep)
 }
 
 pub fn run(args: &TaskArgs) -> Result<()> {
@@ -267,7 +189,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         tolerance_m: args.tolerance_mm * 1e-3,
         ..TrackParams::default()
     };
-    let mut prep = prepare(&args.session, "track", &args.panel, |arm| {
+    let mut prep = prepare_task(&args.session, &args.source, "track", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: task_targets(arm, &params)
                 .iter()
@@ -288,7 +210,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         )
         .collect();
     write_common(&args.out, &prep, &report.steps, &expected)?;
-    draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
+    crate::plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
     write_summary(&args.out, "track", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
@@ -296,7 +218,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
 
 fn run_draw(args: &DrawArgs) -> Result<()> {
     let wall = Instant::now();
-    let mut prep = prepare(&args.session, "draw", &args.panel, |arm| {
+    let mut prep = prepare_task(&args.session, &args.source, "draw", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: Vec::new(),
             plan_m: drawing_path(arm, &args.text)?
@@ -326,36 +248,10 @@ fn write_common(
     steps: &[Step],
     expected: &[Vector2<f64>],
 ) -> Result<()> {
-    let mut csv =
-        String::from("decision,intended,decided,abstained,rounds,confidence,seconds,arm_refusal\n");
-    for (i, s) in steps.iter().enumerate() {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{:.6},{:.4},{}",
-            i + 1,
-            s.intended,
-            s.decided.map(|c| c.to_string()).unwrap_or_default(),
-            s.abstained,
-            s.rounds,
-            s.confidence,
-            s.seconds,
-            s.arm_refusal.as_deref().unwrap_or("").replace(',', ";")
-        );
-    }
-    fs::write(out.join("decisions.csv"), csv).context("writing decisions.csv")?;
+    write_decisions_csv(&out.join("decisions.csv"), steps)?;
     fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
-    let (target, nontarget) = crate::cmd_demo::split_targets(&prep.erp);
-    crate::cmd_inspect::draw_erp(
-        &out.join("erp.png"),
-        &target,
-        &nontarget,
-        "calibration epochs, causal 1–15 Hz",
-    )
-    .context("drawing erp.png")?;
-    let arm = prep.pilot.arm();
-    let keys = crate::cmd_arm::configurations_at(arm, &[0.0, arm.time_s()]);
-    crate::cmd_arm::draw(arm, &keys, expected, &out.join("pen_trace.png"))
-        .context("drawing pen_trace.png")
+    crate::plot::task::draw_calibration_erp(&out.join("erp.png"), &prep.erp)?;
+    crate::plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &out.join("pen_trace.png"))
 }
 
 /// summary.json: what ran, the calibration and the task's report.
@@ -390,18 +286,9 @@ fn write_summary<T: Serialize>(
     fs::write(out.join("summary.json"), json + "\n").context("writing summary.json")
 }
 
-/// Saves a simulated session's raw EEG and prints the wall time.
+/// Saves a live session's raw EEG and prints the wall time.
 fn finish(prep: Prepared, out: &Path, wall: Instant) -> Result<()> {
-    if let AnyPilot::Sim(mut session) = prep.pilot {
-        session
-            .subject_mut()
-            .end(&format!("task over: report in {}", out.display()));
-        let paradigm = session.params().paradigm;
-        let (log, _, _) = session.finish();
-        let path = out.join("session.dat");
-        save_session(&path, &log, &paradigm)
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
+    prep.save_session(out, &format!("task over: report in {}", out.display()))?;
     println!("report in {}", out.display());
     eprintln!("wall time {:.2} s", wall.elapsed().as_secs_f64());
     Ok(())
@@ -418,93 +305,4 @@ fn draw_text(r: &DrawReport) -> String {
         r.max_deviation_m * 1e3,
         r.totals
     )
-}
-
-/// Targets (numbered), the pen's path and each target's minimal path (x first, then z).
-fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<()> {
-    let trace: Vec<(f64, f64)> = arm
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
-    let mut xs: Vec<f64> = trace.iter().map(|p| p.0).collect();
-    let mut zs: Vec<f64> = trace.iter().map(|p| p.1).collect();
-    for t in &r.targets {
-        xs.push(t.target_m[0]);
-        zs.push(t.target_m[1]);
-    }
-    let (x0, x1) = bounds(&xs);
-    let (z0, z1) = bounds(&zs);
-    let span = (x1 - x0).max(z1 - z0) * 0.5 + 0.01;
-    let (cx, cz) = ((x0 + x1) / 2.0, (z0 + z1) / 2.0);
-    crate::with_backend!(path, (900, 900), |root| {
-        use plotters::prelude::*;
-        let err = |e: &dyn std::fmt::Debug| anyhow::anyhow!("{e:?}");
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "Tracking: {}/{} targets reached (black: pen, dashed: minimal path)",
-                    r.n_reached, r.n_attempted
-                ),
-                (crate::plot::FONT_FAMILY, 18),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(cx - span..cx + span, cz - span..cz + span)
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc("x (m)")
-            .y_desc("z (m)")
-            .label_style((crate::plot::FONT_FAMILY, 13))
-            .draw()
-            .map_err(|e| err(&e))?;
-        for t in &r.targets {
-            let (a, b) = (t.start_m, t.target_m);
-            let corner = (b[0], a[1]);
-            for seg in [((a[0], a[1]), corner), (corner, (b[0], b[1]))] {
-                chart
-                    .draw_series(DashedLineSeries::new(
-                        vec![seg.0, seg.1],
-                        6,
-                        4,
-                        RGBColor(240, 140, 60).stroke_width(3),
-                    ))
-                    .map_err(|e| err(&e))?;
-            }
-        }
-        chart
-            .draw_series(
-                trace
-                    .windows(2)
-                    .map(|w| PathElement::new(vec![w[0], w[1]], BLACK.stroke_width(2))),
-            )
-            .map_err(|e| err(&e))?;
-        chart
-            .draw_series(r.targets.iter().map(|t| {
-                let colour = if t.success {
-                    RGBColor(30, 140, 60)
-                } else {
-                    RGBColor(200, 30, 30)
-                };
-                EmptyElement::at((t.target_m[0], t.target_m[1]))
-                    + Circle::new((0, 0), 8, colour.stroke_width(3))
-                    + Text::new(
-                        t.index.to_string(),
-                        (10, -20),
-                        (crate::plot::FONT_FAMILY, 16),
-                    )
-            }))
-            .map_err(|e| err(&e))?;
-        Ok(())
-    })
-}
-
-fn bounds(v: &[f64]) -> (f64, f64) {
-    v.iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        })
 }

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod args;
 mod cmd_arm;
 mod cmd_decode;
 mod cmd_demo;
@@ -14,6 +15,7 @@ mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
+mod pilot;
 mod plot;
 
 #[derive(Debug, Parser)]

@@ -97,7 +97,7 @@ fn online_says_what_is_wrong_before_it_starts() {
     assert!(!ok && err.contains("loopback"), "{err}");
     let (ok, _, err) = common::oddball(&["online", "--model", m, "--source", "nope", "--out", o]);
     assert!(
-        !ok && err.contains("expected sim, lsl:NAME or replay:FILE"),
+        !ok && err.contains("expected sim, nic:HOST:PORT, lsl:NAME or replay:FILE"),
         "{err}"
     );
     let (ok, _, err) = common::oddball(&["online", "--source", "sim"]);

@@ -18,7 +18,7 @@ pub mod protocol;
 mod server;
 
 pub use protocol::{ClientMsg, PanelConfig, ProtocolError, ServerMsg, MAX_CLIENT_MESSAGE};
-pub use server::{Clock, DrawnReport, PanelServer, PanelStats};
+pub use server::{DrawnReport, PanelServer, PanelStats};
 
 /// The page, embedded in the binary.
 pub const INDEX_HTML: &str = include_str!("../../assets/index.html");

@@ -1,6 +1,6 @@
 //! The panel's WebSocket messages, JSON with a `"t"` tag.
 //!
-//! Times are milliseconds on the server's session clock ([`crate::panel::Clock`]); the page
+//! Times are milliseconds on the server's session clock ([`crate::clock::Clock`]); the page
 //! keeps its own clock offset from ping/pong pairs and converts both ways. Client messages are
 //! small: anything over [`MAX_CLIENT_MESSAGE`] bytes, not UTF-8, not JSON or of an unknown kind
 //! is rejected with a [`ProtocolError`] naming what was wrong (and counted by the server; the
@@ -27,6 +27,34 @@ pub struct PanelConfig {
     pub plan_m: Vec<[f64; 2]>,
     /// What runs: e.g. "sim typical seed 1, lda".
     pub title: String,
+}
+
+impl PanelConfig {
+    /// What the page needs to draw `paradigm`'s bulbs and `arm` on its board, with the task's
+    /// targets and planned path (metres).
+    pub fn for_arm(
+        arm: &oddball_arm::ArmSim,
+        paradigm: &oddball_session::paradigm::FourBulbParams,
+        targets_m: Vec<[f64; 2]>,
+        plan_m: Vec<[f64; 2]>,
+        title: String,
+    ) -> Self {
+        let board = arm.workspace().board;
+        Self {
+            bulbs: paradigm
+                .bulbs
+                .iter()
+                .map(|c| (paradigm.code_of(*c), c.name().to_string()))
+                .collect(),
+            flash_ms: paradigm.flash_s * 1e3,
+            countdown_s: paradigm.countdown_s,
+            board_m: [board.x_min_m, board.x_max_m, board.z_min_m, board.z_max_m],
+            base_m: [arm.plant().base()[0], arm.plant().base()[1]],
+            targets_m,
+            plan_m,
+            title,
+        }
+    }
 }
 
 /// Server → page.

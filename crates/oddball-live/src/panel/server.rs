@@ -14,34 +14,8 @@ use tokio::sync::{broadcast, watch};
 
 use super::protocol::{parse_client, ClientMsg, PanelConfig, ServerMsg, MAX_CLIENT_MESSAGE};
 use super::{INDEX_HTML, PANEL_JS};
+use crate::clock::Clock;
 use crate::LiveError;
-
-/// The session clock: milliseconds since it was made, monotonic.
-#[derive(Debug, Clone, Copy)]
-pub struct Clock {
-    zero: Instant,
-}
-
-impl Clock {
-    pub fn new() -> Self {
-        Self {
-            zero: Instant::now(),
-        }
-    }
-    pub fn now_ms(&self) -> f64 {
-        self.zero.elapsed().as_secs_f64() * 1e3
-    }
-    /// The instant of clock time `ms`.
-    pub fn instant(&self, ms: f64) -> Instant {
-        self.zero + Duration::from_secs_f64(ms.max(0.0) / 1e3)
-    }
-}
-
-impl Default for Clock {
-    fn default() -> Self {
-        Self::new()
-    }
-}
 
 /// A flash the page drew: its on frame (reported at once) or its off frame, on the server
 /// clock, and when the report arrived.

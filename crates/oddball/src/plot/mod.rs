@@ -1,4 +1,5 @@
-//! Plot helpers shared by the subcommands: an embedded font (no system font libraries needed) and
+//! The pictures of the reports, one file per picture ([`arm`], [`task`]), and what they share:
+//! an embedded font (no system font libraries needed) and
 //! the choice of PNG or SVG by file extension.
 
 use std::path::Path;
@@ -6,7 +7,10 @@ use std::sync::Once;
 
 use anyhow::{bail, Result};
 
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+pub mod arm;
+pub mod task;
+
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
 /// The font family name every plot uses.

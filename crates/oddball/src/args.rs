@@ -1,0 +1,377 @@
+//! Arguments shared by several commands, typed once (clap parses them into library types):
+//! where the EEG comes from ([`SourceArgs`]), who watches the panel and how the session decides
+//! ([`SessionOptions`]), the browser panel ([`PanelOptions`]) and NIC's framing ([`NicWire`]).
+
+use std::net::{SocketAddr, ToSocketAddrs};
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
+use oddball_decode::decision::DecisionRule;
+use oddball_io::nic::{NicFormat, NicMode};
+use oddball_live::clock::Clock;
+use oddball_live::panel::{PanelConfig, PanelServer};
+use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
+use oddball_session::engine::{CalibrationReport, Session, SessionParams, Subject};
+use oddball_session::paradigm::FourBulbParams;
+use oddball_session::replay::{self, ReplayParams};
+use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
+
+/// The letter G of the paper, as `--commands` spells it.
+pub const LETTER_G: &str = "up,left,down,right,up,left";
+
+/// Comma-separated intended commands (up, down, left, right).
+pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
+    let c = oddball_arm::parse_commands(s).map_err(|e| e.to_string())?;
+    if c.is_empty() {
+        return Err("empty: give at least one of up, down, left, right".into());
+    }
+    Ok(c)
+}
+
+/// Who watches the panel.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SubjectSpec {
+    /// A simulated subject: easy, typical or hard.
+    Preset(SubjectPreset),
+    /// A BCI2000 P300-speller recording played back as four-choice decisions.
+    Replay(PathBuf),
+}
+
+impl FromStr for SubjectSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.strip_prefix("replay:") {
+            Some(f) if !f.is_empty() => Ok(Self::Replay(PathBuf::from(f))),
+            Some(_) => Err("replay: needs a file".into()),
+            None => s.parse().map(Self::Preset).map_err(|e| e.to_string()),
+        }
+    }
+}
+
+/// Where the EEG comes from: shared by `demo`, `task` and `online`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SourceArgs {
+    #[arg(long, default_value = "sim", value_name = "SOURCE", help = SOURCE_HELP)]
+    pub source: SourceSpec,
+    #[command(flatten)]
+    pub nic: NicWire,
+    /// Name of the LSL marker outlet (flashes, cues, decisions) with an LSL source.
+    #[arg(long, default_value = "oddball-markers")]
+    pub markers: String,
+    /// Latency of the simulated amplifier, ms: how late its samples arrive (paced `sim`).
+    #[arg(long, default_value_t = 250.0)]
+    pub sim_latency_ms: f64,
+}
+
+impl SourceArgs {
+    /// How to open the source for `subject` (the simulated one, which also names a NIC
+    /// stream's channels).
+    pub fn open_options(
+        &self,
+        subject: oddball_session::SimulatedSubject,
+        paced: bool,
+    ) -> Result<OpenOptions> {
+        Ok(OpenOptions {
+            subject,
+            paced,
+            sim_latency_ms: self.sim_latency_ms,
+            nic: self.nic.format()?,
+            nic_sfreq: STARSTIM_SFREQ,
+            markers: self.markers.clone(),
+        })
+    }
+}
+
+/// Who watches the panel and how the session decides: shared by `demo`, `task` and `online`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SessionOptions {
+    /// Who watches the panel: easy, typical or hard (simulated), or replay:FILE (a BCI2000
+    /// P300-speller recording played back as four-choice decisions).
+    #[arg(long, default_value = "typical")]
+    pub subject: SubjectSpec,
+    /// Calibration recording for a replayed subject [default: the replay file's sibling whose
+    /// name ends in _1 instead of _N, e.g. eeg3_1.dat for eeg3_2.dat].
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<PathBuf>,
+    /// Seed of the simulated subject and the flash orders.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Pace the simulated session in real time instead of as fast as possible.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Stop flashing as soon as one bulb is probable enough (and abstain when none is
+    /// credible).
+    #[arg(long)]
+    pub dynamic_stopping: bool,
+    /// Posterior at which dynamic stopping decides.
+    #[arg(long, default_value_t = 0.95, value_name = "P")]
+    pub threshold: f64,
+    /// Most rounds per decision with dynamic stopping.
+    #[arg(long, default_value_t = 5)]
+    pub max_rounds: usize,
+    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
+    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
+    #[arg(long, default_value = "lda")]
+    pub pipeline: String,
+    /// Calibration decisions per bulb (simulated subjects).
+    #[arg(long, default_value_t = 10)]
+    pub calibration_per_bulb: usize,
+}
+
+impl SessionOptions {
+    /// The fixed rule (5 rounds) and the rule in effect.
+    pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
+        let fixed = DecisionRule::Fixed {
+            rounds: FourBulbParams::paper().n_rounds,
+        };
+        let dynamic = DecisionRule::Dynamic {
+            threshold: self.threshold,
+            min_rounds: 1,
+            max_rounds: self.max_rounds,
+            credible: 0.5,
+            p_no_control: 0.2,
+        };
+        dynamic
+            .validate()
+            .context("checking --threshold/--max-rounds")?;
+        Ok((
+            fixed,
+            if self.dynamic_stopping {
+                dynamic
+            } else {
+                fixed
+            },
+        ))
+    }
+
+    /// The simulated preset (the subject of a `sim` source, and the montage of a NIC stream).
+    pub fn preset(&self) -> Option<SubjectPreset> {
+        match self.subject {
+            SubjectSpec::Preset(p) => Some(p),
+            SubjectSpec::Replay(_) => None,
+        }
+    }
+
+    /// The simulated subject of this seed.
+    pub fn simulated(&self) -> Result<oddball_session::SimulatedSubject> {
+        let preset = self
+            .preset()
+            .context("--subject replay:… is not a live source")?;
+        SubjectParams::preset(preset)
+            .with_seed(self.seed)
+            .build()
+            .context("building the simulated subject")
+    }
+
+    /// The replayed file and its calibration file, for `replay:FILE` subjects.
+    pub fn replay_files(&self) -> Result<Option<(PathBuf, PathBuf)>> {
+        let SubjectSpec::Replay(file) = &self.subject else {
+            return Ok(None);
+        };
+        let cal = match &self.calibration {
+            Some(c) => c.clone(),
+            None => sibling_calibration(file)?,
+        };
+        Ok(Some((file.clone(), cal)))
+    }
+
+    /// The session's settings under `rule`.
+    pub fn params(&self, rule: DecisionRule) -> SessionParams {
+        let mut params = SessionParams::paper(&self.pipeline);
+        params.seed = self.seed;
+        params.rule = rule;
+        params.calibration_per_bulb = self.calibration_per_bulb;
+        params
+    }
+
+    /// A session with any subject, driving a recording arm, calibrated; the pen's start.
+    pub fn calibrated<S: Subject>(
+        &self,
+        subject: S,
+        rule: DecisionRule,
+        verbose: bool,
+    ) -> Result<(Session<S>, CalibrationReport, Vector2<f64>)> {
+        let arm = recording_arm()?;
+        let pen_start = arm.pen();
+        let mut session = Session::new(self.params(rule), subject, Some(arm))
+            .context("setting up the session")?;
+        let calibration = session.calibrate().context("calibrating")?;
+        if verbose {
+            println!(
+                "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
+                calibration.n_trials,
+                calibration.n_epochs,
+                calibration.n_targets,
+                calibration.n_rejected,
+                session.time_s(),
+                calibration.cv_auc,
+                calibration.d_prime
+            );
+        }
+        Ok((session, calibration, pen_start))
+    }
+
+    /// Reads a replayed subject's files and calibrates on the first; prints the calibration.
+    pub fn calibrated_replay(
+        &self,
+        file: &Path,
+        cal_file: &Path,
+        rule: DecisionRule,
+    ) -> Result<Replayed> {
+        let cal = oddball_io::read(cal_file)
+            .with_context(|| format!("reading {}", cal_file.display()))?;
+        let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
+        let mut params = ReplayParams::paper(&self.pipeline);
+        params.seed = self.seed;
+        params.rule = rule;
+        params.rounds_per_decision = rule.max_rounds().max(FourBulbParams::paper().n_rounds);
+        let (model, calibration) = replay::calibrate(&cal, &params)
+            .with_context(|| format!("calibrating on {}", cal_file.display()))?;
+        println!(
+            "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
+            calibration.n_trials,
+            calibration.n_epochs,
+            calibration.n_targets,
+            calibration.n_rejected,
+            cal_file.display(),
+            calibration.cv_auc,
+            calibration.d_prime
+        );
+        Ok(Replayed {
+            calibration_recording: cal,
+            test,
+            model,
+            calibration,
+            params,
+        })
+    }
+}
+
+/// The arm every session drives, recording its trace.
+pub fn recording_arm() -> Result<ArmSim> {
+    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
+    arm.set_recording(true);
+    Ok(arm)
+}
+
+/// A replayed subject: the calibration recording read and trained on, the test recording read.
+#[derive(Debug)]
+pub struct Replayed {
+    pub calibration_recording: oddball_io::Recording,
+    pub test: oddball_io::Recording,
+    pub model: oddball_decode::pipeline::Model,
+    pub calibration: CalibrationReport,
+    pub params: ReplayParams,
+}
+
+/// `eeg3_2.dat` → `eeg3_1.dat` in the same folder, if it exists and differs.
+fn sibling_calibration(file: &Path) -> Result<PathBuf> {
+    let stem = file
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or_default();
+    let ext = file.extension().and_then(|s| s.to_str()).unwrap_or("dat");
+    if let Some((base, n)) = stem.rsplit_once('_') {
+        if n.chars().all(|c| c.is_ascii_digit()) && n != "1" {
+            let cand = file.with_file_name(format!("{base}_1.{ext}"));
+            if cand.exists() {
+                return Ok(cand);
+            }
+        }
+    }
+    bail!(
+        "no calibration recording for {}: give one with --calibration FILE",
+        file.display()
+    )
+}
+
+/// The stimulus panel in a browser: shared by `online` and `task`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PanelOptions {
+    /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one) and
+    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/`.
+    #[arg(long, value_name = "HOST:PORT")]
+    pub serve: Option<String>,
+    /// Let --serve bind a non-loopback address.
+    #[arg(long)]
+    pub allow_remote: bool,
+    /// Seconds to wait for a page to open the panel before the session starts.
+    #[arg(long, default_value_t = 120.0)]
+    pub wait_page: f64,
+}
+
+impl PanelOptions {
+    /// Starts the panel (when --serve) and waits for a page; prints its address first.
+    pub fn start(&self, config: PanelConfig, clock: Clock) -> Result<Option<PanelServer>> {
+        let Some(addr) = &self.serve else {
+            return Ok(None);
+        };
+        let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
+            .context("starting the panel")?;
+        println!("panel: http://{}/", panel.local_addr());
+        if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
+            bail!(
+                "no page opened the panel at http://{}/ within {} s",
+                panel.local_addr(),
+                self.wait_page
+            );
+        }
+        let stats = panel.stats();
+        println!(
+            "panel page connected: frame {:.2} ms, {}",
+            stats.frame_ms.unwrap_or(f64::NAN),
+            stats.agent.as_deref().unwrap_or("?")
+        );
+        Ok(Some(panel))
+    }
+}
+
+/// How NIC's stream is framed: shared by the simulator and the sessions reading it.
+#[derive(Debug, Clone, clap::Args)]
+pub struct NicWire {
+    /// binary or ascii framing.
+    #[arg(long, default_value = "binary", value_parser = nic_mode)]
+    pub nic_mode: NicMode,
+    /// EEG channels per sample (the simulated Starstim has 8).
+    #[arg(long, default_value_t = 8)]
+    pub nic_channels: usize,
+    /// The stream carries no trigger column.
+    #[arg(long)]
+    pub nic_no_trigger: bool,
+    /// The stream carries no timestamp (lost samples cannot be counted).
+    #[arg(long)]
+    pub nic_no_timestamp: bool,
+}
+
+fn nic_mode(name: &str) -> Result<NicMode, String> {
+    match name {
+        "binary" => Ok(NicMode::Binary),
+        "ascii" => Ok(NicMode::Ascii),
+        other => Err(format!("NIC mode {other:?}: expected binary or ascii")),
+    }
+}
+
+impl NicWire {
+    pub fn format(&self) -> Result<NicFormat> {
+        if !(1..=64).contains(&self.nic_channels) {
+            bail!("--nic-channels {}: expected 1..=64", self.nic_channels);
+        }
+        Ok(NicFormat {
+            mode: self.nic_mode,
+            n_channels: self.nic_channels,
+            trigger: !self.nic_no_trigger,
+            timestamp: !self.nic_no_timestamp,
+        })
+    }
+}
+
+/// `HOST:PORT` → its first address.
+pub fn resolve(addr: &str) -> Result<SocketAddr> {
+    addr.to_socket_addrs()
+        .with_context(|| format!("{addr}: expected HOST:PORT"))?
+        .next()
+        .with_context(|| format!("{addr}: no address"))
+}
