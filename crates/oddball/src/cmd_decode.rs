@@ -13,7 +13,6 @@ use oddball_decode::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, Sco
 use oddball_decode::pipeline::{Model, Pipeline, PipelineParams, Preprocess, PRESETS};
 use oddball_decode::tuning::{cv_folds, preset_grid, tune, Folds, TuningReport};
 use oddball_io::Recording;
-use oddball_signal::detrend::{detrend, DetrendKind};
 use oddball_signal::Epochs;
 use serde::Serialize;
 
@@ -82,20 +81,12 @@ pub fn load_epochs(paths: &[PathBuf], pre: &Preprocess) -> Result<(Vec<Recording
     Ok((recs, eps))
 }
 
-/// Offline: remove each channel's mean, zero-phase band-pass. Causal (models trained online):
-/// one forward pass from the first sample, as the streaming filter does. Then epochs, with the
-/// model's peak-to-peak rejection if it has one.
+/// The model's preprocessing ([`Preprocess::params`]: one path for every command): offline,
+/// each channel's mean removed and a zero-phase band-pass; causal (models trained online), one
+/// forward pass from the first sample, as the streaming filter does. Then epochs, with the
+/// model's rejection.
 fn preprocess(rec: &Recording, pre: &Preprocess) -> Result<Epochs> {
-    let mut raw = rec.raw.clone();
-    let filter = pre.band.design(raw.sfreq())?;
-    if pre.causal {
-        let filtered = filter.sosfilt(raw.data().view(), true);
-        raw.data_mut().assign(&filtered);
-    } else {
-        detrend(raw.data_mut(), DetrendKind::Constant);
-        filter.apply_raw(&mut raw)?;
-    }
-    let (epochs, _dropped) = pre.epochs_params().cut(&raw)?;
+    let (epochs, _dropped) = pre.params().epochs(&rec.raw)?;
     Ok(epochs)
 }
 

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use ndarray::Array2;
 use oddball_io::Recording;
-use oddball_signal::detrend::{detrend, DetrendKind};
+use oddball_signal::detrend::DetrendKind;
 use oddball_signal::epochs::EpochsParams;
-use oddball_signal::filter::{Band, SosFilter};
+use oddball_signal::filter::{Band, ButterworthParams};
+use oddball_signal::preprocess::{Filtering, PreprocessParams};
 use oddball_signal::Epochs;
 
 #[derive(Debug, clap::Args)]
@@ -135,7 +136,19 @@ pub fn summary(rec: &Recording) -> String {
 /// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets.
 fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, Epochs)> {
     let first = &recordings[0].raw;
-    let params = EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0);
+    let params = PreprocessParams {
+        band: ButterworthParams {
+            order: 4,
+            band: Band::Bandpass {
+                l_freq: args.l_freq,
+                h_freq: args.h_freq,
+            },
+        },
+        filtering: Filtering::ZeroPhase {
+            detrend: Some(DetrendKind::Linear),
+        },
+        epochs: EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0),
+    };
     let mut target = Vec::new();
     let mut nontarget = Vec::new();
     for rec in recordings {
@@ -147,18 +160,7 @@ fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, E
                 recordings[0].path.display()
             );
         }
-        let mut raw = raw.clone();
-        detrend(raw.data_mut(), DetrendKind::Linear);
-        SosFilter::butter(
-            4,
-            Band::Bandpass {
-                l_freq: args.l_freq,
-                h_freq: args.h_freq,
-            },
-            raw.sfreq(),
-        )?
-        .apply_raw(&mut raw)?;
-        let (epochs, _) = params.cut(&raw)?;
+        let (epochs, _) = params.epochs(raw)?;
         let idx = |want: bool| -> Vec<usize> {
             (0..epochs.n_epochs())
                 .filter(|&i| epochs.events()[i].target == Some(want))
