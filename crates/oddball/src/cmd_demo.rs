@@ -355,7 +355,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     fs::write(args.out.join("model.json"), &run.model_json)
         .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
     let (target, nontarget) = split_targets(&run.erp);
-    crate::cmd_inspect::draw_erp(
+    crate::plot_erp::draw_erp(
         &args.out.join("erp.png"),
         &target,
         &nontarget,

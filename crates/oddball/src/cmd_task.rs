@@ -345,7 +345,7 @@ fn write_common(
     fs::write(out.join("decisions.csv"), csv).context("writing decisions.csv")?;
     fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
     let (target, nontarget) = crate::cmd_demo::split_targets(&prep.erp);
-    crate::cmd_inspect::draw_erp(
+    crate::plot_erp::draw_erp(
         &out.join("erp.png"),
         &target,
         &nontarget,

@@ -14,7 +14,11 @@ mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
+mod load;
 mod plot;
+mod plot_accuracy;
+mod plot_erp;
+mod preset_arg;
 
 #[derive(Debug, Parser)]
 #[command(
