@@ -15,6 +15,7 @@ pub mod decision;
 pub mod emd;
 pub mod ensemble;
 mod error;
+pub mod evaluate;
 pub mod hilbert;
 pub mod knn;
 pub mod lda;

@@ -1120,9 +1120,11 @@ impl Preprocess {
         }
     }
 
-    /// The epoching of this pre-processing: its window and its peak-to-peak rejection.
+    /// The epoching of this pre-processing: its window, its peak-to-peak rejection and the
+    /// flat-channel rejection ([`FLAT_UV`]).
     pub fn epochs_params(&self) -> oddball_signal::epochs::EpochsParams {
-        let mut p = oddball_signal::epochs::EpochsParams::new(self.tmin, self.tmax);
+        let mut p =
+            oddball_signal::epochs::EpochsParams::new(self.tmin, self.tmax).with_flat(FLAT_UV);
         if self.end_exclusive {
             p = p.with_end_exclusive();
         }
@@ -1132,21 +1134,22 @@ impl Preprocess {
         p
     }
 
-    /// Whether an epoch `(n_channels, n_times)` passes the peak-to-peak rejection, holds no NaN
-    /// or infinity, and has no flat channel (peak-to-peak under [`FLAT_UV`]: a disconnected
-    /// electrode).
-    pub fn accepts(&self, epoch: ndarray::ArrayView2<f64>) -> bool {
-        epoch.rows().into_iter().all(|row| {
-            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-            for &v in row {
-                if !v.is_finite() {
-                    return false;
+    /// The whole path from continuous EEG to this model's epochs (one home:
+    /// [`oddball_signal::preprocess`]): offline, each channel's mean removed and the band-pass
+    /// zero-phase; causal, one forward pass from the first sample; then [`Self::epochs_params`].
+    pub fn params(&self) -> oddball_signal::preprocess::PreprocessParams {
+        use oddball_signal::preprocess::{Filtering, PreprocessParams};
+        PreprocessParams {
+            band: self.band,
+            filtering: if self.causal {
+                Filtering::Causal
+            } else {
+                Filtering::ZeroPhase {
+                    detrend: Some(oddball_signal::detrend::DetrendKind::Constant),
                 }
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-            hi - lo >= FLAT_UV && self.reject_peak_to_peak_uv.is_none_or(|t| hi - lo <= t)
-        })
+            },
+            epochs: self.epochs_params(),
+        }
     }
 }
 

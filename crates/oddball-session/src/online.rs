@@ -6,13 +6,19 @@
 //! still buffered. As soon as the last sample of an epoch (`tmax` after its onset) has arrived,
 //! the epoch is handed out. Because [`StreamingFilter`] equals one offline causal pass over the
 //! whole recording, the epochs equal those [`offline_epochs`] cuts from the saved recording, bit
-//! for bit.
+//! for bit; both hold non-finite samples the same way and judge an epoch by the one rejection
+//! rule, [`EpochsParams::channel_fault`] (the offline cut is
+//! [`oddball_signal::preprocess::PreprocessParams::epochs`], the one preprocessing path of
+//! training and evaluation).
 
 use std::collections::VecDeque;
 
 use ndarray::{s, Array2, ArrayView2};
 use oddball_decode::pipeline::Preprocess;
+use oddball_signal::epochs::{ChannelFault, DropReason, EpochsParams};
 use oddball_signal::filter::{StreamInit, StreamingFilter};
+use oddball_signal::preprocess::{hold_non_finite, Filtering, PreprocessParams};
+use oddball_signal::{Event, Raw};
 
 use crate::SessionError;
 
@@ -32,7 +38,8 @@ pub struct ReadyEpoch {
     pub marker: Marker,
     /// Band-passed samples `(n_channels, n_times)`, µV.
     pub data: Array2<f64>,
-    /// Passed the amplitude rejection (and holds no NaN or infinity).
+    /// Passed the rejection rule: no NaN or infinity in its input, no flat channel, none over
+    /// the amplitude threshold.
     pub accepted: bool,
 }
 
@@ -73,7 +80,8 @@ impl std::ops::Index<usize> for ChannelMask {
 #[derive(Debug)]
 pub struct OnlineEpocher {
     filter: StreamingFilter,
-    pre: Preprocess,
+    /// The window and the rejection rule.
+    epochs: EpochsParams,
     /// Epoch window: first sample offset from the onset, and length.
     first: i64,
     n_times: usize,
@@ -102,25 +110,11 @@ pub struct OnlineEpocher {
 impl OnlineEpocher {
     /// An epocher for `n_channels` at `sfreq` Hz with the causal band-pass of `pre`.
     pub fn new(pre: &Preprocess, sfreq: f64, n_channels: usize) -> Result<Self, SessionError> {
-        if !pre.causal {
-            return Err(SessionError::InvalidParameter {
-                name: "preprocess.causal",
-                value: "false".into(),
-                reason: "online epoching filters causally; use Preprocess::online()".into(),
-            });
-        }
-        let filter = pre.band.design(sfreq)?;
-        let (first, n_times) = pre.window(sfreq);
-        if n_times == 0 {
-            return Err(SessionError::InvalidParameter {
-                name: "preprocess.tmax",
-                value: pre.tmax.to_string(),
-                reason: "the epoch window is empty".into(),
-            });
-        }
+        let (params, first, n_times) = causal(pre, sfreq)?;
+        let filter = params.band.design(sfreq)?;
         Ok(Self {
             filter: StreamingFilter::new(filter, n_channels, StreamInit::Steady),
-            pre: *pre,
+            epochs: params.epochs,
             first,
             n_times,
             n_channels,
@@ -232,23 +226,22 @@ impl OnlineEpocher {
             });
         }
         let mut clean = chunk.to_owned();
-        let bad = sanitize(&mut clean, &mut self.hold, &mut self.non_finite);
+        let held = hold_non_finite(clean.view_mut(), &mut self.hold);
         let filtered = self.filter.process(clean.view())?;
         for (b, row) in self.buf.iter_mut().zip(filtered.rows()) {
             b.extend(row.iter());
         }
-        for (t, &b) in bad.iter().enumerate() {
-            let mut mask = ChannelMask::default();
-            if b {
-                for (c, v) in chunk.column(t).iter().enumerate() {
-                    if !v.is_finite() {
-                        mask.0 |= 1 << (c % 128);
-                    }
-                }
+        let at = self.bad.len();
+        self.bad.resize(at + chunk.ncols(), false);
+        self.bad_channel
+            .resize(at + chunk.ncols(), ChannelMask::default());
+        for c in 0..self.n_channels {
+            self.non_finite[c] += held.samples(c).len() as u64;
+            for &t in held.samples(c) {
+                self.bad[at + t] = true;
+                self.bad_channel[at + t].0 |= 1 << (c % 128);
             }
-            self.bad_channel.push(mask);
         }
-        self.bad.extend(bad);
         self.received += chunk.ncols() as u64;
         let mut ready = Vec::new();
         while let Some(m) = self.pending.front() {
@@ -262,11 +255,7 @@ impl OnlineEpocher {
                 data.row_mut(c)
                     .assign(&ndarray::ArrayView1::from(&b[lo..lo + self.n_times]));
             }
-            let held = self.bad[lo..lo + self.n_times].iter().any(|&b| b);
-            let accepted = !held && self.pre.accepts(data.view());
-            if !accepted {
-                self.blame(&data, lo, held);
-            }
+            let accepted = self.judge(&data, lo);
             ready.push(ReadyEpoch {
                 marker: m,
                 data,
@@ -277,26 +266,32 @@ impl OnlineEpocher {
         Ok(ready)
     }
 
-    /// Counts, per channel, why a rejected epoch was rejected.
-    fn blame(&mut self, data: &Array2<f64>, lo: usize, held: bool) {
+    /// The rejection rule on a complete epoch starting at buffer index `lo`; counts, per
+    /// channel, why a rejected epoch was rejected.
+    fn judge(&mut self, data: &Array2<f64>, lo: usize) -> bool {
+        let window = lo..lo + self.n_times;
+        let held = self.bad[window.clone()].iter().any(|&b| b);
+        let mut accepted = true;
         for (c, row) in data.rows().into_iter().enumerate() {
-            let f = &mut self.faults[c];
-            if held && self.bad_channel[lo..lo + self.n_times].iter().any(|b| b[c]) {
-                f.non_finite += 1;
+            let non_finite_at = if held {
+                self.bad_channel[window.clone()].iter().position(|b| b[c])
+            } else {
+                None
+            };
+            let Some(fault) = self.epochs.channel_fault(row, non_finite_at) else {
                 continue;
-            }
-            let (lo_v, hi_v) = row
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
-            let ptp = hi_v - lo_v;
-            if ptp < oddball_decode::pipeline::FLAT_UV {
-                f.flat += 1;
-            } else if self.pre.reject_peak_to_peak_uv.is_some_and(|t| ptp > t) {
-                f.over_threshold += 1;
+            };
+            accepted = false;
+            let f = &mut self.faults[c];
+            match fault {
+                ChannelFault::NonFinite { .. } => f.non_finite += 1,
+                ChannelFault::Flat { .. } => f.flat += 1,
+                ChannelFault::Absolute { .. } | ChannelFault::PeakToPeak { .. } => {
+                    f.over_threshold += 1
+                }
             }
         }
+        accepted
     }
 
     /// Per channel: epochs rejected because of it, by reason.
@@ -322,70 +317,93 @@ impl OnlineEpocher {
     }
 }
 
-/// Replaces non-finite samples with the channel's last finite value (`hold`, updated), counts
-/// them per channel, and returns per sample whether any channel was replaced. A NaN must never
-/// enter the recursive filter: it would poison its state for good.
-pub fn sanitize(data: &mut Array2<f64>, hold: &mut [f64], counts: &mut [u64]) -> Vec<bool> {
-    let mut bad = vec![false; data.ncols()];
-    for (c, mut row) in data.rows_mut().into_iter().enumerate() {
-        for (t, v) in row.iter_mut().enumerate() {
-            if v.is_finite() {
-                hold[c] = *v;
-            } else {
-                *v = hold[c];
-                counts[c] += 1;
-                bad[t] = true;
+/// The causal path of `pre` (what the online epocher streams), its first sample offset and
+/// epoch length at `sfreq`; a zero-phase one or an empty window is refused.
+fn causal(pre: &Preprocess, sfreq: f64) -> Result<(PreprocessParams, i64, usize), SessionError> {
+    let params = pre.params();
+    if params.filtering != Filtering::Causal {
+        return Err(SessionError::InvalidParameter {
+            name: "preprocess.causal",
+            value: "false".into(),
+            reason: "online epoching filters causally; use Preprocess::online()".into(),
+        });
+    }
+    let (first, n_times) = pre.window(sfreq);
+    if n_times == 0 {
+        return Err(SessionError::InvalidParameter {
+            name: "preprocess.tmax",
+            value: pre.tmax.to_string(),
+            reason: "the epoch window is empty".into(),
+        });
+    }
+    params.epochs.validate(sfreq)?;
+    Ok((params, first, n_times))
+}
+
+/// The epochs of `onsets` cut from a whole recording the way [`OnlineEpocher`] cuts them from
+/// the stream: the one offline path ([`PreprocessParams::filter`] then
+/// [`oddball_signal::preprocess::Filtered::cut`]) with `pre`'s causal band-pass. Epochs that do
+/// not fit in the recording are `None`; rejected ones keep their data, `accepted` false.
+pub fn offline_epochs(
+    pre: &Preprocess,
+    raw: &Raw,
+    onsets: &[u64],
+) -> Result<Vec<Option<ReadyEpoch>>, SessionError> {
+    let (params, first, n_times) = causal(pre, raw.sfreq())?;
+    let filtered = params.filter(raw)?;
+    let events: Vec<Event> = onsets.iter().map(|&o| Event::new(o as usize, 0)).collect();
+    let (epochs, log) = filtered.cut(&params.epochs, &events)?;
+    let mut out: Vec<Option<ReadyEpoch>> = Vec::with_capacity(onsets.len());
+    let mut dropped = log.dropped.iter().peekable();
+    let mut kept = 0;
+    for (tag, &onset) in onsets.iter().enumerate() {
+        let marker = Marker {
+            onset,
+            code: 0,
+            tag,
+        };
+        match dropped.next_if(|d| d.index == tag) {
+            Some(d) if matches!(d.reason, DropReason::OutOfBounds { .. }) => out.push(None),
+            Some(_) => {
+                let lo = (onset as i64 + first) as usize;
+                out.push(Some(ReadyEpoch {
+                    marker,
+                    data: filtered
+                        .raw
+                        .data()
+                        .slice(s![.., lo..lo + n_times])
+                        .to_owned(),
+                    accepted: false,
+                }));
+            }
+            None => {
+                out.push(Some(ReadyEpoch {
+                    marker,
+                    data: epochs.epoch(kept).to_owned(),
+                    accepted: true,
+                }));
+                kept += 1;
             }
         }
     }
-    bad
-}
-
-/// The epochs of `onsets` cut from a whole recording `(n_channels, n_times)` the way
-/// [`OnlineEpocher`] cuts them from the stream: one causal pass with the steady state at the
-/// first sample. Epochs that do not fit in the recording are `None`.
-pub fn offline_epochs(
-    pre: &Preprocess,
-    sfreq: f64,
-    data: ArrayView2<f64>,
-    onsets: &[u64],
-) -> Result<Vec<Option<ReadyEpoch>>, SessionError> {
-    let filter = pre.band.design(sfreq)?;
-    let mut clean = data.to_owned();
-    let bad = sanitize(
-        &mut clean,
-        &mut vec![0.0; data.nrows()],
-        &mut vec![0; data.nrows()],
-    );
-    let filtered = filter.sosfilt(clean.view(), true);
-    let (first, n_times) = pre.window(sfreq);
-    Ok(onsets
-        .iter()
-        .enumerate()
-        .map(|(tag, &onset)| {
-            let lo = onset as i64 + first;
-            if lo < 0 || lo as usize + n_times > filtered.ncols() {
-                return None;
-            }
-            let lo = lo as usize;
-            let epoch = filtered.slice(s![.., lo..lo + n_times]).to_owned();
-            Some(ReadyEpoch {
-                marker: Marker {
-                    onset,
-                    code: 0,
-                    tag,
-                },
-                accepted: !bad[lo..lo + n_times].iter().any(|&b| b) && pre.accepts(epoch.view()),
-                data: epoch,
-            })
-        })
-        .collect())
+    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    fn raw(data: &Array2<f64>) -> Raw {
+        let names = (0..data.nrows()).map(|c| format!("E{c}")).collect();
+        Raw::new(
+            data.clone(),
+            100.0,
+            names,
+            oddball_signal::Events::default(),
+        )
+        .unwrap()
+    }
 
     fn signal(n_ch: usize, n: usize) -> Array2<f64> {
         Array2::from_shape_fn((n_ch, n), |(c, t)| {
@@ -423,7 +441,7 @@ mod tests {
                 got.extend(ep.push_samples(data.slice(s![.., at..at + c])).unwrap());
                 at += c;
             }
-            let offline = offline_epochs(&pre, 100.0, data.view(), &sorted).unwrap();
+            let offline = offline_epochs(&pre, &raw(&data), &sorted).unwrap();
             let expected: Vec<_> = offline.into_iter().flatten().collect();
             prop_assert_eq!(got.len(), expected.len());
             for (g, e) in got.iter().zip(&expected) {
@@ -450,7 +468,7 @@ mod tests {
         .unwrap();
         got.extend(ep.push_samples(data.slice(s![.., 10_000..10_001])).unwrap());
         assert_eq!(got.len(), 1);
-        let offline = offline_epochs(&pre, 100.0, data.view(), &[9_900]).unwrap();
+        let offline = offline_epochs(&pre, &raw(&data), &[9_900]).unwrap();
         assert_eq!(got[0].data, offline[0].as_ref().unwrap().data);
         // Long gone: a clear error.
         ep.push_samples(data.slice(s![.., 10_001..])).unwrap();
@@ -491,7 +509,7 @@ mod tests {
         assert!(got.iter().all(|e| e.data.iter().all(|v| v.is_finite())));
         assert_eq!(ep.non_finite, [10, 1]);
         // The offline cut agrees, NaNs and all.
-        let off = offline_epochs(&pre, 100.0, data.view(), &onsets).unwrap();
+        let off = offline_epochs(&pre, &raw(&data), &onsets).unwrap();
         for (g, o) in got.iter().zip(off.iter().flatten()) {
             assert_eq!((&g.data, g.accepted), (&o.data, o.accepted));
         }

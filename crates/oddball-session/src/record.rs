@@ -253,7 +253,7 @@ pub fn reevaluate(
         .iter()
         .flat_map(|t| t.flashes.iter().map(|f| f.onset))
         .collect();
-    let epochs = offline_epochs(&model.preprocess, raw.sfreq(), raw.data().view(), &onsets)?;
+    let epochs = offline_epochs(&model.preprocess, raw, &onsets)?;
     let (first, n_times) = model.preprocess.window(raw.sfreq());
     let mut out = Vec::new();
     let mut i = 0;

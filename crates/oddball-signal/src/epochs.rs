@@ -1,5 +1,9 @@
-//! Cutting epochs around events, baseline correction, amplitude-threshold rejection and the
-//! averaging of repeated stimuli.
+//! Cutting epochs around events, baseline correction, amplitude-threshold and flat-channel
+//! rejection, and the averaging of repeated stimuli.
+//!
+//! The rejection rule ([`EpochsParams::channel_fault`]) is the one rule of the crate: offline cuts
+//! ([`EpochsParams::cut`], [`crate::preprocess::PreprocessParams::epochs`]) and the online epocher
+//! of `oddball-session` both ask it, so they keep and drop the same epochs.
 //!
 //! Sample convention (MNE's): an epoch covers the samples `onset + round(tmin·sfreq)` through
 //! `onset + round(tmax·sfreq)`, both included, so `[0, 0.6]` s at 500 Hz is 301 samples; or, with
@@ -9,9 +13,10 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
-use ndarray::{s, Array2, Array3, Axis};
+use ndarray::{s, Array2, Array3, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
+use crate::preprocess::NonFinite;
 use crate::{Epochs, Event, Raw, SignalError};
 
 /// When an epoch is dropped for its amplitude.
@@ -45,6 +50,11 @@ pub struct EpochsParams {
     pub baseline: Option<(f64, f64)>,
     /// Amplitude rejection, applied after baseline correction.
     pub reject: Option<Reject>,
+    /// A channel whose peak-to-peak amplitude in the epoch is below this many µV is flat (a
+    /// disconnected electrode, or one stuck at a rail) and drops the epoch (MNE's
+    /// `flat=dict(eeg=...)`). Absent in settings saved before it existed: no flat rejection.
+    #[serde(default)]
+    pub flat: Option<f64>,
 }
 
 impl EpochsParams {
@@ -56,6 +66,7 @@ impl EpochsParams {
             end_exclusive: false,
             baseline: None,
             reject: None,
+            flat: None,
         }
     }
 
@@ -78,6 +89,88 @@ impl EpochsParams {
     pub fn with_reject(mut self, reject: Reject) -> Self {
         self.reject = Some(reject);
         self
+    }
+
+    /// Drops epochs with a channel flatter than `flat_uv` peak-to-peak.
+    pub fn with_flat(mut self, flat_uv: f64) -> Self {
+        self.flat = Some(flat_uv);
+        self
+    }
+
+    /// Checks the window for `sfreq` and the thresholds: the first and last sample offsets, as
+    /// [`Self::offsets`].
+    pub fn validate(&self, sfreq: f64) -> Result<(i64, i64), SignalError> {
+        let offsets = self.offsets(sfreq)?;
+        for t in self
+            .reject
+            .map(|r| r.threshold())
+            .into_iter()
+            .chain(self.flat)
+        {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(SignalError::InvalidThreshold { threshold: t });
+            }
+        }
+        Ok(offsets)
+    }
+
+    /// The rejection rule for one channel of an epoch (after baseline correction): why it drops
+    /// the epoch, if it does. In order: a non-finite sample (in `row`, or at `non_finite_at`,
+    /// the first sample of the window where the channel's input was non-finite before it was
+    /// replaced for filtering, see [`crate::preprocess::hold_non_finite`]); a flat channel
+    /// (peak-to-peak under [`Self::flat`]); the amplitude threshold ([`Self::reject`]).
+    pub fn channel_fault(
+        &self,
+        row: ArrayView1<f64>,
+        non_finite_at: Option<usize>,
+    ) -> Option<ChannelFault> {
+        if let Some(sample) = non_finite_at.or_else(|| row.iter().position(|v| !v.is_finite())) {
+            return Some(ChannelFault::NonFinite { sample });
+        }
+        let (lo, hi) = row
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        let ptp = hi - lo;
+        if let Some(threshold) = self.flat {
+            if ptp < threshold {
+                return Some(ChannelFault::Flat {
+                    value: ptp,
+                    threshold,
+                });
+            }
+        }
+        match self.reject {
+            None => None,
+            Some(Reject::Absolute(threshold)) => {
+                let peak = row.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                (peak > threshold).then_some(ChannelFault::Absolute {
+                    value: peak,
+                    threshold,
+                })
+            }
+            Some(Reject::PeakToPeak(threshold)) => {
+                (ptp > threshold).then_some(ChannelFault::PeakToPeak {
+                    value: ptp,
+                    threshold,
+                })
+            }
+        }
+    }
+
+    /// The rejection rule for a whole epoch `(n_channels, n_times)`: the first channel at fault
+    /// and why; `non_finite_at(c)` as in [`Self::channel_fault`].
+    pub fn drop_reason(
+        &self,
+        epoch: ArrayView2<f64>,
+        ch_names: &[String],
+        non_finite_at: impl Fn(usize) -> Option<usize>,
+    ) -> Option<DropReason> {
+        epoch.rows().into_iter().enumerate().find_map(|(c, row)| {
+            self.channel_fault(row, non_finite_at(c))
+                .map(|fault| fault.on_channel(&ch_names[c]))
+        })
     }
 
     /// First and last sample offsets relative to the onset (both included).
@@ -103,22 +196,27 @@ impl EpochsParams {
     }
 
     /// Cuts an epoch for each of `events` (onsets on `raw`'s sample clock). Epochs reaching past
-    /// either end of the recording, holding a non-finite sample, or over the rejection threshold
-    /// are left out and listed in the [`DropLog`].
+    /// either end of the recording, holding a non-finite sample, with a flat channel or over the
+    /// rejection threshold are left out and listed in the [`DropLog`].
     pub fn cut_events(
         &self,
         raw: &Raw,
         events: &[Event],
     ) -> Result<(Epochs, DropLog), SignalError> {
+        self.cut_marked(raw, events, None)
+    }
+
+    /// [`Self::cut_events`] on a recording whose non-finite samples were replaced before
+    /// filtering: an epoch over one of `non_finite` is dropped as if it still held it.
+    pub(crate) fn cut_marked(
+        &self,
+        raw: &Raw,
+        events: &[Event],
+        non_finite: Option<&NonFinite>,
+    ) -> Result<(Epochs, DropLog), SignalError> {
         let sfreq = raw.sfreq();
-        let (first, last) = self.offsets(sfreq)?;
+        let (first, last) = self.validate(sfreq)?;
         let n_times = (last - first + 1) as usize;
-        if let Some(r) = self.reject {
-            let t = r.threshold();
-            if !(t.is_finite() && t > 0.0) {
-                return Err(SignalError::InvalidThreshold { threshold: t });
-            }
-        }
         let baseline = match self.baseline {
             None => None,
             Some((bmin, bmax)) => {
@@ -167,7 +265,10 @@ impl EpochsParams {
                     row.mapv_inplace(|v| v - m);
                 }
             }
-            if let Some(reason) = self.check(&epoch, raw.ch_names()) {
+            let reason = self.drop_reason(epoch.view(), raw.ch_names(), |c| {
+                non_finite.and_then(|m| m.first_in(c, start as usize, n_times))
+            });
+            if let Some(reason) = reason {
                 log.dropped.push(Dropped {
                     index,
                     event: ev.clone(),
@@ -186,44 +287,43 @@ impl EpochsParams {
             log,
         ))
     }
+}
 
-    fn check(&self, epoch: &Array2<f64>, ch_names: &[String]) -> Option<DropReason> {
-        for (c, row) in epoch.rows().into_iter().enumerate() {
-            if let Some(t) = row.iter().position(|v| !v.is_finite()) {
-                return Some(DropReason::NonFinite {
-                    channel: ch_names[c].clone(),
-                    sample: t,
-                });
-            }
-            match self.reject {
-                None => {}
-                Some(Reject::Absolute(threshold)) => {
-                    let peak = row.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-                    if peak > threshold {
-                        return Some(DropReason::Absolute {
-                            channel: ch_names[c].clone(),
-                            value: peak,
-                            threshold,
-                        });
-                    }
-                }
-                Some(Reject::PeakToPeak(threshold)) => {
-                    let (lo, hi) = row
-                        .iter()
-                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                            (lo.min(v), hi.max(v))
-                        });
-                    if hi - lo > threshold {
-                        return Some(DropReason::PeakToPeak {
-                            channel: ch_names[c].clone(),
-                            value: hi - lo,
-                            threshold,
-                        });
-                    }
-                }
-            }
+/// Why one channel drops an epoch (see [`EpochsParams::channel_fault`]); values in µV.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ChannelFault {
+    /// NaN or ±∞ at `sample` (index within the epoch).
+    NonFinite { sample: usize },
+    /// Peak-to-peak under the flat threshold.
+    Flat { value: f64, threshold: f64 },
+    /// Largest |amplitude| over the threshold.
+    Absolute { value: f64, threshold: f64 },
+    /// Peak-to-peak over the threshold.
+    PeakToPeak { value: f64, threshold: f64 },
+}
+
+impl ChannelFault {
+    /// The drop reason naming the channel.
+    pub fn on_channel(self, channel: &str) -> DropReason {
+        let channel = channel.to_string();
+        match self {
+            ChannelFault::NonFinite { sample } => DropReason::NonFinite { channel, sample },
+            ChannelFault::Flat { value, threshold } => DropReason::Flat {
+                channel,
+                value,
+                threshold,
+            },
+            ChannelFault::Absolute { value, threshold } => DropReason::Absolute {
+                channel,
+                value,
+                threshold,
+            },
+            ChannelFault::PeakToPeak { value, threshold } => DropReason::PeakToPeak {
+                channel,
+                value,
+                threshold,
+            },
         }
-        None
     }
 }
 
@@ -246,6 +346,12 @@ pub enum DropReason {
     },
     /// A channel's peak-to-peak amplitude passed the threshold (µV).
     PeakToPeak {
+        channel: String,
+        value: f64,
+        threshold: f64,
+    },
+    /// A channel's peak-to-peak amplitude was under the flat threshold (µV).
+    Flat {
         channel: String,
         value: f64,
         threshold: f64,
@@ -276,6 +382,14 @@ impl fmt::Display for DropReason {
                 value,
                 threshold,
             } => write!(f, "{channel}: peak-to-peak {value:.1} µV > {threshold} µV"),
+            DropReason::Flat {
+                channel,
+                value,
+                threshold,
+            } => write!(
+                f,
+                "{channel}: flat, peak-to-peak {value:.2e} µV < {threshold} µV"
+            ),
         }
     }
 }
@@ -303,7 +417,8 @@ impl DropLog {
         self.dropped.is_empty()
     }
 
-    /// Counts per kind of reason: `out of bounds`, `non-finite`, `absolute`, `peak-to-peak`.
+    /// Counts per kind of reason: `out of bounds`, `non-finite`, `absolute`, `peak-to-peak`,
+    /// `flat`.
     pub fn counts(&self) -> BTreeMap<&'static str, usize> {
         let mut m = BTreeMap::new();
         for d in &self.dropped {
@@ -312,6 +427,7 @@ impl DropLog {
                 DropReason::NonFinite { .. } => "non-finite",
                 DropReason::Absolute { .. } => "absolute",
                 DropReason::PeakToPeak { .. } => "peak-to-peak",
+                DropReason::Flat { .. } => "flat",
             };
             *m.entry(k).or_insert(0) += 1;
         }

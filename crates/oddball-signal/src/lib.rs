@@ -6,7 +6,9 @@
 //!   [`filter::sosfiltfilt`] equal to scipy's with its default padding, and a causal stateful
 //!   [`filter::StreamingFilter`] for online use.
 //! * [`detrend`], [`decimate`], and [`epochs`]: cutting, baseline correction, amplitude-threshold
-//!   rejection and averaging of repetitions.
+//!   and flat-channel rejection and averaging of repetitions.
+//! * [`preprocess`]: the one path from continuous EEG to epochs (held non-finite samples, detrend,
+//!   band-pass, cut, rejection), MNE's `Epochs(raw, events, tmin, tmax, reject, flat)`.
 //!
 //! Everything is `f64`.
 
@@ -15,6 +17,7 @@ pub mod detrend;
 pub mod epochs;
 mod error;
 pub mod filter;
+pub mod preprocess;
 mod types;
 
 pub use error::SignalError;

@@ -114,7 +114,7 @@ pub struct SessionOptions {
     pub max_rounds: usize,
     /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
     /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
-    #[arg(long, default_value = "lda")]
+    #[arg(long, default_value = crate::preset_arg::DEFAULT_PIPELINE, value_parser = crate::preset_arg::parse_preset)]
     pub pipeline: String,
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]

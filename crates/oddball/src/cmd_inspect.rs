@@ -1,20 +1,19 @@
 //! `oddball inspect FILE…`: what a recording holds, and optionally its target vs non-target ERPs.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{bail, Context, Result};
-use ndarray::Array2;
+use anyhow::{bail, Result};
 use oddball_io::Recording;
-use oddball_signal::detrend::{detrend, DetrendKind};
+use oddball_signal::detrend::DetrendKind;
 use oddball_signal::epochs::EpochsParams;
-use oddball_signal::filter::{Band, SosFilter};
+use oddball_signal::filter::{Band, ButterworthParams};
+use oddball_signal::preprocess::{Filtering, PreprocessParams};
 use oddball_signal::Epochs;
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
-    /// Recordings: BCI2000 .dat, CSV (e.g. Muse), EDF/EDF+/BDF.
-    #[arg(required = true)]
+    #[arg(required = true, help = concat!("Recordings: ", crate::load::formats!(), "."))]
     pub files: Vec<PathBuf>,
     /// Draw target vs non-target averages per channel to this .png or .svg (all files pooled;
     /// they must share channels and sampling rate).
@@ -37,14 +36,14 @@ pub struct InspectArgs {
 pub fn run(args: &InspectArgs) -> Result<()> {
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let rec = oddball_io::read(path).with_context(|| format!("reading {}", path.display()))?;
+        let rec = crate::load::read(path)?;
         print!("{}", summary(&rec));
         recordings.push(rec);
     }
     if let Some(plot) = &args.plot {
         let (target, nontarget) = erp_epochs(&recordings, args)?;
         let band = format!("{}–{} Hz", args.l_freq, args.h_freq);
-        draw_erp(plot, &target, &nontarget, &band)?;
+        crate::plot::erp::draw_erp(plot, &target, &nontarget, &band)?;
         println!("wrote {}", plot.display());
     }
     Ok(())
@@ -135,7 +134,19 @@ pub fn summary(rec: &Recording) -> String {
 /// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets.
 fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, Epochs)> {
     let first = &recordings[0].raw;
-    let params = EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0);
+    let params = PreprocessParams {
+        band: ButterworthParams {
+            order: 4,
+            band: Band::Bandpass {
+                l_freq: args.l_freq,
+                h_freq: args.h_freq,
+            },
+        },
+        filtering: Filtering::ZeroPhase {
+            detrend: Some(DetrendKind::Linear),
+        },
+        epochs: EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0),
+    };
     let mut target = Vec::new();
     let mut nontarget = Vec::new();
     for rec in recordings {
@@ -147,18 +158,7 @@ fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, E
                 recordings[0].path.display()
             );
         }
-        let mut raw = raw.clone();
-        detrend(raw.data_mut(), DetrendKind::Linear);
-        SosFilter::butter(
-            4,
-            Band::Bandpass {
-                l_freq: args.l_freq,
-                h_freq: args.h_freq,
-            },
-            raw.sfreq(),
-        )?
-        .apply_raw(&mut raw)?;
-        let (epochs, _) = params.cut(&raw)?;
+        let (epochs, _) = params.epochs(raw)?;
         let idx = |want: bool| -> Vec<usize> {
             (0..epochs.n_epochs())
                 .filter(|&i| epochs.events()[i].target == Some(want))
@@ -177,66 +177,4 @@ fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, E
         );
     }
     Ok((target, nontarget))
-}
-
-/// A grid of per-channel averages: targets red, non-targets blue; `band` names the filter.
-pub fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, band: &str) -> Result<()> {
-    let t_avg: Array2<f64> = target.average().expect("non-empty");
-    let n_avg: Array2<f64> = nontarget.average().expect("non-empty");
-    let times_ms: Vec<f64> = target.times().iter().map(|t| t * 1000.0).collect();
-    let n_channels = target.n_channels();
-    let cols = (n_channels as f64).sqrt().ceil() as usize;
-    let rows = n_channels.div_ceil(cols);
-    let size = ((cols as u32) * 300, (rows as u32) * 220 + 40);
-    let lo = t_avg
-        .iter()
-        .chain(n_avg.iter())
-        .fold(f64::INFINITY, |a, &b| a.min(b));
-    let hi = t_avg
-        .iter()
-        .chain(n_avg.iter())
-        .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-    let pad = 0.05 * (hi - lo).max(1e-6);
-    let (y0, y1) = (lo - pad, hi + pad);
-    let (x0, x1) = (times_ms[0], *times_ms.last().expect("epoch has samples"));
-    crate::with_backend!(path, size, |root| {
-        let title = format!(
-            "target (n={}, red) vs non-target (n={}, blue), {band}, µV",
-            target.n_epochs(),
-            nontarget.n_epochs(),
-        );
-        let root = root
-            .titled(&title, (crate::plot::FONT_FAMILY, 20))
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let panels = root.split_evenly((rows, cols));
-        for (c, panel) in panels.iter().enumerate().take(n_channels) {
-            let mut chart = ChartBuilder::on(panel)
-                .caption(&target.ch_names()[c], (crate::plot::FONT_FAMILY, 16))
-                .margin(6)
-                .x_label_area_size(24)
-                .y_label_area_size(40)
-                .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
-            chart
-                .configure_mesh()
-                .x_labels(5)
-                .y_labels(5)
-                .x_desc("ms")
-                .label_style((crate::plot::FONT_FAMILY, 11))
-                .draw()
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
-            for (avg, color) in [(&n_avg, BLUE), (&t_avg, RED)] {
-                chart
-                    .draw_series(LineSeries::new(
-                        times_ms
-                            .iter()
-                            .zip(avg.row(c).iter())
-                            .map(|(&t, &v)| (t, v)),
-                        color.stroke_width(2),
-                    ))
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
-            }
-        }
-        Ok(())
-    })
 }

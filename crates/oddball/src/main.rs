@@ -16,7 +16,9 @@ mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
 mod pilot;
+mod load;
 mod plot;
+mod preset_arg;
 
 #[derive(Debug, Parser)]
 #[command(

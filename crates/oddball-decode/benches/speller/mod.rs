@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 
 use oddball_decode::pipeline::Preprocess;
-use oddball_signal::detrend::{detrend, DetrendKind};
 use oddball_signal::Epochs;
 
-/// Epochs of `name` (in `bci2000-samplefiles-p300` under `../shared/data` or `ODDBALL_DATA`) after
-/// the constant detrend, `pre`'s band-pass and its window; `None`, said on stderr, without the file.
+/// Epochs of `name` (in `bci2000-samplefiles-p300` under `../shared/data` or `ODDBALL_DATA`) cut
+/// by `pre`'s preprocessing, as `oddball train` cuts them; `None`, said on stderr, without the
+/// file.
 pub fn speller_epochs(name: &str, pre: &Preprocess) -> Option<Epochs> {
     let dir = std::env::var_os("ODDBALL_DATA")
         .map(PathBuf::from)
@@ -23,12 +23,5 @@ pub fn speller_epochs(name: &str, pre: &Preprocess) -> Option<Epochs> {
         return None;
     }
     let rec = oddball_io::read(&path).expect("the speller file reads");
-    let mut raw = rec.raw;
-    detrend(raw.data_mut(), DetrendKind::Constant);
-    pre.band
-        .design(raw.sfreq())
-        .unwrap()
-        .apply_raw(&mut raw)
-        .unwrap();
-    Some(pre.epochs_params().cut(&raw).unwrap().0)
+    Some(pre.params().epochs(&rec.raw).unwrap().0)
 }

@@ -7,7 +7,9 @@ use std::sync::Once;
 
 use anyhow::{bail, Result};
 
+pub mod accuracy;
 pub mod arm;
+pub mod erp;
 pub mod task;
 
 static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");

@@ -16,7 +16,7 @@ pub fn draw_calibration_erp(path: &Path, erp: &Epochs) -> Result<()> {
             .collect()
     };
     let (target, nontarget) = (erp.select(&idx(true)), erp.select(&idx(false)));
-    crate::cmd_inspect::draw_erp(
+    crate::plot::erp::draw_erp(
         path,
         &target,
         &nontarget,

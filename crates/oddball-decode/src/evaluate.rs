@@ -1,0 +1,652 @@
+//! Scoring pipelines on epoched recordings: held-out test recordings, k-fold cross-validation
+//! (with the hyper-parameter search nested in each fold), and speller character accuracy by
+//! repetitions with the Wolpaw ITR — never letting test data into any fitted step, nor into the
+//! choice of hyper-parameters ([`crate::tuning`] sees the training epochs only).
+//!
+//! The input is [`EpochedRecording`]s (the epochs of one recording each, cut by
+//! `oddball_signal::preprocess`); [`evaluate`] runs a list of presets, [`train`] fits one.
+//! Both report what they do through a [`Progress`] callback (fits made, tuning tables, each
+//! preset's [`PipelineResult`]) and print nothing.
+
+use std::time::Instant;
+
+use ndarray::Array1;
+use oddball_io::Speller;
+use oddball_signal::{Epochs, Events, SignalError};
+use serde::Serialize;
+
+use crate::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash};
+use crate::pipeline::{Pipeline, PipelineParams};
+use crate::tuning::{cv_folds, preset_grid, tune, Folds, TuningReport};
+use crate::DecodeError;
+
+/// Why an evaluation could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum EvaluateError {
+    /// An epoch's event carries no target flag, so it cannot be scored.
+    #[error("epoch {index} (code {code}) has no target flag")]
+    Unlabelled { index: usize, code: u32 },
+    /// A speller recording lost epochs: its characters' flashes would shift.
+    #[error("{recording}: {dropped} of {n_events} flashes could not be epoched, so its characters cannot be scored")]
+    DroppedFlashes {
+        recording: String,
+        dropped: usize,
+        n_events: usize,
+    },
+    /// The hyper-parameter search of a preset failed (`fold`: 1-based outer fold).
+    #[error("tuning {preset}{}", .fold.map(|f| format!(" in fold {f}")).unwrap_or_default())]
+    Tuning {
+        preset: String,
+        fold: Option<usize>,
+        #[source]
+        source: DecodeError,
+    },
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+    #[error(transparent)]
+    Signal(#[from] SignalError),
+}
+
+type Result<T> = std::result::Result<T, EvaluateError>;
+
+/// The epochs of one recording, as evaluation sees them.
+#[derive(Debug, Clone)]
+pub struct EpochedRecording {
+    /// Names the recording in errors (e.g. its path).
+    pub name: String,
+    pub epochs: Epochs,
+    /// The speller layout of a P300-speller recording.
+    pub speller: Option<Speller>,
+    /// Events the recording holds (more than `epochs` when some could not be epoched).
+    pub n_events: usize,
+}
+
+/// What an evaluation or a training run is doing, for a progress display.
+#[derive(Debug, Clone, Copy)]
+pub enum Progress<'a> {
+    /// Before anything: every fit the run will make, and the folds of the cross-validation
+    /// (when there are no test recordings).
+    Plan {
+        fits: usize,
+        cross_validation: Option<&'a Folds>,
+    },
+    /// A preset starts.
+    Preset(&'a str),
+    /// One pipeline was fitted.
+    Fit,
+    /// A preset's hyper-parameters were chosen; `fold` is (1-based outer fold, number of outer
+    /// folds) when the search ran inside a cross-validation fold.
+    Tuned {
+        preset: &'a str,
+        fold: Option<(usize, usize)>,
+        report: &'a TuningReport,
+    },
+    /// A preset's result.
+    Scored(&'a PipelineResult),
+}
+
+/// One preset's scores.
+#[derive(Debug, Clone, Serialize)]
+pub struct PipelineResult {
+    pub pipeline: String,
+    /// Epoch ROC-AUC on the test data (mean over folds under cross-validation).
+    pub auc: f64,
+    pub auc_folds: Vec<f64>,
+    /// Speller character accuracy for 1..N repetitions (test files that are spellers; pooled
+    /// over the characters of all of them).
+    pub speller_accuracy: Option<Vec<f64>>,
+    /// Cells of the speller matrix (chance accuracy is one over this).
+    pub speller_choices: Option<usize>,
+    /// Characters picked with all repetitions.
+    pub speller_text: Option<String>,
+    /// Fewest repetitions from which every character stays right with every further repetition
+    /// (a curve that reaches 100 % and drops again counts from after its last drop), if any.
+    pub reps_for_all_correct: Option<usize>,
+    pub itr_at_best: Option<Itr>,
+    pub fit_s: f64,
+    pub score_epochs_per_s: f64,
+    /// `--tune` with test files: the settings chosen on the training files.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tuning: Option<TuningReport>,
+    /// `--tune` under cross-validation: the settings chosen inside each outer fold.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tuning_per_fold: Option<Vec<TuningReport>>,
+}
+
+/// Settings of an evaluation.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EvaluateParams {
+    /// Preset names ([`crate::pipeline::PRESETS`]), scored in this order.
+    pub presets: Vec<String>,
+    /// Folds of the cross-validation (without test recordings) and of the tuning.
+    pub folds: usize,
+    /// Choose each preset's hyper-parameters by cross-validation on the training data only.
+    pub tune: bool,
+}
+
+/// The target flag of every epoch.
+pub fn labels(epochs: &Epochs) -> Result<Vec<bool>> {
+    epochs
+        .events()
+        .iter()
+        .enumerate()
+        .map(|(index, e)| {
+            e.target.ok_or(EvaluateError::Unlabelled {
+                index,
+                code: e.code,
+            })
+        })
+        .collect()
+}
+
+/// The speller character of every epoch (numbered across recordings), so that cross-validation
+/// keeps a character's overlapping flashes in one fold; `None` unless every recording is a
+/// speller whose flashes were all epoched and there are at least two characters.
+pub fn character_groups(recs: &[EpochedRecording]) -> Option<Vec<usize>> {
+    let mut groups = Vec::new();
+    let mut next = 0;
+    for rec in recs {
+        let speller = rec.speller.as_ref()?;
+        if rec.epochs.n_epochs() != rec.n_events {
+            return None;
+        }
+        let events = Events::new(rec.epochs.events().to_vec());
+        for block in speller.character_blocks(&events) {
+            groups.extend(std::iter::repeat_n(next, block.len()));
+            next += 1;
+        }
+    }
+    (next >= 2 && groups.len() == recs.iter().map(|r| r.epochs.n_epochs()).sum::<usize>())
+        .then_some(groups)
+}
+
+/// The recordings' epochs as one set, their labels and speller characters.
+fn pooled(recs: &[EpochedRecording]) -> Result<(Epochs, Vec<bool>, Option<Vec<usize>>)> {
+    let parts: Vec<Epochs> = recs.iter().map(|r| r.epochs.clone()).collect();
+    let epochs = Epochs::concatenate(&parts)?;
+    let y = labels(&epochs)?;
+    Ok((epochs, y, character_groups(recs)))
+}
+
+/// A fitted pipeline and how it was made.
+#[derive(Debug, Clone)]
+pub struct Trained {
+    pub pipeline: Pipeline,
+    /// With tuning: the choice and every candidate's cross-validated AUC.
+    pub tuning: Option<TuningReport>,
+    pub fit_s: f64,
+    pub n_epochs: usize,
+    pub n_targets: usize,
+    pub sfreq: f64,
+}
+
+/// Fits `preset` on all epochs of `recs`; with `tune_folds`, its hyper-parameters are first
+/// chosen by that many folds of cross-validation (speller characters kept whole).
+pub fn train(
+    preset: &str,
+    recs: &[EpochedRecording],
+    tune_folds: Option<usize>,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Trained> {
+    let (epochs, y, groups) = pooled(recs)?;
+    let (params, tuning) = match tune_folds {
+        Some(k) => {
+            let grid = preset_grid(preset, epochs.sfreq())?;
+            let folds = cv_folds(&y, groups.as_deref(), k)?;
+            on(Progress::Plan {
+                fits: grid.len() * folds.n_folds(),
+                cross_validation: None,
+            });
+            let (params, report) = tune(
+                &grid,
+                epochs.data().view(),
+                &y,
+                groups.as_deref(),
+                k,
+                &mut || on(Progress::Fit),
+            )
+            .map_err(|source| EvaluateError::Tuning {
+                preset: preset.to_string(),
+                fold: None,
+                source,
+            })?;
+            on(Progress::Tuned {
+                preset,
+                fold: None,
+                report: &report,
+            });
+            (params, Some(report))
+        }
+        None => (PipelineParams::preset(preset, epochs.sfreq())?, None),
+    };
+    let t0 = Instant::now();
+    let pipeline = params.fit_grouped(epochs.data().view(), &y, groups.as_deref())?;
+    let fit_s = t0.elapsed().as_secs_f64();
+    Ok(Trained {
+        pipeline,
+        tuning,
+        fit_s,
+        n_epochs: epochs.n_epochs(),
+        n_targets: y.iter().filter(|&&t| t).count(),
+        sfreq: epochs.sfreq(),
+    })
+}
+
+/// Scores every preset of `params`: fitted on `train` and scored on `test`, or by k-fold
+/// cross-validation on `train` when `test` is empty.
+pub fn evaluate(
+    params: &EvaluateParams,
+    train: &[EpochedRecording],
+    test: &[EpochedRecording],
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Vec<PipelineResult>> {
+    let (train_epochs, ytr, groups) = pooled(train)?;
+    let grids = params
+        .presets
+        .iter()
+        .map(|n| {
+            if params.tune {
+                preset_grid(n, train_epochs.sfreq()).map(|g| g.len())
+            } else {
+                PipelineParams::preset(n, train_epochs.sfreq()).map(|_| 0)
+            }
+        })
+        .collect::<std::result::Result<Vec<usize>, _>>()?;
+    let outer = if test.is_empty() {
+        Some(cv_folds(&ytr, groups.as_deref(), params.folds)?)
+    } else {
+        None
+    };
+    // Every fit the run will make.
+    let fits_per_grid_point: usize = match &outer {
+        None if params.tune => cv_folds(&ytr, groups.as_deref(), params.folds)?.n_folds(),
+        None => 0,
+        Some(f) if params.tune => (0..f.n_folds())
+            .map(|k| {
+                let (tr, _) = f.split(k);
+                let y: Vec<bool> = tr.iter().map(|&i| ytr[i]).collect();
+                let g: Option<Vec<usize>> =
+                    groups.as_ref().map(|g| tr.iter().map(|&i| g[i]).collect());
+                cv_folds(&y, g.as_deref(), params.folds).map(|f| f.n_folds())
+            })
+            .sum::<std::result::Result<usize, _>>()?,
+        Some(_) => 0,
+    };
+    let final_fits = outer.as_ref().map_or(1, Folds::n_folds);
+    on(Progress::Plan {
+        fits: grids
+            .iter()
+            .map(|&g| g * fits_per_grid_point + final_fits)
+            .sum(),
+        cross_validation: outer.as_ref(),
+    });
+    let mut results = Vec::new();
+    for name in &params.presets {
+        on(Progress::Preset(name));
+        let r = match &outer {
+            Some(folds) => cross_validate(
+                name,
+                &train_epochs,
+                &ytr,
+                groups.as_deref(),
+                folds,
+                params.tune.then_some(params.folds),
+                on,
+            )?,
+            None => {
+                let (p, tuning) = if params.tune {
+                    let grid = preset_grid(name, train_epochs.sfreq())?;
+                    let (p, report) = tune(
+                        &grid,
+                        train_epochs.data().view(),
+                        &ytr,
+                        groups.as_deref(),
+                        params.folds,
+                        &mut || on(Progress::Fit),
+                    )
+                    .map_err(|source| EvaluateError::Tuning {
+                        preset: name.clone(),
+                        fold: None,
+                        source,
+                    })?;
+                    on(Progress::Tuned {
+                        preset: name,
+                        fold: None,
+                        report: &report,
+                    });
+                    (p, Some(report))
+                } else {
+                    (PipelineParams::preset(name, train_epochs.sfreq())?, None)
+                };
+                let mut r = held_out(&p, &train_epochs, &ytr, groups.as_deref(), test)?;
+                on(Progress::Fit);
+                r.tuning = tuning;
+                r
+            }
+        };
+        on(Progress::Scored(&r));
+        results.push(r);
+    }
+    Ok(results)
+}
+
+/// Fits `params` on the training epochs and scores the test recordings.
+pub fn held_out(
+    params: &PipelineParams,
+    train: &Epochs,
+    ytr: &[bool],
+    groups: Option<&[usize]>,
+    test: &[EpochedRecording],
+) -> Result<PipelineResult> {
+    let t0 = Instant::now();
+    let model = params.fit_grouped(train.data().view(), ytr, groups)?;
+    let fit_s = t0.elapsed().as_secs_f64();
+    score_test(&model, fit_s, test)
+}
+
+/// One speller recording's scores.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpellerScores {
+    /// Character accuracy for 1..N repetitions.
+    pub accuracy: Vec<f64>,
+    /// The characters picked with all repetitions.
+    pub text: String,
+    pub n_chars: usize,
+    /// Cells of the matrix.
+    pub n_choices: usize,
+    /// Seconds of one repetition (every row and column flashed once).
+    pub seconds_per_repetition: f64,
+}
+
+/// Character accuracy by repetitions of a speller recording from its epochs' `scores`; every
+/// flash must have been epoched.
+pub fn score_speller(
+    rec: &EpochedRecording,
+    speller: &Speller,
+    scores: &Array1<f64>,
+) -> Result<SpellerScores> {
+    let ep = &rec.epochs;
+    // Characters are consecutive runs of flashes; a dropped epoch would shift every
+    // later character onto the wrong flashes.
+    if ep.n_epochs() != rec.n_events {
+        return Err(EvaluateError::DroppedFlashes {
+            recording: rec.name.clone(),
+            dropped: rec.n_events - ep.n_epochs(),
+            n_events: rec.n_events,
+        });
+    }
+    let events = Events::new(ep.events().to_vec());
+    let flashes: Vec<ScoredFlash> = ep
+        .events()
+        .iter()
+        .zip(scores.iter())
+        .map(|(e, &score)| ScoredFlash {
+            code: e.code,
+            target: e.target == Some(true),
+            score,
+        })
+        .collect();
+    // Character blocks are consecutive runs of epochs: cut the flashes the same way.
+    let mut rest = flashes.as_slice();
+    let blocks: Vec<Vec<ScoredFlash>> = speller
+        .character_blocks(&events)
+        .iter()
+        .map(|b| {
+            let (head, tail) = rest.split_at(b.len());
+            rest = tail;
+            head.to_vec()
+        })
+        .collect();
+    let rows: Vec<u32> = (0..speller.n_rows())
+        .map(|r| speller.code_of_row(r))
+        .collect();
+    let cols: Vec<u32> = (0..speller.n_cols())
+        .map(|c| speller.code_of_col(c))
+        .collect();
+    let max_reps = blocks.iter().map(|b| b.len()).min().unwrap_or(0) / (rows.len() + cols.len());
+    let (accuracy, picks) = speller_accuracy_by_repetitions(&blocks, &rows, &cols, max_reps)?;
+    let text: String = picks
+        .iter()
+        .map(|&(r, c)| {
+            speller
+                .row_of_code(r)
+                .zip(speller.col_of_code(c))
+                .and_then(|(r, c)| speller.symbol(r, c))
+                .unwrap_or("?")
+                .to_string()
+        })
+        .collect();
+    // Seconds per selection from the recorded flash rate: r repetitions of all codes.
+    let onsets: Vec<usize> = ep.events().iter().map(|e| e.onset).collect();
+    let mut gaps: Vec<usize> = onsets.windows(2).map(|w| w[1] - w[0]).collect();
+    gaps.sort_unstable();
+    let soa = gaps.get(gaps.len() / 2).copied().unwrap_or(0) as f64 / ep.sfreq();
+    Ok(SpellerScores {
+        accuracy,
+        text,
+        n_chars: blocks.len(),
+        n_choices: rows.len() * cols.len(),
+        seconds_per_repetition: (rows.len() + cols.len()) as f64 * soa,
+    })
+}
+
+/// Scores the test recordings with a fitted pipeline (`fit_s`: how long its fit took): the
+/// epoch AUC over all of them, and for speller recordings the character accuracy by
+/// repetitions pooled over their characters, the spelled text and the best ITR.
+pub fn score_test(
+    model: &Pipeline,
+    fit_s: f64,
+    test: &[EpochedRecording],
+) -> Result<PipelineResult> {
+    let mut all_scores = Vec::new();
+    let mut all_y = Vec::new();
+    let mut score_s = 0.0;
+    let mut spellers = Vec::new();
+    for rec in test {
+        let ep = &rec.epochs;
+        let t1 = Instant::now();
+        let scores: Array1<f64> = model.decision_function(ep.data().view())?;
+        score_s += t1.elapsed().as_secs_f64();
+        let y = labels(ep)?;
+        if let Some(speller) = &rec.speller {
+            spellers.push(score_speller(rec, speller, &scores)?);
+        }
+        all_scores.extend(scores.iter().copied());
+        all_y.extend(y);
+    }
+    let auc = roc_auc(&all_scores, &all_y)?;
+    // Speller files pooled: accuracy over all their characters, up to the fewest repetitions.
+    let mut result = PipelineResult {
+        pipeline: model.name().to_string(),
+        auc,
+        auc_folds: vec![auc],
+        speller_accuracy: None,
+        speller_choices: None,
+        speller_text: None,
+        reps_for_all_correct: None,
+        itr_at_best: None,
+        fit_s,
+        score_epochs_per_s: all_scores.len() as f64 / score_s.max(1e-12),
+        tuning: None,
+        tuning_per_fold: None,
+    };
+    if let Some(first) = spellers.first() {
+        let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
+        let reps = spellers.iter().map(|s| s.accuracy.len()).min().unwrap_or(0);
+        let acc: Vec<f64> = (0..reps)
+            .map(|r| {
+                spellers
+                    .iter()
+                    .map(|s| s.accuracy[r] * s.n_chars as f64)
+                    .sum::<f64>()
+                    / n_chars.max(1) as f64
+            })
+            .collect();
+        let per_rep = spellers
+            .iter()
+            .map(|s| s.seconds_per_repetition * s.n_chars as f64)
+            .sum::<f64>()
+            / n_chars.max(1) as f64;
+        result.itr_at_best = acc
+            .iter()
+            .enumerate()
+            .map(|(i, &a)| Itr::new(first.n_choices, a, (i + 1) as f64 * per_rep))
+            .max_by(|a, b| a.bits_per_minute.total_cmp(&b.bits_per_minute));
+        result.reps_for_all_correct = reps_from_which_all_correct(&acc);
+        result.speller_choices = Some(first.n_choices);
+        result.speller_text = Some(spellers.iter().map(|s| s.text.as_str()).collect());
+        result.speller_accuracy = Some(acc);
+    }
+    Ok(result)
+}
+
+/// The first repetition count (1-based) from which the accuracy stays at 100 % up to the last
+/// repetition scored, if the last is 100 %.
+pub fn reps_from_which_all_correct(acc: &[f64]) -> Option<usize> {
+    match acc.iter().rposition(|&a| a < 1.0) {
+        None => (!acc.is_empty()).then_some(1),
+        Some(i) => (i + 1 < acc.len()).then_some(i + 2),
+    }
+}
+
+/// k-fold cross-validation of `name` on `data` with `folds` (speller characters kept whole, or
+/// stratified by label). With `tune_folds`, the grid search runs inside each fold's training
+/// part with that many inner folds.
+pub fn cross_validate(
+    name: &str,
+    data: &Epochs,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    folds: &Folds,
+    tune_folds: Option<usize>,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<PipelineResult> {
+    let mut aucs = Vec::new();
+    let mut fit_s = 0.0;
+    let mut score_s = 0.0;
+    let mut n_scored = 0;
+    let mut reports = Vec::new();
+    for f in 0..folds.n_folds() {
+        let (tr, te) = folds.split(f);
+        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+        let yte: Vec<bool> = te.iter().map(|&i| y[i]).collect();
+        let train = data.select(&tr);
+        let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
+        let params = match tune_folds {
+            Some(k) => {
+                let grid = preset_grid(name, data.sfreq())?;
+                let (params, report) = tune(
+                    &grid,
+                    train.data().view(),
+                    &ytr,
+                    gtr.as_deref(),
+                    k,
+                    &mut || on(Progress::Fit),
+                )
+                .map_err(|source| EvaluateError::Tuning {
+                    preset: name.to_string(),
+                    fold: Some(f + 1),
+                    source,
+                })?;
+                on(Progress::Tuned {
+                    preset: name,
+                    fold: Some((f + 1, folds.n_folds())),
+                    report: &report,
+                });
+                reports.push(report);
+                params
+            }
+            None => PipelineParams::preset(name, data.sfreq())?,
+        };
+        let t0 = Instant::now();
+        let model = params.fit_grouped(train.data().view(), &ytr, gtr.as_deref())?;
+        fit_s += t0.elapsed().as_secs_f64();
+        on(Progress::Fit);
+        let t1 = Instant::now();
+        let s = model.decision_function(data.select(&te).data().view())?;
+        score_s += t1.elapsed().as_secs_f64();
+        n_scored += te.len();
+        aucs.push(roc_auc(&s.to_vec(), &yte)?);
+    }
+    Ok(PipelineResult {
+        pipeline: name.to_string(),
+        auc: aucs.iter().sum::<f64>() / aucs.len() as f64,
+        auc_folds: aucs,
+        speller_accuracy: None,
+        speller_choices: None,
+        speller_text: None,
+        reps_for_all_correct: None,
+        itr_at_best: None,
+        fit_s: fit_s / folds.n_folds() as f64,
+        score_epochs_per_s: n_scored as f64 / score_s.max(1e-12),
+        tuning: None,
+        tuning_per_fold: tune_folds.is_some().then_some(reports),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use oddball_signal::Event;
+
+    #[test]
+    fn repetitions_count_from_the_last_miss() {
+        let reps = reps_from_which_all_correct;
+        assert_eq!(reps(&[0.5, 1.0, 1.0]), Some(2));
+        assert_eq!(reps(&[1.0, 1.0]), Some(1));
+        // reached at 2, lost at 3 and 4: all right only from 5 on
+        assert_eq!(reps(&[0.0, 1.0, 0.5, 0.5, 1.0, 1.0]), Some(5));
+        assert_eq!(reps(&[1.0, 0.75]), None);
+        assert_eq!(reps(&[]), None);
+    }
+
+    fn epochs(targets: &[Option<bool>]) -> Epochs {
+        let n = targets.len();
+        let events = targets
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Event {
+                target: t,
+                ..Event::new(i * 10, 1)
+            })
+            .collect();
+        Epochs::new(
+            ndarray::Array3::zeros((n, 1, 4)),
+            64.0,
+            0.0,
+            vec!["Cz".into()],
+            events,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn unlabelled_epochs_and_dropped_speller_flashes_are_named() {
+        assert_eq!(
+            labels(&epochs(&[Some(true), Some(false)])).unwrap(),
+            [true, false]
+        );
+        let err = labels(&epochs(&[Some(true), None])).unwrap_err();
+        assert_eq!(err.to_string(), "epoch 1 (code 1) has no target flag");
+        let speller = Speller::from_rows(&["AB", "CD"]).unwrap();
+        let rec = EpochedRecording {
+            name: "x.dat".into(),
+            epochs: epochs(&[Some(true), Some(false)]),
+            speller: Some(speller.clone()),
+            n_events: 3,
+        };
+        let err = score_speller(&rec, &speller, &Array1::zeros(2)).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                EvaluateError::DroppedFlashes {
+                    dropped: 1,
+                    n_events: 3,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        assert_eq!(character_groups(&[rec]), None);
+    }
+}
