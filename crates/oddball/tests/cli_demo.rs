@@ -3,10 +3,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("oddball-demo-{name}-{}", std::process::id()))
+fn tmp(name: &str) -> oddball_testkit::TempDir {
+    oddball_testkit::TempDir::new(&format!("demo-{name}"))
 }
 
 fn summary(dir: &Path) -> serde_json::Value {

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
-fn tmp(name: &str) -> PathBuf {
+fn tmp(name: &str) -> oddball_testkit::TempDir {
     common::tmp_dir(&format!("online-{name}"))
 }
 
@@ -71,18 +71,17 @@ fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
         }
     }
     // pyxdf, a standard reader, opens it too (when ODDBALL_PYXDF names a python with pyxdf).
-    match std::env::var("ODDBALL_PYXDF") {
-        Ok(py) => {
-            let script = concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../tools/golden/xdf/pyxdf_read.py"
-            );
-            let o = Command::new(py).arg(script).arg(&path).output().unwrap();
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            let s = String::from_utf8_lossy(&o.stdout);
-            assert!(s.contains(&format!("{n}")), "pyxdf sees {n} samples: {s}");
-        }
-        Err(_) => eprintln!("skipping the pyxdf check: set ODDBALL_PYXDF to a python with pyxdf"),
+    if let Some(py) =
+        oddball_testkit::tool("ODDBALL_PYXDF", "the pyxdf check", "a python with pyxdf")
+    {
+        let script = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tools/golden/xdf/pyxdf_read.py"
+        );
+        let o = Command::new(py).arg(script).arg(&path).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s = String::from_utf8_lossy(&o.stdout);
+        assert!(s.contains(&format!("{n}")), "pyxdf sees {n} samples: {s}");
     }
 }
 
