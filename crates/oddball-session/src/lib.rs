@@ -6,6 +6,19 @@
 //! * [`subject`]: a simulated subject who attends one stimulus and produces 8-channel EEG: 1/f
 //!   background, alpha, mains, drift, blinks, a visual response to every flash and a P300 to the
 //!   attended ones (presets easy, typical, hard).
+//!
+//! # Example
+//! The paper's four-bulb panel gives each command its own stimulus code:
+//! ```
+//! use oddball_arm::Command;
+//! use oddball_session::paradigm::FourBulbParams;
+//!
+//! let panel = FourBulbParams::paper();
+//! for c in [Command::Up, Command::Down, Command::Left, Command::Right] {
+//!     assert_eq!(panel.command_of(panel.code_of(c)), Some(c));
+//! }
+//! assert_eq!(panel.command_of(0), None);
+//! ```
 
 pub mod engine;
 mod error;

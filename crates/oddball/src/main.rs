@@ -5,6 +5,10 @@
 //! reader that closes standard output early (`oddball inspect FILE | head -1`) ends the program
 //! quietly with status 0, as in other command-line tools.
 
+// The doc comments of the clap arguments are `--help` text (`[default: <out>/arm.png]`), not
+// rustdoc markup.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};

@@ -78,7 +78,7 @@
 //!   (by default 255, NIC's lost-packet flag) give no event but still count as the previous
 //!   sample's value (`5 255 5` gives two events). The whole trigger column is kept in
 //!   [`EasyInfo::triggers`].
-//! * **Errors** ([`IoError::Csv`], the crate's line-and-column variant, with the path of the
+//! * **Errors** ([`IoError::Csv`](crate::IoError::Csv), the crate's line-and-column variant, with the path of the
 //!   `.easy` or `.info` file at fault; lines count from 1, blank lines included; in a `.easy`
 //!   the column is the 1-based TAB-separated cell, in a `.info` the character where the value
 //!   starts): a cell that is not a number, an integer trigger
@@ -98,7 +98,7 @@
 //! `.info` sits beside the old `.easy`; the reader refuses that pair unless their sample counts
 //! agree). The `.easy` holds, per sample, the EEG in whole nV (`round(µV × 1000)`, halves away
 //! from zero; the largest rounding is reported), no accelerometer or AddSensor columns, the
-//! trigger and the timestamp. The trigger is the code of each of the [`Raw`]'s events at its
+//! trigger and the timestamp. The trigger is the code of each of the [`Raw`](oddball_signal::Raw)'s events at its
 //! onset sample only, 0 elsewhere. Timestamp of sample `i`: `start_ms + round(i × 1000 /
 //! sfreq)` ms, rounded to the nearest ms (halves away from zero) and computed from `i` each
 //! time, so the error never exceeds 0.5 ms and does not accumulate (above 1000 Hz successive
@@ -231,7 +231,7 @@ impl EasyLayout {
     }
 }
 
-/// Where [`Raw::sfreq`] of a `.easy` recording came from.
+/// Where [`Raw::sfreq`](oddball_signal::Raw::sfreq) of a `.easy` recording came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum EasySfreqSource {
     /// [`EasyOptions::sfreq`].

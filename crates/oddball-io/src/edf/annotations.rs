@@ -117,7 +117,7 @@ pub(crate) fn parse_event_text(text: &str) -> Option<EventText> {
     Some((code, target, label))
 }
 
-/// The annotation text [`write_edf_plus`] writes for an event: `CODE [target|nontarget][: LABEL]`.
+/// The annotation text [`write_edf_plus`](super::write_edf_plus) writes for an event: `CODE [target|nontarget][: LABEL]`.
 pub fn event_annotation_text(e: &Event) -> String {
     let mut s = e.code.to_string();
     match e.target {

@@ -49,7 +49,7 @@
 //! that does not fit the stream's number type (integers: finite and in range after rounding;
 //! float32: within its range; NaN and ±inf are stored as they are in float formats).
 //!
-//! [`write_xdf`] writes a [`Raw`] (and its events as a string marker stream, each as
+//! [`write_xdf`] writes a [`Raw`](oddball_signal::Raw) (and its events as a string marker stream, each as
 //! [`crate::edf::event_annotation_text`]) to a temporary file renamed into place.
 //!
 //! # Reading ([`read_xdf`], [`read_xdf_file`])
@@ -57,7 +57,7 @@
 //! ([`XdfFile`]). [`read_xdf`] makes a [`Recording`](crate::Recording) of it:
 //! * **EEG**: the stream [`XdfOptions::eeg_stream`] names; else the numeric stream of type
 //!   `EEG` (case-insensitive) with the most channels; else the regular-rate numeric stream with
-//!   the most channels (ties: the first). Its nominal rate is the [`Raw`]'s `sfreq`; channel
+//!   the most channels (ties: the first). Its nominal rate is the [`Raw`](oddball_signal::Raw)'s `sfreq`; channel
 //!   names are the `desc/channels/channel/label`s (`Ch1` … for missing ones); each channel is
 //!   converted to µV from its unit (`volts`/`V` × 10⁶, `millivolts`/`mV` × 10³,
 //!   `microvolts`/`µV`/`uV` × 1, `nanovolts`/`nV` × 10⁻³, case-insensitive; any other or no unit:
@@ -75,10 +75,10 @@
 //!   code. Every marker, with its full text, timestamp and sample, is in [`XdfInfo::markers`].
 //! * **Cut files**: a file that ends inside a chunk (a recorder killed while writing) is read up
 //!   to its last complete chunk and reported with [`XdfInfo::truncated`] (or refused with
-//!   [`IoError::Truncated`] when [`XdfOptions::allow_truncated`] is off). A file cut between
+//!   [`IoError::Truncated`](crate::IoError::Truncated) when [`XdfOptions::allow_truncated`] is off). A file cut between
 //!   chunks cannot be told from a complete one by its bytes, except that its streams have no
 //!   StreamFooter ([`XdfInfo::finished`]).
-//! * **Errors** ([`IoError::InvalidField`] with the byte offset from the file start and the
+//! * **Errors** ([`IoError::InvalidField`](crate::IoError::InvalidField) with the byte offset from the file start and the
 //!   field): a wrong magic code, NumLengthBytes other than 1/4/8, a Length below 2, a chunk whose
 //!   content does not fill its Length exactly, TimeStampBytes other than 0/8, a Samples,
 //!   ClockOffset or StreamFooter chunk for a stream without StreamHeader, a second StreamHeader
@@ -108,7 +108,6 @@ use std::io::Read;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
-
 
 pub use read::{
     parse_xdf_file, read_xdf_file, XdfFile, XdfFooter, XdfStreamData, XdfStreamInfo, XdfValues,
