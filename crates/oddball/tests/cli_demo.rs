@@ -140,7 +140,8 @@ fn replay_of_real_speller_eeg_reports_accuracy_and_itr() {
 
 #[test]
 fn bad_options_are_clear_errors() {
-    let out = tmp("sleepy");
+    let base = tmp("sleepy");
+    let out = base.join("out");
     let (ok, _, err) = common::oddball(&[
         "demo",
         "--subject",

@@ -15,14 +15,16 @@ fn tmp(name: &str) -> oddball_testkit::TempDir {
     common::tmp_dir(&format!("online-{name}"))
 }
 
-/// A model from a (fast, unpaced) demo run.
-fn model() -> PathBuf {
-    common::demo_model(&tmp("model"))
+/// A model from a (fast, unpaced) demo run, with the folder that holds it (removed on drop).
+fn model() -> (oddball_testkit::TempDir, PathBuf) {
+    let dir = tmp("model");
+    let model = common::demo_model(&dir);
+    (dir, model)
 }
 
 #[test]
 fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
-    let model = model();
+    let (_model_dir, model) = model();
     let out = tmp("kill");
     let mut child = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args(["online", "--model", model.to_str().unwrap(), "--seed", "7"])
@@ -87,7 +89,7 @@ fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
 
 #[test]
 fn online_says_what_is_wrong_before_it_starts() {
-    let model = model();
+    let (_model_dir, model) = model();
     let m = model.to_str().unwrap();
     let out = tmp("errors");
     let o = out.to_str().unwrap();
@@ -128,7 +130,7 @@ fn decisions(stdout: &str) -> Vec<&str> {
 
 #[test]
 fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_file() {
-    let model = model();
+    let (_model_dir, model) = model();
     let m = model.to_str().unwrap();
     let out = tmp("replay");
     let (rec_dir, again, other) = (out.join("rec"), out.join("again"), out.join("other"));
