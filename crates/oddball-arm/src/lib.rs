@@ -9,7 +9,7 @@
 //! * [`integrate`] — fixed-step RK4.
 //! * [`control`] — [`TaskSpaceController`]: inverse-dynamics linearisation with the task-space
 //!   PD law of the paper, damped least squares near singularities.
-//! * [`reference`] — direction [`Command`]s and minimum-jerk / step transitions of `p_d`.
+//! * [`reference`](mod@reference) — direction [`Command`]s and minimum-jerk / step transitions of `p_d`.
 //! * [`workspace`] — the [`Board`] and the reachability checks that refuse unsafe commands.
 //! * [`trace`] — the pen's timestamped polyline.
 //! * [`sim`] — [`ArmSim`]: the closed loop with actuator saturation, safety stops and per-step
@@ -34,6 +34,18 @@
 //! reason and the arm holds its previous target; torque saturation is applied by the actuator
 //! model and counted in every [`SegmentStats`]; the simulation stops with an error if the arm
 //! ever leaves its joint limits or the pen leaves the board.
+//!
+//! # Example
+//! A command list as the CLI takes it, and where each command moves the pen's target:
+//! ```
+//! use oddball_arm::{parse_commands, Command, Vector2};
+//!
+//! let commands = parse_commands("up,right")?;
+//! assert_eq!(commands, [Command::Up, Command::Right]);
+//! let moved: Vector2<f64> = commands.iter().map(|c| c.direction()).sum();
+//! assert_eq!(moved, Vector2::new(1.0, 1.0));
+//! # Ok::<(), oddball_arm::UnknownCommand>(())
+//! ```
 
 pub mod config;
 pub mod control;

@@ -391,8 +391,7 @@ fn config_errors_name_the_field() {
 
 #[test]
 fn config_file_errors_name_the_file() {
-    let dir = std::env::temp_dir().join(format!("oddball-arm-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("arm-test");
     let path = dir.join("arm.toml");
     std::fs::write(&path, "gravity_m_s2 = 9.81\n[board]\nx_min_m = 0.2\n").unwrap();
     let err = ArmConfig::from_toml_path(&path).unwrap_err();

@@ -12,7 +12,7 @@
 //!
 //! Written here rather than with the `ndwt` crate (0.1.1), although ndwt's `Bior2_2` with
 //! `BoundaryCondition::Symmetric` does agree with PyWavelets (checked to 2e-15 on one level): ndwt
-//! requires Rust 1.95 and edition 2024 while this workspace declares `rust-version = 1.85`, and it
+//! requires Rust 1.95 and edition 2024 while this workspace declares `rust-version = 1.88`, and it
 //! brings SIMD, proc-macro and rayon dependencies for what is a 6-tap filter on ~200 samples. The
 //! transform here is checked against PyWavelets 1.9 in `tests/paper_golden.rs`.
 

@@ -12,24 +12,7 @@ use oddball_decode::DecodeError;
 /// Synthetic epochs `(n_epochs, 4, 64)` at 64 Hz: a deterministic pseudo-random noise, a 10 Hz
 /// sine and, on every fifth epoch (the targets), a bump at 300 ms growing with the channel.
 fn synthetic(n_epochs: usize, seed: u64) -> (Array3<f64>, Vec<bool>) {
-    let mut state = seed;
-    let mut uniform = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
-    let y: Vec<bool> = (0..n_epochs).map(|i| i % 5 == 0).collect();
-    let x = Array3::from_shape_fn((n_epochs, 4, 64), |(e, c, t)| {
-        let tt = t as f64 / 64.0;
-        let bump = if y[e] {
-            4.0 * (c as f64 + 1.0) * (-((tt - 0.3) / 0.05).powi(2)).exp()
-        } else {
-            0.0
-        };
-        bump + 3.0 * uniform() + (2.0 * std::f64::consts::PI * 10.0 * tt + c as f64).sin()
-    });
-    (x, y)
+    oddball_testkit::synthetic_p300(n_epochs, seed, 5, 0, 4.0, 3.0)
 }
 
 /// A saved model of every preset (the last two with a decision model), as `(name, JSON)`.

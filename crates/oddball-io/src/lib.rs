@@ -20,6 +20,23 @@
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
 //! allocated.
+//!
+//! # Example
+//! A CSV recording parsed from memory (the path only names it in messages):
+//! ```
+//! use std::path::Path;
+//! use oddball_io::{csv::parse_csv, CsvOptions, Format};
+//!
+//! let text = "time,Cz,Pz,marker\n0.000,1.5,2.0,0\n0.004,1.0,2.5,7\n0.008,0.5,3.0,0\n";
+//! let options = CsvOptions::detect(&["time", "Cz", "Pz", "marker"]);
+//! let rec = parse_csv(text.as_bytes(), Path::new("mem.csv"), &options)?;
+//! assert_eq!(rec.format, Format::Csv);
+//! assert_eq!(rec.raw.ch_names(), ["Cz", "Pz"]);
+//! assert_eq!(rec.raw.n_times(), 3);
+//! assert_eq!(rec.raw.data()[[1, 2]], 3.0);
+//! assert_eq!(rec.raw.events().len(), 1);
+//! # Ok::<(), oddball_io::IoError>(())
+//! ```
 
 pub mod bci2000;
 pub mod csv;
@@ -31,8 +48,8 @@ pub mod manifest;
 pub mod mat;
 pub mod nic;
 pub mod speller;
-mod tempfile;
 mod units;
+mod writing;
 pub mod xdf;
 
 use std::path::{Path, PathBuf};

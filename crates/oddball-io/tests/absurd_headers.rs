@@ -46,21 +46,16 @@ fn edf_record_counts_and_durations_that_make_no_sense_are_refused() {
 
 #[test]
 fn bci2000_zero_hz_negative_channel_counts_and_zero_columns_are_refused() {
-    let Some(path) = [concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/bci2000-samplefiles-p300/eeg3_1.dat"
-    )]
-    .into_iter()
-    .map(std::path::PathBuf::from)
-    .find(|p| p.is_file()) else {
-        eprintln!("skipping: ../shared/data/bci2000-samplefiles-p300/eeg3_1.dat not found");
+    let Some(path) = oddball_testkit::data_file(
+        "bci2000_zero_hz_negative_channel_counts_and_zero_columns_are_refused",
+        "bci2000-samplefiles-p300/eeg3_1.dat",
+    ) else {
         return;
     };
     let bytes = std::fs::read(&path).unwrap();
     let header_end = bytes.windows(2).position(|w| w == b"\r\n").unwrap();
     let first = String::from_utf8_lossy(&bytes[..header_end]).to_string();
-    let dir = std::env::temp_dir().join(format!("oddball-absurd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("absurd");
     let cases: Vec<(Vec<u8>, &str)> = vec![
         // SamplingRate= 256 → 0 (same length keeps the header length right).
         (

@@ -1402,11 +1402,11 @@ fn compare_with_pyxdf(ours: &XdfFile, py: &Value, what: &str) {
 
 #[test]
 fn pyxdf_reads_what_the_writer_writes() {
-    let Some(python) = std::env::var_os("ODDBALL_PYXDF") else {
-        eprintln!(
-            "skipping pyxdf_reads_what_the_writer_writes: set ODDBALL_PYXDF to a python with pyxdf \
-             and numpy (see tools/golden/xdf/README.md)"
-        );
+    let Some(python) = oddball_testkit::tool(
+        "ODDBALL_PYXDF",
+        "pyxdf_reads_what_the_writer_writes",
+        "a python with pyxdf and numpy, see tools/golden/xdf/README.md",
+    ) else {
         return;
     };
     let tmp = TempDir::new("xdf-pyxdf");

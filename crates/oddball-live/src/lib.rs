@@ -14,6 +14,17 @@
 //! * [`record`]: the recording, XDF flushed per block.
 //! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
 //!   decisions out) and the simulated subject as a live LSL amplifier.
+//!
+//! # Example
+//! The timing report's summary of a list of delays (population standard deviation):
+//! ```
+//! use oddball_live::live::Summary;
+//!
+//! let s = Summary::of(&[1.0, 2.0, 3.0, 6.0]).unwrap();
+//! assert_eq!((s.n, s.mean, s.min, s.max), (4, 3.0, 1.0, 6.0));
+//! assert!((s.sd - 1.8708286933869707).abs() < 1e-15);
+//! assert_eq!(Summary::of(&[]), None);
+//! ```
 
 pub mod clock;
 mod error;

@@ -39,8 +39,7 @@ fn a_live_session_on_schedule_equals_the_direct_session_and_records_it() {
         .map(|&c| direct.decide(Some(c)).unwrap())
         .collect();
 
-    let dir = std::env::temp_dir().join(format!("oddball-live-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("live");
     let path = dir.join("live.xdf");
     let _ = std::fs::remove_file(&path);
     let clock = Clock::new();
@@ -94,8 +93,7 @@ fn a_live_session_on_schedule_equals_the_direct_session_and_records_it() {
 fn a_recorded_session_played_back_decides_the_same_and_stops_at_the_end_of_the_file() {
     let commands = [Command::Up, Command::Right];
     let arm = || ArmSim::from_config(&ArmConfig::default()).unwrap();
-    let dir = std::env::temp_dir().join(format!("oddball-playback-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("playback");
     let path = dir.join("recorded.xdf");
     let _ = std::fs::remove_file(&path);
     let clock = Clock::new();

@@ -205,17 +205,13 @@ fn resolving_nothing_times_out_naming_the_query() {
 
 /// The python with pylsl, or `None` (and a skip line) when `ODDBALL_PYLSL` is not set.
 fn pylsl(test: &str) -> Option<String> {
-    match std::env::var("ODDBALL_PYLSL") {
-        Ok(p) if !p.is_empty() => Some(p),
-        _ => {
-            println!(
-                "skipped {test}: set ODDBALL_PYLSL to a python with pylsl \
-                 (python3 -m venv /tmp/pylsl-venv && /tmp/pylsl-venv/bin/pip install -r \
-                 tools/lsl/requirements.txt; ODDBALL_PYLSL=/tmp/pylsl-venv/bin/python)"
-            );
-            None
-        }
-    }
+    oddball_testkit::tool(
+        "ODDBALL_PYLSL",
+        test,
+        "a python with pylsl: python3 -m venv /tmp/pylsl-venv && /tmp/pylsl-venv/bin/pip install -r \
+         tools/lsl/requirements.txt; ODDBALL_PYLSL=/tmp/pylsl-venv/bin/python",
+    )
+    .map(|p| p.to_string_lossy().into_owned())
 }
 
 fn script(name: &str) -> PathBuf {

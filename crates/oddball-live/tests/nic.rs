@@ -86,8 +86,7 @@ fn a_session_over_nic_binary_draws_the_letter_g() {
     assert_eq!(report.flashes, log.flashes.len());
 
     // The session as NIC .easy + .info: read back, it re-evaluates to the same decisions.
-    let dir = std::env::temp_dir().join(format!("oddball-nic-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("nic");
     let path = dir.join("session.easy");
     let summary = save_session_easy(&path, &log, &paradigm, 1_700_000_000_000).unwrap();
     assert_eq!(summary.max_rounding_uv, 0.0, "NIC delivers whole nV");

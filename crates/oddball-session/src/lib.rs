@@ -10,6 +10,19 @@
 //!   presenter, the observer (a [`roles::Subject`] is all three).
 //! * [`engine`]: the session: calibration, training, online decisions driving the arm.
 //! * [`task`]: tasks people do with a pilot (copy, tracking, drawing).
+//!
+//! # Example
+//! The paper's four-bulb panel gives each command its own stimulus code:
+//! ```
+//! use oddball_arm::Command;
+//! use oddball_session::paradigm::FourBulbParams;
+//!
+//! let panel = FourBulbParams::paper();
+//! for c in [Command::Up, Command::Down, Command::Left, Command::Right] {
+//!     assert_eq!(panel.command_of(panel.code_of(c)), Some(c));
+//! }
+//! assert_eq!(panel.command_of(0), None);
+//! ```
 
 pub mod engine;
 mod error;

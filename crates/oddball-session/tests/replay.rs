@@ -8,16 +8,10 @@ use oddball_session::engine::TrialOutcome;
 use oddball_session::replay::{calibrate, replay, ReplayParams};
 
 fn data_file(name: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    let p = dir.join("bci2000-samplefiles-p300").join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found (set ODDBALL_DATA)", p.display());
-        None
-    }
+    oddball_testkit::data_file(
+        "the replay test",
+        &format!("bci2000-samplefiles-p300/{name}"),
+    )
 }
 
 #[test]

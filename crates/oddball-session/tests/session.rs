@@ -43,8 +43,7 @@ fn the_typical_subject_draws_the_letter_g_and_the_saved_session_re_evaluates_ide
     let paradigm = s.params().paradigm;
     let (log, model, _) = s.finish();
     let model = model.unwrap();
-    let dir = std::env::temp_dir().join(format!("oddball-session-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = oddball_testkit::TempDir::new("session");
     let path = dir.join("session.dat");
     save_session(&path, &log, &paradigm).unwrap();
     let rec = oddball_io::read(&path).unwrap();

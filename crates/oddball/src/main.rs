@@ -1,7 +1,13 @@
 //! `oddball`: a P300 brain–computer interface that steers a simulated robot arm.
 //!
 //! Subcommands live in `cmd_*.rs`; errors are printed as a chain (`error: …: caused by …`) and the
-//! process exits with status 1 (2 for command-line usage errors, which clap reports itself).
+//! process exits with status 1 (2 for command-line usage errors, which clap reports itself). A
+//! reader that closes standard output early (`oddball inspect FILE | head -1`) ends the program
+//! quietly with status 0, as in other command-line tools.
+
+// The doc comments of the clap arguments are `--help` text (`[default: <out>/arm.png]`), not
+// rustdoc markup.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
 use std::process::ExitCode;
 
@@ -51,7 +57,36 @@ enum Command {
     Arm(cmd_arm::ArmArgs),
 }
 
+/// Whether `err` (or one of its causes) is a write into a closed pipe.
+fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// `print!` panics when standard output is a closed pipe (Rust ignores SIGPIPE); that panic
+/// ends the program with status 0 instead, every other panic is reported as usual.
+fn exit_quietly_on_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let message = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if message.starts_with("failed printing to stdout")
+            && message.to_ascii_lowercase().contains("broken pipe")
+        {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Demo(args) => cmd_demo::run(&args),
@@ -65,6 +100,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("oddball: error: {err}");
             // A cause whose text the previous message already quotes adds nothing.

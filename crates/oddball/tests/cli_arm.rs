@@ -10,7 +10,7 @@ fn arm(args: &[&str]) -> (bool, String, String) {
 
 #[test]
 fn draws_the_g_and_writes_trajectory_and_svg() {
-    let dir = std::env::temp_dir().join(format!("oddball-arm-{}", std::process::id()));
+    let dir = oddball_testkit::TempDir::new("arm");
     let plot = dir.join("arm.svg");
     let (ok, out, err) = arm(&[
         "--out",
@@ -48,7 +48,7 @@ fn draws_the_g_and_writes_trajectory_and_svg() {
 
 #[test]
 fn a_command_off_the_board_is_refused_and_the_arm_holds() {
-    let dir = std::env::temp_dir().join(format!("oddball-arm-off-{}", std::process::id()));
+    let dir = oddball_testkit::TempDir::new("arm-off");
     let cmds = "up,up,up,up,up,up,up,up";
     let (ok, out, err) = arm(&["--commands", cmds, "--out", dir.to_str().unwrap()]);
     assert!(ok, "{err}");

@@ -18,8 +18,7 @@ fn field<'a>(json: &'a serde_json::Value, key: &str) -> &'a serde_json::Value {
 #[test]
 fn speller_forward_split_spells_6mk_and_a_saved_model_scores_the_same() {
     let Some(d) = data_dir() else { return };
-    let tmp = std::env::temp_dir().join(format!("oddball-decode-{}", std::process::id()));
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = oddball_testkit::TempDir::new("decode");
     let (train, test) = (d.join("eeg3_1.dat"), d.join("eeg3_2.dat"));
     let json = tmp.join("lda.json");
     let (ok, out, err) = oddball(&[
@@ -158,8 +157,7 @@ fn rewrite(src: &std::path::Path, dst: &std::path::Path, flip: bool) {
 #[test]
 fn tuning_never_sees_the_test_file_flipped_test_labels_give_the_same_choice() {
     let Some(d) = data_dir() else { return };
-    let tmp = std::env::temp_dir().join(format!("oddball-tune-{}", std::process::id()));
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = oddball_testkit::TempDir::new("tune");
     let (same, flipped) = (tmp.join("same.dat"), tmp.join("flipped.dat"));
     rewrite(&d.join("eeg2_2.dat"), &same, false);
     rewrite(&d.join("eeg2_2.dat"), &flipped, true);
@@ -210,8 +208,7 @@ fn tuning_never_sees_the_test_file_flipped_test_labels_give_the_same_choice() {
 #[test]
 fn train_tune_saves_the_choice_and_evaluate_plots_accuracy_by_repetitions() {
     let Some(d) = data_dir() else { return };
-    let tmp = std::env::temp_dir().join(format!("oddball-tune-lda-{}", std::process::id()));
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = oddball_testkit::TempDir::new("tune-lda");
     let (train, test) = (d.join("eeg3_1.dat"), d.join("eeg3_2.dat"));
     let model = tmp.join("model.json");
     let (ok, out, err) = oddball(&[
@@ -311,7 +308,8 @@ fn train_tune_saves_the_choice_and_evaluate_plots_accuracy_by_repetitions() {
 #[test]
 fn mdm_preset_spells_the_speller_split() {
     let Some(d) = data_dir() else { return };
-    let json = std::env::temp_dir().join(format!("oddball-mdm-{}.json", std::process::id()));
+    let tmp = oddball_testkit::TempDir::new("mdm");
+    let json = tmp.join("mdm.json");
     let (ok, out, err) = oddball(&[
         "evaluate",
         "--train",

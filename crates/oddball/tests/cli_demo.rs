@@ -3,10 +3,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-fn tmp(name: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("oddball-demo-{name}-{}", std::process::id()))
+fn tmp(name: &str) -> oddball_testkit::TempDir {
+    oddball_testkit::TempDir::new(&format!("demo-{name}"))
 }
 
 fn summary(dir: &Path) -> serde_json::Value {
@@ -140,7 +140,8 @@ fn replay_of_real_speller_eeg_reports_accuracy_and_itr() {
 
 #[test]
 fn bad_options_are_clear_errors() {
-    let out = tmp("sleepy");
+    let base = tmp("sleepy");
+    let out = base.join("out");
     let (ok, _, err) = common::oddball(&[
         "demo",
         "--subject",

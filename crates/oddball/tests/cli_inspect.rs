@@ -38,7 +38,8 @@ fn oddball_and_muse_summaries_and_erp_plot() {
     let eeg2 = dir.join("bci2000-samplefiles-p300/eeg2_1.dat");
     let muse =
         dir.join("muse-visual-p300-eeg-notebooks/subject1/session1/data_2017-02-04-15_45_13.csv");
-    let plot = std::env::temp_dir().join(format!("oddball-erp-{}.svg", std::process::id()));
+    let tmp = oddball_testkit::TempDir::new("erp");
+    let plot = tmp.join("erp.svg");
     let (ok, out, err) = inspect(&[eeg2.to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(out.contains("channels   64:"), "{out}");
@@ -64,7 +65,8 @@ fn oddball_and_muse_summaries_and_erp_plot() {
 fn a_truncated_file_is_a_clear_error() {
     let Some(dir) = data_dir() else { return };
     let bytes = std::fs::read(dir.join("bci2000-samplefiles-p300/eeg3_1.dat")).unwrap();
-    let cut = std::env::temp_dir().join(format!("oddball-cut-{}.dat", std::process::id()));
+    let tmp = oddball_testkit::TempDir::new("cut");
+    let cut = tmp.join("cut.dat");
     std::fs::write(&cut, &bytes[..bytes.len() / 2 + 3]).unwrap();
     let (ok, _, err) = inspect(&[cut.to_str().unwrap()]);
     let _ = std::fs::remove_file(&cut);

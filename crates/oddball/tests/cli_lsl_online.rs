@@ -15,7 +15,7 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
     let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
     let cfg = root.join("tools/lsl/lsl_api.cfg");
     let id = std::process::id();
-    let dir = std::env::temp_dir().join(format!("oddball-lsl-online-{id}"));
+    let dir = oddball_testkit::TempDir::new("lsl-online");
     let model = common::demo_model(&dir);
     let eeg = format!("oddball-test-eeg-{id}");
     let markers = format!("oddball-test-markers-{id}");

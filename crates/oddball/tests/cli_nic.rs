@@ -26,7 +26,7 @@ fn a_demo_over_nic_from_another_process_draws_the_g() {
             .unwrap()
             .trim_end_matches(',')
             .to_string();
-        let dir = std::env::temp_dir().join(format!("oddball-nic-{mode}-{}", std::process::id()));
+        let dir = oddball_testkit::TempDir::new(&format!("nic-{mode}"));
         let source = format!("nic:{addr}");
         let (ok, out, err) = common::oddball(&[
             "demo",
@@ -68,7 +68,7 @@ fn nothing_listening_is_a_clear_error() {
     let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let addr = l.local_addr().unwrap();
     drop(l);
-    let dir = std::env::temp_dir().join(format!("oddball-nic-none-{}", std::process::id()));
+    let dir = oddball_testkit::TempDir::new("nic-none");
     let source = format!("nic:{addr}");
     let (ok, _, err) =
         common::oddball(&["demo", "--source", &source, "--out", dir.to_str().unwrap()]);

@@ -11,18 +11,20 @@ use std::time::{Duration, Instant};
 
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
-fn tmp(name: &str) -> PathBuf {
+fn tmp(name: &str) -> oddball_testkit::TempDir {
     common::tmp_dir(&format!("online-{name}"))
 }
 
-/// A model from a (fast, unpaced) demo run.
-fn model() -> PathBuf {
-    common::demo_model(&tmp("model"))
+/// A model from a (fast, unpaced) demo run, with the folder that holds it (removed on drop).
+fn model() -> (oddball_testkit::TempDir, PathBuf) {
+    let dir = tmp("model");
+    let model = common::demo_model(&dir);
+    (dir, model)
 }
 
 #[test]
 fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
-    let model = model();
+    let (_model_dir, model) = model();
     let out = tmp("kill");
     let mut child = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args(["online", "--model", model.to_str().unwrap(), "--seed", "7"])
@@ -71,24 +73,23 @@ fn a_recording_cut_by_kill_9_opens_and_holds_every_flushed_sample() {
         }
     }
     // pyxdf, a standard reader, opens it too (when ODDBALL_PYXDF names a python with pyxdf).
-    match std::env::var("ODDBALL_PYXDF") {
-        Ok(py) => {
-            let script = concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../tools/golden/xdf/pyxdf_read.py"
-            );
-            let o = Command::new(py).arg(script).arg(&path).output().unwrap();
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-            let s = String::from_utf8_lossy(&o.stdout);
-            assert!(s.contains(&format!("{n}")), "pyxdf sees {n} samples: {s}");
-        }
-        Err(_) => eprintln!("skipping the pyxdf check: set ODDBALL_PYXDF to a python with pyxdf"),
+    if let Some(py) =
+        oddball_testkit::tool("ODDBALL_PYXDF", "the pyxdf check", "a python with pyxdf")
+    {
+        let script = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../tools/golden/xdf/pyxdf_read.py"
+        );
+        let o = Command::new(py).arg(script).arg(&path).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s = String::from_utf8_lossy(&o.stdout);
+        assert!(s.contains(&format!("{n}")), "pyxdf sees {n} samples: {s}");
     }
 }
 
 #[test]
 fn online_says_what_is_wrong_before_it_starts() {
-    let model = model();
+    let (_model_dir, model) = model();
     let m = model.to_str().unwrap();
     let out = tmp("errors");
     let o = out.to_str().unwrap();
@@ -129,7 +130,7 @@ fn decisions(stdout: &str) -> Vec<&str> {
 
 #[test]
 fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_file() {
-    let model = model();
+    let (_model_dir, model) = model();
     let m = model.to_str().unwrap();
     let out = tmp("replay");
     let (rec_dir, again, other) = (out.join("rec"), out.join("again"), out.join("other"));

@@ -15,11 +15,11 @@ use std::process::{Command, Stdio};
 
 /// Chromium's path from ODDBALL_CHROMIUM, or `None` with a skip message.
 fn chromium() -> Option<std::ffi::OsString> {
-    let c = std::env::var_os("ODDBALL_CHROMIUM");
-    if c.is_none() {
-        eprintln!("skipping the browser test: set ODDBALL_CHROMIUM=/usr/bin/chromium (and npm ci in tools/panel-test)");
-    }
-    c
+    oddball_testkit::tool(
+        "ODDBALL_CHROMIUM",
+        "the browser test",
+        "e.g. /usr/bin/chromium, and npm ci in tools/panel-test",
+    )
 }
 
 fn root() -> PathBuf {

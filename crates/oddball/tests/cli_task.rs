@@ -2,8 +2,8 @@
 
 mod common;
 
-fn tmp(name: &str) -> std::path::PathBuf {
-    std::env::temp_dir().join(format!("oddball-task-{name}-{}", std::process::id()))
+fn tmp(name: &str) -> oddball_testkit::TempDir {
+    oddball_testkit::TempDir::new(&format!("task-{name}"))
 }
 
 fn summary(dir: &std::path::Path) -> serde_json::Value {

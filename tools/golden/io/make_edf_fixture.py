@@ -14,7 +14,7 @@ plus two "EDF Annotations" signals holding annotations with and without duration
 
 Expected values come from pyedflib's own reader (readSignal, physical units) times the unit
 factor to microvolts, and from readAnnotations. The expected events follow the oddball-io
-annotation rules (documented in crates/oddball-io/src/edf.rs) and are written out by hand below.
+annotation rules (documented in crates/oddball-io/src/edf/mod.rs) and are written out by hand below.
 """
 from __future__ import annotations
 

@@ -33,7 +33,7 @@ use oddball_signal::{Events, Raw};
 
 use super::params::parse_parameter_line;
 use crate::error::StateProblem;
-use crate::tempfile::{check_writable, TempFile};
+use crate::writing::{check_writable, TempFile};
 use crate::IoError;
 
 /// One state (a BCI2000 state-vector variable): one value per sample.
@@ -176,7 +176,7 @@ pub fn write_bci2000(
         path: path.to_path_buf(),
         what,
     };
-    crate::tempfile::check_not_empty(path, raw, "BCI2000")?;
+    crate::writing::check_not_empty(path, raw, "BCI2000")?;
     let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
     let sfreq = raw.sfreq();
     if sfreq > 1e6 {

@@ -1,39 +1,11 @@
-//! Helpers shared by the integration tests: where the real data and the fixtures are, and a
-//! temporary directory that removes itself.
+//! Helpers shared by the integration tests: where the real data (the test-kit's switch: skip
+//! locally, fail under `ODDBALL_REQUIRE_DATA=1`) and the fixtures are, temporary directories.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// The shared data folder: `$ODDBALL_DATA`, else `../shared/data` beside the workspace.
-/// `None` (with a "skipping" note on stderr) when it is absent.
-pub fn data_dir(test: &str) -> Option<PathBuf> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipping {test}: data folder {} not found (set ODDBALL_DATA)",
-            dir.display()
-        );
-        None
-    }
-}
-
-/// A file below the data folder, or `None` with a "skipping" note when it is absent.
-pub fn data_file(test: &str, rel: &str) -> Option<PathBuf> {
-    let p = data_dir(test)?.join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!("skipping {test}: {} not found", p.display());
-        None
-    }
-}
+#[allow(unused_imports)] // not every test binary uses each
+pub use oddball_testkit::{data_dir, data_file, TempDir};
 
 pub fn bci2000_file(test: &str, name: &str) -> Option<PathBuf> {
     data_file(test, &format!("bci2000-samplefiles-p300/{name}"))
@@ -48,39 +20,6 @@ pub fn fixture(name: &str) -> PathBuf {
 pub fn golden(name: &str) -> serde_json::Value {
     let text = std::fs::read_to_string(fixture(name)).expect("fixture JSON");
     serde_json::from_str(&text).expect("valid JSON")
-}
-
-/// A fresh directory under the system temp dir, deleted on drop.
-pub struct TempDir(PathBuf);
-
-impl TempDir {
-    pub fn new(tag: &str) -> Self {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let p = std::env::temp_dir().join(format!(
-            "oddball-io-{tag}-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir_all(&p).expect("create temp dir");
-        TempDir(p)
-    }
-
-    pub fn path(&self) -> &Path {
-        &self.0
-    }
-
-    /// Writes `bytes` to `name` inside the directory and returns the path.
-    pub fn write(&self, name: &str, bytes: &[u8]) -> PathBuf {
-        let p = self.0.join(name);
-        std::fs::write(&p, bytes).expect("write temp file");
-        p
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 /// `|a − b| <= rel × scale`, with a message naming what differs.

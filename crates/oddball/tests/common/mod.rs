@@ -5,19 +5,10 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// `../shared/data` beside the checkout (or `ODDBALL_DATA`); `None`, with a message, when absent.
+/// `../shared/data` beside the checkout (or `ODDBALL_DATA`); `None`, with a message, when absent
+/// (a failure under `ODDBALL_REQUIRE_DATA=1`, see `oddball_testkit`).
 pub fn data_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ODDBALL_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipping: real EEG folder {} not found", dir.display());
-        None
-    }
+    oddball_testkit::data_dir("this CLI test (real EEG)")
 }
 
 /// Runs `oddball ARGS…`: (exit status success, stdout, stderr).
@@ -33,11 +24,9 @@ pub fn oddball(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// A fresh temporary folder for one test (removed first if a previous run left it).
-pub fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("oddball-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// A fresh temporary folder for one test, removed when dropped.
+pub fn tmp_dir(name: &str) -> oddball_testkit::TempDir {
+    oddball_testkit::TempDir::new(name)
 }
 
 /// A model fitted in a quick (unpaced) one-command demo session, for `oddball online`.

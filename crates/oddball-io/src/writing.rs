@@ -1,70 +1,70 @@
 //! What the writers share: a temporary file renamed into place (a failure never leaves a
-//! half-written file under the final name), and the check that every sample can be stored.
+//! half-written file under the final name; the `tempfile` crate's), and the check that every
+//! sample can be stored.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use oddball_signal::Raw;
 
 use crate::IoError;
 
-/// A temporary file beside the target, removed on drop unless renamed into place.
+/// A temporary file beside the target (the `tempfile` crate's, named `.<name>.<random>.tmp`,
+/// created with `O_EXCL`), removed on drop unless renamed into place with [`TempFile::persist`].
+#[derive(Debug)]
 pub(crate) struct TempFile {
     pub(crate) path: PathBuf,
-    persisted: bool,
+    temp: tempfile::TempPath,
 }
 
 impl TempFile {
-    /// Creates `.<name>.<pid>-<n>.tmp` in the target's directory.
+    /// Creates the temporary file in the target's directory; its permissions are those of a
+    /// file created with [`File::create`] (`0o666` less the umask), not `tempfile`'s `0o600`,
+    /// since it becomes the written file.
     pub(crate) fn create(target: &Path) -> Result<(Self, File), IoError> {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let name = target.file_name().ok_or_else(|| IoError::Io {
-            path: target.to_path_buf(),
+        let err = |path: &Path, source| IoError::Io {
+            path: path.to_path_buf(),
             action: "create",
-            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"),
+            source,
+        };
+        let name = target.file_name().ok_or_else(|| {
+            err(
+                target,
+                std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"),
+            )
         })?;
-        let path = target.with_file_name(format!(
-            ".{}.{}-{}.tmp",
-            name.to_string_lossy(),
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
-        let file = OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&path)
-            .map_err(|source| IoError::Io {
-                path: path.clone(),
-                action: "create",
-                source,
-            })?;
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let mut builder = tempfile::Builder::new();
+        let prefix = format!(".{}.", name.to_string_lossy());
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let (file, temp) = builder
+            .tempfile_in(dir)
+            .map_err(|source| err(dir, source))?
+            .into_parts();
         Ok((
             Self {
-                path,
-                persisted: false,
+                path: temp.to_path_buf(),
+                temp,
             },
             file,
         ))
     }
 
     /// Renames the (closed) file to `target`.
-    pub(crate) fn persist(mut self, target: &Path) -> Result<(), IoError> {
-        std::fs::rename(&self.path, target).map_err(|source| IoError::Io {
+    pub(crate) fn persist(self, target: &Path) -> Result<(), IoError> {
+        self.temp.persist(target).map_err(|e| IoError::Io {
             path: target.to_path_buf(),
             action: "rename",
-            source,
-        })?;
-        self.persisted = true;
-        Ok(())
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        if !self.persisted {
-            let _ = std::fs::remove_file(&self.path);
-        }
+            source: e.error,
+        })
     }
 }
 
