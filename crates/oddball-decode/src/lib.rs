@@ -23,6 +23,7 @@ pub mod logistic;
 pub mod metrics;
 pub mod pca;
 pub mod pipeline;
+pub mod preprocess;
 pub mod riemann;
 pub mod scaler;
 pub mod svm;
