@@ -8,30 +8,26 @@
 //!   and `predict_proba` = P(target).
 //! * Fitted models derive `Serialize`/`Deserialize` so pipelines save and load.
 
-pub mod amplitude;
-pub mod channel_select;
-pub mod covariance;
+pub mod classifiers;
 pub mod decision;
-pub mod emd;
-pub mod ensemble;
 mod error;
-pub mod hilbert;
-pub mod knn;
-pub mod lda;
+pub mod features;
 mod linalg;
-pub mod logistic;
 pub mod metrics;
-pub mod pca;
+pub mod model;
+pub mod model_selection;
 pub mod pipeline;
 pub mod preprocess;
+pub mod preset;
 pub mod riemann;
-pub mod scaler;
-pub mod svm;
 #[cfg(test)]
 mod testutil;
-pub mod toeplitz_lda;
-pub mod tuning;
-pub mod wavelet;
-pub mod xdawn;
+pub mod traits;
+
+// The modules at their paths before the grouping by role.
+pub use classifiers::{ensemble, knn, lda, logistic, svm, toeplitz_lda};
+pub use features::{amplitude, channel_select, emd, hilbert, pca, scaler, wavelet};
+pub use model_selection::tuning;
+pub use riemann::{covariance, xdawn};
 
 pub use error::DecodeError;
