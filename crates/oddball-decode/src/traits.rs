@@ -192,3 +192,34 @@ impl<T: ProbabilisticClassifier> Scorer for T {
         ProbabilisticClassifier::predict_proba(self, x.rows("classifier")?)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::classifiers::ClassifierParams;
+    use crate::lda::LdaParams;
+    use crate::riemann::MdmParams;
+
+    #[test]
+    fn a_step_given_the_wrong_kind_of_features_names_itself() {
+        let rows = FeatureData::Rows(Array2::from_shape_fn((6, 2), |(i, j)| (i * 2 + j) as f64));
+        let y = [true, false, true, false, true, false];
+        let mdm = ClassifierParams::Mdm(MdmParams::default()).fit(rows.view(), &y, 2);
+        assert!(
+            matches!(&mdm, Err(DecodeError::ShapeMismatch { what, .. }) if what == "MDM input"),
+            "{mdm:?}"
+        );
+        let lda = ClassifierParams::Lda(LdaParams::default())
+            .fit(rows.view(), &y, 2)
+            .unwrap();
+        let spd = FeatureData::Spd(Array3::from_shape_fn((2, 2, 2), |(_, i, j)| {
+            f64::from(u8::from(i == j))
+        }));
+        assert!(matches!(
+            lda.scorer().decision_function(spd.view()),
+            Err(DecodeError::ShapeMismatch { .. })
+        ));
+        assert_eq!(spd.select(&[1, 1, 0]).n_epochs(), 3);
+        assert!(spd.into_rows("PCA").is_err());
+    }
+}

@@ -74,6 +74,21 @@ fn a_score_fusion_adds_its_members_scores_in_units_of_their_training_spread() {
     // A fused model whose score scale is not a positive number is refused at load.
     let text = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], fused).to_json();
     assert!(Model::from_json(&text).is_ok());
+    // A fused pipeline that fuses again is refused: fusions do not nest (nor their settings).
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let member = v["pipeline"]["fused"][0].clone();
+    let mut nested = v.clone();
+    nested["pipeline"]["fused"][0]["fused"] = serde_json::json!([member]);
+    let mut nested_params = v.clone();
+    nested_params["pipeline"]["fused"][0]["params"]["fused"] =
+        serde_json::json!([member["params"].clone()]);
+    for bad in [nested, nested_params] {
+        let err = Model::from_json(&bad.to_string()).unwrap_err();
+        assert!(
+            matches!(&err, DecodeError::ModelFormat { reason } if reason.contains("do not nest")),
+            "{err}"
+        );
+    }
     let scale = format!("\"score_scale\":{}", {
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();
         v["pipeline"]["score_scale"].clone()
