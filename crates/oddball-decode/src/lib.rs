@@ -7,6 +7,17 @@
 //! * Classifiers give a continuous score per epoch (`decision_function`, larger = more target-like)
 //!   and `predict_proba` = P(target).
 //! * Fitted models derive `Serialize`/`Deserialize` so pipelines save and load.
+//! * Pipeline steps share the traits of [`traits`] (settings `fit` into a fitted
+//!   [`traits::Transformer`] or [`traits::Scorer`]); features between steps are rows or, for
+//!   the Riemannian classifiers, SPD matrices `(n_epochs, n, n)` ([`traits::FeatureData`]).
+//!
+//! Modules by role, as scikit-learn and pyRiemann group them: [`features`] (amplitude, EMD,
+//! Hilbert, wavelet, PCA, scaler, channel selection), [`classifiers`] (SVM, k-NN, soft vote,
+//! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
+//! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
+//! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
+//! [`metrics`] measures them. The modules keep their former paths too (`oddball_decode::svm`,
+//! `oddball_decode::tuning`, …).
 
 pub mod classifiers;
 pub mod decision;

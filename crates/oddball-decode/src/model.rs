@@ -1,5 +1,5 @@
 //! The saved model: a fitted [`Pipeline`] with the pre-processing and channel layout that feed
-//! it, its format versions, and its JSON form ([`PipelineRepr`], [`ParamsRepr`]: the layout
+//! it, its format versions, and its JSON form (`PipelineRepr`, `ParamsRepr`: the layout
 //! every version so far wrote, kept apart from the in-memory types so those can say what the
 //! file cannot, e.g. that fusions do not nest).
 

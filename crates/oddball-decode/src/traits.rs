@@ -34,7 +34,7 @@ pub trait ProbabilisticClassifier {
         None
     }
     /// [`Self::predict_proba`] from the squared distances `(n_samples, n_rows)` to
-    /// [`Self::distance_rows`], as [`crate::linalg::sq_distances`] computes them.
+    /// [`Self::distance_rows`], as `linalg::sq_distances` computes them.
     fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
         let _ = d2;
         Err(DecodeError::InvalidParameter {

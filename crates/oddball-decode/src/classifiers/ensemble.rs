@@ -11,7 +11,7 @@
 //! SVM to its support vectors, which are training rows too when both were fitted on the same data)
 //! share one distance computation: on first use the ensemble finds each member's rows among the
 //! largest member's by their exact bits, then measures every query against those rows once
-//! ([`crate::linalg::sq_distances`], the formula both members use alone) and hands each member its
+//! (`linalg::sq_distances`, the formula both members use alone) and hands each member its
 //! columns. The scores are the members' own, bit for bit (tested); a member whose rows are not all
 //! found scores alone.
 
