@@ -7,6 +7,17 @@
 //! * Classifiers give a continuous score per epoch (`decision_function`, larger = more target-like)
 //!   and `predict_proba` = P(target).
 //! * Fitted models derive `Serialize`/`Deserialize` so pipelines save and load.
+//! * Pipeline steps share the traits of [`traits`] (settings `fit` into a fitted
+//!   [`traits::Transformer`] or [`traits::Scorer`]); features between steps are rows or, for
+//!   the Riemannian classifiers, SPD matrices `(n_epochs, n, n)` ([`traits::FeatureData`]).
+//!
+//! Modules by role, as scikit-learn and pyRiemann group them: [`features`] (amplitude, EMD,
+//! Hilbert, wavelet, PCA, scaler, channel selection), [`classifiers`] (SVM, k-NN, soft vote,
+//! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
+//! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
+//! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
+//! [`metrics`] measures them. The modules keep their former paths too (`oddball_decode::svm`,
+//! `oddball_decode::tuning`, …).
 //!
 //! # Example
 //! The ROC AUC of target scores: 1 when every target scores above every non-target, 0.5 for a
@@ -21,31 +32,28 @@
 //! # Ok::<(), oddball_decode::DecodeError>(())
 //! ```
 
-pub mod amplitude;
-pub mod channel_select;
-pub mod covariance;
+pub mod classifiers;
 pub mod decision;
-pub mod emd;
-pub mod ensemble;
 mod error;
 pub mod evaluate;
-pub mod hilbert;
-pub mod knn;
-pub mod lda;
+pub mod features;
 mod linalg;
-pub mod logistic;
 pub mod metrics;
-pub mod pca;
+pub mod model;
+pub mod model_selection;
 pub mod pipeline;
+pub mod preprocess;
+pub mod preset;
 pub mod riemann;
-pub mod scaler;
 pub mod stats;
-pub mod svm;
 #[cfg(test)]
 mod testutil;
-pub mod toeplitz_lda;
-pub mod tuning;
-pub mod wavelet;
-pub mod xdawn;
+pub mod traits;
+
+// The modules at their paths before the grouping by role.
+pub use classifiers::{ensemble, knn, lda, logistic, svm, toeplitz_lda};
+pub use features::{amplitude, channel_select, emd, hilbert, pca, scaler, wavelet};
+pub use model_selection::tuning;
+pub use riemann::{covariance, xdawn};
 
 pub use error::DecodeError;

@@ -111,3 +111,94 @@ fn damaged_models_are_errors() {
     );
     assert!(Model::from_json(&deep).is_err());
 }
+
+/// Where the saved models of earlier versions live (see [`saved_models_of_earlier_versions_score_the_same`]).
+fn saved_models_fixture() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/saved_models.json")
+}
+
+/// The model JSON `text` as an older format wrote it: format `version`, without the fields that
+/// format did not have yet (`params` came with 2, the stacking fields with 3).
+fn as_version(text: &str, version: u32) -> String {
+    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
+    v["format_version"] = version.into();
+    let strip = |p: &mut serde_json::Value| {
+        let p = p.as_object_mut().unwrap();
+        if version < 2 {
+            p.remove("params");
+            p.remove("score_scale");
+        }
+        for k in ["score_center", "score_weight", "fusion_intercept"] {
+            p.remove(k);
+        }
+    };
+    strip(&mut v["pipeline"]);
+    if let Some(fused) = v["pipeline"]
+        .get_mut("fused")
+        .and_then(|f| f.as_array_mut())
+    {
+        fused.iter_mut().for_each(strip);
+    }
+    serde_json::to_string(&v).unwrap()
+}
+
+/// Models saved by the code before the pipeline was opened up (commit bf0714e: every preset in
+/// format 3, the small single ones also as format 1, the score fusion as format 2) load and give the
+/// scores they gave then, bit for bit. `ODDBALL_WRITE_MODEL_FIXTURES=1` rewrites the fixture
+/// (only ever from the code whose scores are the reference).
+#[test]
+fn saved_models_of_earlier_versions_score_the_same() {
+    let (x, _) = synthetic(40, 11);
+    let scores_of = |m: &Model| {
+        let s = m.pipeline.decision_function(x.view()).unwrap().to_vec();
+        let p = m.pipeline.predict_proba(x.view()).ok().map(|p| p.to_vec());
+        (s, p)
+    };
+    if std::env::var_os("ODDBALL_WRITE_MODEL_FIXTURES").is_some() {
+        let mut entries = Vec::new();
+        for (name, json) in preset_models() {
+            let mut texts = vec![(3, json.clone())];
+            if name == "lda+riemann" {
+                texts.push((2, as_version(&json, 2)));
+            } else if ["lda", "toeplitz-lda", "riemann", "mdm"].contains(&name.as_str()) {
+                texts.push((1, as_version(&json, 1)));
+            }
+            for (version, text) in texts {
+                let m = Model::from_json(&text).unwrap();
+                let (s, p) = scores_of(&m);
+                entries.push(serde_json::json!({
+                    "name": name, "format_version": version, "model": text,
+                    "decision_function": s, "predict_proba": p,
+                }));
+            }
+        }
+        let text = serde_json::to_string_pretty(&serde_json::Value::from(entries)).unwrap();
+        std::fs::write(saved_models_fixture(), text).unwrap();
+    }
+    let text = std::fs::read_to_string(saved_models_fixture()).expect("the saved-model fixture");
+    let entries: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
+    assert_eq!(entries.len(), PRESETS.len() + 5);
+    for e in &entries {
+        let what = format!("{} (format {})", e["name"], e["format_version"]);
+        let m = Model::from_json(e["model"].as_str().unwrap())
+            .unwrap_or_else(|err| panic!("{what}: {err}"));
+        assert_eq!(Some(m.format_version as u64), e["format_version"].as_u64());
+        let (s, p) = scores_of(&m);
+        let want: Vec<f64> = serde_json::from_value(e["decision_function"].clone()).unwrap();
+        assert_eq!(s, want, "{what}: decision values");
+        if m.format_version == 3 {
+            assert_eq!(
+                m.to_json(),
+                e["model"].as_str().unwrap(),
+                "{what}: saved the same"
+            );
+        }
+        let want: Option<Vec<f64>> = serde_json::from_value(e["predict_proba"].clone()).unwrap();
+        assert_eq!(p, want, "{what}: probabilities");
+        assert_eq!(
+            Model::from_json(&m.to_json()).unwrap().to_json(),
+            m.to_json(),
+            "{what}: saves again the same"
+        );
+    }
+}

@@ -12,6 +12,7 @@ use ndarray::{Array1, Array2, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::scaler::{check_finite, check_labels, check_n_features};
+use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -144,6 +145,28 @@ impl Knn {
     /// Majority vote: P(target) > ½ (scikit-learn's argmax, ties to the non-target class).
     pub fn predict(&self, x: ArrayView2<f64>) -> Result<Vec<bool>> {
         Ok(self.predict_proba(x)?.iter().map(|&p| p > 0.5).collect())
+    }
+}
+
+impl ProbabilisticClassifier for Knn {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Knn::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Knn::decision_function(self, x)
+    }
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        Some(self.training_rows())
+    }
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        Knn::predict_proba_from_sq_distances(self, d2.view())
+    }
+}
+
+impl FitClassifier for KnnParams {
+    type Fitted = Knn;
+    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Knn> {
+        self.fit(x.rows("k-NN")?, y)
     }
 }
 

@@ -24,6 +24,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid};
+use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -223,6 +224,22 @@ impl Logistic {
     /// P(target) per row.
     pub fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         Ok(self.decision_function(x)?.mapv(sigmoid))
+    }
+}
+
+impl ProbabilisticClassifier for Logistic {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Logistic::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Logistic::decision_function(self, x)
+    }
+}
+
+impl FitClassifier for LogisticParams {
+    type Fitted = Logistic;
+    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Logistic> {
+        self.fit(x.rows("logistic regression")?, y)
     }
 }
 

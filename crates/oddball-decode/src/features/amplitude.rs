@@ -23,6 +23,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::hilbert::{HhtExtractor, HhtFeatures};
+use crate::traits::{FeatureData, FitTransformer, Transformer};
 use crate::wavelet::{DwtExtractor, DwtFeatures};
 use crate::DecodeError;
 
@@ -355,6 +356,40 @@ impl PaperExtractor {
             )?;
         }
         Ok(())
+    }
+}
+
+/// Nothing to learn: the settings are the fitted map.
+impl FitTransformer for AmplitudeFeatures {
+    type Fitted = AmplitudeFeatures;
+    fn fit_transformer(&self, _: ArrayView3<f64>, _: &[bool]) -> Result<AmplitudeFeatures> {
+        Ok(*self)
+    }
+    fn is_stateless(&self) -> bool {
+        true
+    }
+}
+
+impl Transformer for AmplitudeFeatures {
+    fn transform_epochs(&self, epochs: ArrayView3<f64>) -> Result<FeatureData> {
+        Ok(FeatureData::Rows(self.transform(epochs)?))
+    }
+}
+
+/// Nothing to learn: the settings are the fitted map.
+impl FitTransformer for PaperFeatures {
+    type Fitted = PaperFeatures;
+    fn fit_transformer(&self, _: ArrayView3<f64>, _: &[bool]) -> Result<PaperFeatures> {
+        Ok(*self)
+    }
+    fn is_stateless(&self) -> bool {
+        true
+    }
+}
+
+impl Transformer for PaperFeatures {
+    fn transform_epochs(&self, epochs: ArrayView3<f64>) -> Result<FeatureData> {
+        Ok(FeatureData::Rows(self.transform(epochs)?))
     }
 }
 

@@ -24,62 +24,12 @@ use serde::{Deserialize, Serialize};
 use crate::knn::{Knn, KnnParams};
 use crate::scaler::{check_finite, check_n_features};
 use crate::svm::{Svm, SvmParams};
+use crate::traits::{FeatureView, FitClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
 
-/// A fitted binary classifier that scores and gives P(target).
-pub trait ProbabilisticClassifier {
-    /// P(target) per row of `x` `(n_samples, n_features)`.
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>>;
-    /// Continuous score per row, larger = more target-like.
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>>;
-    /// The rows a distance-based member measures queries against (see the module docs); `None`
-    /// for any other member.
-    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
-        None
-    }
-    /// [`Self::predict_proba`] from the squared distances `(n_samples, n_rows)` to
-    /// [`Self::distance_rows`], as `linalg::sq_distances` computes them.
-    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
-        let _ = d2;
-        Err(DecodeError::InvalidParameter {
-            name: "member",
-            value: "not distance-based".into(),
-            reason: "this member does not score from distances".into(),
-        })
-    }
-}
-
-impl ProbabilisticClassifier for Svm {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Svm::predict_proba(self, x)
-    }
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Svm::decision_function(self, x)
-    }
-    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
-        self.rbf_support_vectors()
-    }
-    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
-        Svm::predict_proba_from_sq_distances(self, d2)
-    }
-}
-
-impl ProbabilisticClassifier for Knn {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Knn::predict_proba(self, x)
-    }
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Knn::decision_function(self, x)
-    }
-    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
-        Some(self.training_rows())
-    }
-    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
-        Knn::predict_proba_from_sq_distances(self, d2.view())
-    }
-}
+pub use crate::traits::ProbabilisticClassifier;
 
 /// Unfitted member settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -306,6 +256,26 @@ impl<M: ProbabilisticClassifier> ProbabilisticClassifier for SoftVote<M> {
     /// The ensemble's score is its P(target) (as the peer scores its vote).
     fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         self.predict_proba(x)
+    }
+}
+
+impl FitClassifier for SoftVoteParams {
+    type Fitted = SoftVote;
+    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<SoftVote> {
+        self.fit(x.rows("soft vote")?, y)
+    }
+    fn with_scale_gamma(&self, gamma: f64) -> Self {
+        SoftVoteParams {
+            members: self
+                .members
+                .iter()
+                .map(|m| match m {
+                    MemberParams::Svm(p) => MemberParams::Svm(p.with_scale_gamma(gamma)),
+                    m => *m,
+                })
+                .collect(),
+            weights: self.weights.clone(),
+        }
     }
 }
 

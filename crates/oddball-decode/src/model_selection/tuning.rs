@@ -27,12 +27,17 @@ use ndarray::{ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::amplitude::AmplitudeFeatures;
+use crate::classifiers::ClassifierParams;
 use crate::ensemble::MemberParams;
+use crate::features::FeatureParams;
 use crate::knn::KnnParams;
 use crate::metrics::roc_auc;
-use crate::pipeline::{ClassifierParams, FeatureParams, PipelineParams};
+use crate::pipeline::PipelineParams;
+use crate::preset::Preset;
 use crate::svm::SvmParams;
 use crate::DecodeError;
+
+pub use super::folds::{cv_folds, Folds};
 
 type Result<T> = std::result::Result<T, DecodeError>;
 
@@ -46,10 +51,16 @@ pub struct Candidate {
 /// The grid [`PipelineParams::preset`]`(name, sfreq)` is tuned over (see the module doc); the
 /// preset's own settings are one of the candidates.
 pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
-    let base = PipelineParams::preset(name, sfreq)?;
+    grid(name.parse()?, sfreq)
+}
+
+/// The grid `preset` is tuned over at `sfreq` Hz (see the module doc); the preset's own
+/// settings are one of the candidates.
+pub fn grid(preset: Preset, sfreq: f64) -> Result<Vec<Candidate>> {
+    let base = preset.params(sfreq)?;
     let mut out = Vec::new();
-    match name {
-        "lda" | "toeplitz-lda" => {
+    match preset {
+        Preset::Lda | Preset::ToeplitzLda => {
             let mut bins: Vec<usize> = [32.0, 25.0, 20.0]
                 .iter()
                 .map(|&f| crate::amplitude::samples_per(sfreq, f))
@@ -57,15 +68,15 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
             bins.dedup();
             for bin in bins {
                 let mut p = base.clone();
-                p.features = FeatureParams::Amplitude(AmplitudeFeatures::bin_mean(bin)?);
+                p.main.features = FeatureParams::Amplitude(AmplitudeFeatures::bin_mean(bin)?);
                 out.push(Candidate {
                     label: format!("bin {bin} samples ({:.0} ms)", 1000.0 * bin as f64 / sfreq),
                     params: p,
                 });
             }
         }
-        "riemann" | "mdm" => {
-            let cs: &[f64] = if name == "riemann" {
+        Preset::Riemann | Preset::Mdm => {
+            let cs: &[f64] = if preset == Preset::Riemann {
                 &[0.1, 1.0, 10.0]
             } else {
                 &[1.0]
@@ -73,12 +84,12 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
             for nfilter in [2, 4, 6] {
                 for &c in cs {
                     let mut p = base.clone();
-                    match &mut p.features {
-                        FeatureParams::XdawnTangent { xdawn, .. }
-                        | FeatureParams::XdawnCovariances { xdawn, .. } => xdawn.nfilter = nfilter,
-                        _ => unreachable!("the {name} preset has xDAWN features"),
+                    match &mut p.main.features {
+                        FeatureParams::XdawnTangent(f) => f.xdawn.nfilter = nfilter,
+                        FeatureParams::XdawnCovariances(f) => f.xdawn.nfilter = nfilter,
+                        _ => unreachable!("the {preset} preset has xDAWN features"),
                     }
-                    let label = if let ClassifierParams::Logistic(l) = &mut p.classifier {
+                    let label = if let ClassifierParams::Logistic(l) = &mut p.main.classifier {
                         l.c = c;
                         format!("nfilter {nfilter}, C {c}")
                     } else {
@@ -88,12 +99,12 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
                 }
             }
         }
-        "paper" | "paper-svm" => {
+        Preset::Paper | Preset::PaperSvm => {
             for c in [1.0, 10.0] {
                 for factor in [1.0, 0.5] {
                     let mut p = base.clone();
                     let set = |s: &mut SvmParams| s.c = c;
-                    match &mut p.classifier {
+                    match &mut p.main.classifier {
                         ClassifierParams::Svm(s) => set(s),
                         ClassifierParams::Vote(v) => {
                             for m in &mut v.members {
@@ -102,9 +113,9 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
                                 }
                             }
                         }
-                        _ => unreachable!("the {name} preset has an SVM"),
+                        _ => unreachable!("the {preset} preset has an SVM"),
                     }
-                    p.svm_gamma_scale = factor;
+                    p.main.svm_gamma_scale = factor;
                     out.push(Candidate {
                         label: format!("C {c}, gamma {factor}×scale"),
                         params: p,
@@ -113,147 +124,27 @@ pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
             }
         }
         // Equal-weight score fusion has nothing to tune: its members keep their presets' settings.
-        "lda+riemann" => out.push(Candidate {
+        Preset::LdaRiemann => out.push(Candidate {
             label: "lda + riemann, equal weights (no grid)".into(),
             params: base.clone(),
         }),
         // Stacking learns its weights by its own inner cross-validation.
-        "stack" => out.push(Candidate {
+        Preset::Stack => out.push(Candidate {
             label: "toeplitz-lda + riemann + mdm, stacked (no grid)".into(),
             params: base.clone(),
         }),
-        "paper-knn" => {
+        Preset::PaperKnn => {
             for k in [3, 5, 9] {
                 let mut p = base.clone();
-                p.classifier = ClassifierParams::Knn(KnnParams { k });
+                p.main.classifier = ClassifierParams::Knn(KnnParams { k });
                 out.push(Candidate {
                     label: format!("k {k}"),
                     params: p,
                 });
             }
         }
-        other => {
-            return Err(DecodeError::InvalidParameter {
-                name: "pipeline",
-                value: other.to_string(),
-                reason: "no tuning grid for this preset".into(),
-            })
-        }
     }
     Ok(out)
-}
-
-/// Cross-validation folds: the test fold of every epoch.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Folds {
-    fold_of: Vec<usize>,
-    n_folds: usize,
-    grouped: bool,
-}
-
-impl Folds {
-    /// Number of folds (the `k` asked for, or fewer when there are fewer groups).
-    pub fn n_folds(&self) -> usize {
-        self.n_folds
-    }
-
-    /// Test fold of each epoch.
-    pub fn fold_of(&self) -> &[usize] {
-        &self.fold_of
-    }
-
-    /// Whether the folds keep groups together (rather than being stratified by label).
-    pub fn grouped(&self) -> bool {
-        self.grouped
-    }
-
-    /// (training indices, test indices) of fold `f`, each in increasing order.
-    pub fn split(&self, f: usize) -> (Vec<usize>, Vec<usize>) {
-        (0..self.fold_of.len()).partition(|&i| self.fold_of[i] != f)
-    }
-}
-
-/// `k` folds of epochs labelled `y`: groups (e.g. speller characters; `groups[i]` is epoch `i`'s)
-/// kept whole, `min(k, n_groups)` folds of contiguous runs of groups (in order of first
-/// appearance); without groups, stratified by label (`min(k, smaller class)` folds). Every fold
-/// must leave both classes in its training and its test part.
-pub fn cv_folds(y: &[bool], groups: Option<&[usize]>, k: usize) -> Result<Folds> {
-    if k < 2 {
-        return Err(DecodeError::InvalidParameter {
-            name: "folds",
-            value: k.to_string(),
-            reason: "cross-validation needs at least 2 folds".into(),
-        });
-    }
-    let n_targets = y.iter().filter(|&&t| t).count();
-    let n_nontargets = y.len() - n_targets;
-    if n_targets < 2 || n_nontargets < 2 {
-        return Err(DecodeError::NeedBothClasses {
-            n_targets,
-            n_nontargets,
-        });
-    }
-    let folds = match groups {
-        Some(g) => {
-            if g.len() != y.len() {
-                return Err(DecodeError::LabelCount {
-                    n_samples: g.len(),
-                    n_labels: y.len(),
-                });
-            }
-            let mut order: Vec<usize> = Vec::new();
-            let index: Vec<usize> = g
-                .iter()
-                .map(|id| match order.iter().position(|o| o == id) {
-                    Some(p) => p,
-                    None => {
-                        order.push(*id);
-                        order.len() - 1
-                    }
-                })
-                .collect();
-            let n_groups = order.len();
-            let n_folds = k.min(n_groups);
-            if n_folds < 2 {
-                return Err(DecodeError::TooFewSamples {
-                    what: format!(
-                        "cross-validation kept by group needs at least 2 groups, got {n_groups}"
-                    ),
-                });
-            }
-            Folds {
-                fold_of: index.iter().map(|&gi| gi * n_folds / n_groups).collect(),
-                n_folds,
-                grouped: true,
-            }
-        }
-        None => {
-            let n_folds = k.min(n_targets).min(n_nontargets);
-            Folds {
-                fold_of: crate::svm::stratified_folds(y, n_folds)?,
-                n_folds,
-                grouped: false,
-            }
-        }
-    };
-    for f in 0..folds.n_folds {
-        let (tr, te) = folds.split(f);
-        for (part, idx) in [("training", &tr), ("test", &te)] {
-            let t = idx.iter().filter(|&&i| y[i]).count();
-            if t == 0 || t == idx.len() {
-                return Err(DecodeError::TooFewSamples {
-                    what: format!(
-                        "the {part} part of fold {} of {} has {t} targets among {} epochs: \
-                         it needs both classes",
-                        f + 1,
-                        folds.n_folds,
-                        idx.len()
-                    ),
-                });
-            }
-        }
-    }
-    Ok(folds)
 }
 
 /// Cross-validated scores of a grid.
@@ -306,7 +197,7 @@ pub fn grid_search_with(
     }
     let folds = cv_folds(y, groups, k)?;
     let n = candidates.len();
-    let mut fold_auc = vec![vec![0.0; folds.n_folds]; n];
+    let mut fold_auc = vec![vec![0.0; folds.n_folds()]; n];
     let mut done = vec![false; n];
     for i in 0..n {
         if done[i] {
@@ -314,7 +205,7 @@ pub fn grid_search_with(
         }
         if !candidates[i].fused.is_empty() {
             // A score fusion is fitted whole in each fold (its fronts differ).
-            for (f, (tr, te)) in (0..folds.n_folds).map(|f| folds.split(f)).enumerate() {
+            for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
                 let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
                 let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
                 let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&e| g[e]).collect());
@@ -334,26 +225,26 @@ pub fn grid_search_with(
             .filter(|&j| {
                 !done[j]
                     && candidates[j].fused.is_empty()
-                    && candidates[i].same_front(&candidates[j])
+                    && candidates[i].main.same_front(&candidates[j].main)
             })
             .collect();
-        let shared = candidates[i].stateless_features(epochs).transpose()?;
-        for (f, (tr, te)) in (0..folds.n_folds).map(|f| folds.split(f)).enumerate() {
+        let shared = candidates[i].main.stateless_features(epochs).transpose()?;
+        for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
             let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
             let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
             let n_in = epochs.dim().1;
             let (xtr, xte, n_front) = match &shared {
-                Some(x) => (x.select(Axis(0), &tr), x.select(Axis(0), &te), n_in),
+                Some(x) => (x.select(&tr), x.select(&te), n_in),
                 None => {
                     let etr = epochs.select(Axis(0), &tr);
-                    let (front, xtr) = candidates[i].fit_front(etr.view(), &ytr)?;
+                    let (front, xtr) = candidates[i].main.fit_front(etr.view(), &ytr)?;
                     let xte = front.transform(epochs.select(Axis(0), &te).view())?;
                     (xtr, xte, front.n_channels(n_in))
                 }
             };
             for &j in &members {
-                let head = candidates[j].fit_head(xtr.clone(), &ytr, n_front)?;
-                let scores = head.decision_function(xte.view())?;
+                let head = candidates[j].main.fit_head(xtr.clone(), &ytr, n_front)?;
+                let scores = head.decision_function(xte.clone())?;
                 fold_auc[j][f] = roc_auc(&scores.to_vec(), &yte)?;
                 on_fit();
             }
@@ -371,8 +262,8 @@ pub fn grid_search_with(
         best,
         mean_auc,
         fold_auc,
-        n_folds: folds.n_folds,
-        grouped: folds.grouped,
+        n_folds: folds.n_folds(),
+        grouped: folds.grouped(),
     })
 }
 
@@ -515,7 +406,7 @@ mod tests {
         let base = PipelineParams::preset("lda", 64.0).unwrap();
         // Only the first sample of each channel: no sight of the 300 ms bump.
         let mut blind = base.clone();
-        blind.features = FeatureParams::Amplitude(AmplitudeFeatures::decimate(64).unwrap());
+        blind.main.features = FeatureParams::Amplitude(AmplitudeFeatures::decimate(64).unwrap());
         let g = grid_search(&[blind, base], x.view(), &y, Some(&groups), 3).unwrap();
         assert_eq!(g.best, 1, "{:?}", g.mean_auc);
         assert!(

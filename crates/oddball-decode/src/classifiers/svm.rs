@@ -30,6 +30,7 @@ use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::scaler::{check_finite, check_labels, check_n_features};
+use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -568,6 +569,37 @@ impl Svm {
             .iter()
             .map(|&f| f > 0.0)
             .collect())
+    }
+}
+
+impl ProbabilisticClassifier for Svm {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Svm::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Svm::decision_function(self, x)
+    }
+    fn distance_rows(&self) -> Option<ArrayView2<'_, f64>> {
+        self.rbf_support_vectors()
+    }
+    fn predict_proba_from_sq_distances(&self, d2: Array2<f64>) -> Result<Array1<f64>> {
+        Svm::predict_proba_from_sq_distances(self, d2)
+    }
+}
+
+impl FitClassifier for SvmParams {
+    type Fitted = Svm;
+    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Svm> {
+        self.fit(x.rows("SVM")?, y)
+    }
+    fn with_scale_gamma(&self, gamma: f64) -> Self {
+        SvmParams {
+            kernel: match self.kernel {
+                Kernel::Rbf(Gamma::Scale) => Kernel::Rbf(Gamma::Value(gamma)),
+                k => k,
+            },
+            ..*self
+        }
     }
 }
 

@@ -33,6 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid, standardise_columns, to_array2};
+use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -240,6 +241,27 @@ impl ToeplitzLda {
     /// The logistic sigmoid of [`decision_function`](Self::decision_function).
     pub fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         Ok(self.decision_function(x)?.mapv(sigmoid))
+    }
+}
+
+impl ProbabilisticClassifier for ToeplitzLda {
+    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        ToeplitzLda::predict_proba(self, x)
+    }
+    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        ToeplitzLda::decision_function(self, x)
+    }
+}
+
+impl FitClassifier for ToeplitzLdaParams {
+    type Fitted = ToeplitzLda;
+    fn fit_classifier(
+        &self,
+        x: FeatureView<'_>,
+        y: &[bool],
+        n_channels: usize,
+    ) -> Result<ToeplitzLda> {
+        self.fit(x.rows("block-Toeplitz LDA")?, y, n_channels)
     }
 }
 

@@ -12,8 +12,8 @@
 //!
 //! `transform` is `(x − mean) · componentsᵀ`.
 //!
-//! `V` and `s` come from the symmetric eigendecomposition (nalgebra's `SymmetricEigen`) of the
-//! smaller Gram matrix: `Xcᵀ Xc` (`p × p`) when `p ≤ n`, else `Xc Xcᵀ` (`n × n`) with
+//! `V` and `s` come from the symmetric eigendecomposition (nalgebra's `SymmetricEigen`; why not
+//! the crate's own EISPACK solver: see the module doc of `linalg`) of the smaller Gram matrix: `Xcᵀ Xc` (`p × p`) when `p ≤ n`, else `Xc Xcᵀ` (`n × n`) with
 //! `V = Xcᵀ U / s`. This is the eigen route scikit-learn calls `covariance_eigh`; it gives the same
 //! kept components as its SVD to ~1e-12 (tested against scikit-learn in `tests/paper_golden.rs`) at
 //! about half the cost of nalgebra's SVD (0.6 s against 1.5 s for 720 × 656 on this machine), because

@@ -1,0 +1,324 @@
+//! The saved model: a fitted [`Pipeline`] with the pre-processing and channel layout that feed
+//! it, its format versions, and its JSON form (`PipelineRepr`, `ParamsRepr`: the layout
+//! every version so far wrote, kept apart from the in-memory types so those can say what the
+//! file cannot, e.g. that fusions do not nest).
+
+use serde::{Deserialize, Serialize};
+
+use crate::channel_select::{ChannelSelection, ChannelSelectionParams};
+use crate::classifiers::{Classifier, ClassifierParams};
+use crate::features::{FeatureParams, Features};
+use crate::pca::{Pca, PcaParams};
+use crate::pipeline::{
+    FusedMember, Fusion, FusionTerm, Pipeline, PipelineParams, Single, SingleParams,
+};
+use crate::preprocess::Preprocess;
+use crate::scaler::{StandardScaler, StandardScalerParams};
+use crate::DecodeError;
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+/// Version of the saved-model format written; a file of a version not in
+/// [`READABLE_MODEL_VERSIONS`] is refused at load. Version 2 added score fusion (a model of
+/// version 1 reads the same under 2; a binary that knows only 1 refuses a fused model rather
+/// than scoring half of it). Version 3 added stacked fusion (weights, centres, intercept) and the
+/// block-Toeplitz LDA; older files read the same under 3.
+pub const MODEL_FORMAT_VERSION: u32 = 3;
+
+/// Saved-model versions this build reads.
+pub const READABLE_MODEL_VERSIONS: [u32; 3] = [1, 2, 3];
+
+/// A trained model as saved to disk: the pipeline plus everything needed to feed it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Model {
+    pub format_version: u32,
+    pub preprocess: Preprocess,
+    /// Sampling rate of the training data, Hz.
+    pub sfreq: f64,
+    /// Channel names, in the order the pipeline expects.
+    pub ch_names: Vec<String>,
+    pub pipeline: Pipeline,
+    /// How scores become choices in a session (absent for models trained offline).
+    #[serde(default)]
+    pub decision: Option<crate::decision::DecisionModel>,
+    /// How the pipeline's settings were chosen by cross-validation on the training data
+    /// (`oddball train --tune`); absent when the preset's defaults were used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tuning: Option<crate::tuning::TuningReport>,
+}
+
+impl Model {
+    pub fn new(
+        preprocess: Preprocess,
+        sfreq: f64,
+        ch_names: Vec<String>,
+        pipeline: Pipeline,
+    ) -> Self {
+        Self {
+            format_version: MODEL_FORMAT_VERSION,
+            preprocess,
+            sfreq,
+            ch_names,
+            pipeline,
+            decision: None,
+            tuning: None,
+        }
+    }
+
+    /// JSON text of the model.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).expect("a model serialises")
+    }
+
+    /// Reads a model, refusing other format versions before decoding the rest.
+    pub fn from_json(text: &str) -> Result<Self> {
+        #[derive(Deserialize)]
+        struct Version {
+            format_version: Option<u32>,
+        }
+        let v: Version = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
+            reason: e.to_string(),
+        })?;
+        match v.format_version {
+            Some(found) if READABLE_MODEL_VERSIONS.contains(&found) => {}
+            found => {
+                return Err(DecodeError::ModelVersion {
+                    found,
+                    expected: MODEL_FORMAT_VERSION,
+                })
+            }
+        }
+        let model: Self = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
+            reason: e.to_string(),
+        })?;
+        model.pipeline.check_fusion()?;
+        Ok(model)
+    }
+
+    /// Checks that a recording's channels and rate are the ones the model was trained on.
+    pub fn check_layout(&self, ch_names: &[String], sfreq: f64) -> Result<()> {
+        if ch_names != self.ch_names.as_slice() || (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
+            return Err(DecodeError::LayoutMismatch {
+                expected: format!("{} Hz, channels {:?}", self.sfreq, self.ch_names),
+                got: format!("{sfreq} Hz, channels {ch_names:?}"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The saved form of a [`Pipeline`], as every format so far wrote it: the main pipeline's
+/// steps and settings, its fused pipelines in the same form (their own fusion fields empty),
+/// and the fusion terms. A fused pipeline that fuses again is refused: fusions do not nest.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct PipelineRepr {
+    name: String,
+    n_channels: usize,
+    n_times: usize,
+    channels: Option<ChannelSelection>,
+    features: Features,
+    scaler: Option<StandardScaler>,
+    pca: Option<Pca>,
+    classifier: Classifier,
+    /// The settings it was fitted with (absent in models saved before they were kept).
+    #[serde(default)]
+    params: Option<ParamsRepr>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    fused: Vec<PipelineRepr>,
+    /// This pipeline's [`FusionTerm`].
+    #[serde(default = "unit")]
+    score_scale: f64,
+    #[serde(default)]
+    score_center: f64,
+    #[serde(default = "unit")]
+    score_weight: f64,
+    /// The fused score's offset (0 for a fused member).
+    #[serde(default)]
+    fusion_intercept: f64,
+}
+
+/// The saved form of [`PipelineParams`] (a fused member's: no `fused`, standardised `fusion`).
+#[derive(Serialize, Deserialize)]
+pub(crate) struct ParamsRepr {
+    name: String,
+    channel_selection: Option<ChannelSelectionParams>,
+    features: FeatureParams,
+    scaler: Option<StandardScalerParams>,
+    pca: Option<PcaParams>,
+    classifier: ClassifierParams,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    fused: Vec<ParamsRepr>,
+    #[serde(default, skip_serializing_if = "Fusion::is_standardised")]
+    fusion: Fusion,
+    #[serde(default = "unit")]
+    svm_gamma_scale: f64,
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+fn nested(name: &str) -> DecodeError {
+    DecodeError::ModelFormat {
+        reason: format!("fused pipeline {name} fuses further pipelines: fusions do not nest"),
+    }
+}
+
+impl ParamsRepr {
+    fn split(self) -> (SingleParams, Vec<ParamsRepr>, Fusion) {
+        let single = SingleParams {
+            name: self.name,
+            channel_selection: self.channel_selection,
+            features: self.features,
+            scaler: self.scaler,
+            pca: self.pca,
+            classifier: self.classifier,
+            svm_gamma_scale: self.svm_gamma_scale,
+        };
+        (single, self.fused, self.fusion)
+    }
+}
+
+impl From<SingleParams> for ParamsRepr {
+    fn from(p: SingleParams) -> Self {
+        Self {
+            name: p.name,
+            channel_selection: p.channel_selection,
+            features: p.features,
+            scaler: p.scaler,
+            pca: p.pca,
+            classifier: p.classifier,
+            fused: Vec::new(),
+            fusion: Fusion::Standardised,
+            svm_gamma_scale: p.svm_gamma_scale,
+        }
+    }
+}
+
+impl TryFrom<ParamsRepr> for SingleParams {
+    type Error = DecodeError;
+    fn try_from(r: ParamsRepr) -> Result<Self> {
+        let (single, fused, fusion) = r.split();
+        if !fused.is_empty() || !fusion.is_standardised() {
+            return Err(nested(&single.name));
+        }
+        Ok(single)
+    }
+}
+
+impl From<PipelineParams> for ParamsRepr {
+    fn from(p: PipelineParams) -> Self {
+        Self {
+            fused: p.fused.into_iter().map(Into::into).collect(),
+            fusion: p.fusion,
+            ..p.main.into()
+        }
+    }
+}
+
+impl TryFrom<ParamsRepr> for PipelineParams {
+    type Error = DecodeError;
+    fn try_from(r: ParamsRepr) -> Result<Self> {
+        let (main, fused, fusion) = r.split();
+        Ok(Self {
+            main,
+            fused: fused
+                .into_iter()
+                .map(SingleParams::try_from)
+                .collect::<Result<_>>()?,
+            fusion,
+        })
+    }
+}
+
+impl PipelineRepr {
+    fn new(single: Single, term: FusionTerm, params: Option<ParamsRepr>) -> Self {
+        Self {
+            name: single.name,
+            n_channels: single.n_channels,
+            n_times: single.n_times,
+            channels: single.channels,
+            features: single.features,
+            scaler: single.scaler,
+            pca: single.pca,
+            classifier: single.classifier,
+            params,
+            fused: Vec::new(),
+            score_scale: term.scale,
+            score_center: term.center,
+            score_weight: term.weight,
+            fusion_intercept: 0.0,
+        }
+    }
+
+    /// The single pipeline, its fusion term, and the rest.
+    #[allow(clippy::type_complexity)]
+    fn split(
+        self,
+    ) -> (
+        Single,
+        FusionTerm,
+        Option<ParamsRepr>,
+        Vec<PipelineRepr>,
+        f64,
+    ) {
+        let single = Single {
+            name: self.name,
+            n_channels: self.n_channels,
+            n_times: self.n_times,
+            channels: self.channels,
+            features: self.features,
+            scaler: self.scaler,
+            pca: self.pca,
+            classifier: self.classifier,
+        };
+        let term = FusionTerm {
+            scale: self.score_scale,
+            center: self.score_center,
+            weight: self.score_weight,
+        };
+        (single, term, self.params, self.fused, self.fusion_intercept)
+    }
+}
+
+impl From<Pipeline> for PipelineRepr {
+    fn from(p: Pipeline) -> Self {
+        let mut repr = PipelineRepr::new(p.main, p.term, p.params.map(Into::into));
+        repr.fused = p
+            .fused
+            .into_iter()
+            .map(|m| PipelineRepr::new(m.single, m.term, m.params.map(Into::into)))
+            .collect();
+        repr.fusion_intercept = p.fusion_intercept;
+        repr
+    }
+}
+
+impl TryFrom<PipelineRepr> for Pipeline {
+    type Error = DecodeError;
+    fn try_from(r: PipelineRepr) -> Result<Self> {
+        let (main, term, params, fused, fusion_intercept) = r.split();
+        let fused = fused
+            .into_iter()
+            .map(|m| {
+                // A member's own fusion intercept was always written as 0 and never read.
+                let (single, term, params, further, _) = m.split();
+                if !further.is_empty() {
+                    return Err(nested(&single.name));
+                }
+                Ok(FusedMember {
+                    single,
+                    params: params.map(SingleParams::try_from).transpose()?,
+                    term,
+                })
+            })
+            .collect::<Result<_>>()?;
+        Ok(Self {
+            main,
+            params: params.map(PipelineParams::try_from).transpose()?,
+            term,
+            fused,
+            fusion_intercept,
+        })
+    }
+}

@@ -1,0 +1,506 @@
+//! Pipelines: transformers chained into a classifier, fit on epochs and labels, as a
+//! scikit-learn `Pipeline`; and score fusions of single pipelines.
+//!
+//! A single pipeline ([`SingleParams`] → [`Single`]) is `[channel selection] → features →
+//! [StandardScaler] → [PCA] → classifier`, where the features are either a per-epoch map with
+//! nothing to learn (amplitudes; the paper's amplitude + Hilbert–Huang + wavelet map) or learned
+//! xDAWN covariances, projected to the Riemannian tangent space (rows) or kept as SPD matrices
+//! `(n_epochs, n, n)` (for MDM). The feature maps and classifiers are the registries of
+//! [`crate::features`] and [`crate::classifiers`], each step fitted through the traits of
+//! [`crate::traits`]. Every learned step is fitted on the training epochs only.
+//!
+//! A [`PipelineParams`] is one single pipeline plus, optionally, further single pipelines fused
+//! with it ([`fusion`]); a member of a fusion is a single pipeline by its type, so fusions do not
+//! nest. A fitted [`Pipeline`] keeps the [`PipelineParams`] it was fitted with, so a saved model
+//! carries its settings (e.g. those chosen by [`crate::tuning`]). Named settings are
+//! [`crate::preset::Preset`]s; the saved form is [`crate::model`]'s.
+
+pub mod fusion;
+
+use ndarray::{Array1, ArrayView2, ArrayView3, Axis};
+use serde::{Deserialize, Serialize};
+
+use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
+pub use crate::classifiers::{Classifier, ClassifierParams};
+pub use crate::features::{FeatureParams, Features};
+pub use crate::model::{Model, MODEL_FORMAT_VERSION, READABLE_MODEL_VERSIONS};
+use crate::pca::{Pca, PcaParams};
+pub use crate::preprocess::{Preprocess, FLAT_UV};
+pub use crate::preset::{Preset, PRESETS};
+pub use crate::riemann::{XdawnCovFeatures, XdawnTangent};
+use crate::scaler::{StandardScaler, StandardScalerParams};
+use crate::traits::{FeatureData, FeatureView};
+use crate::DecodeError;
+pub use fusion::{FusedMember, Fusion, FusionTerm};
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+/// Unfitted settings of one pipeline (no fusion).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SingleParams {
+    /// A name for reports (the preset's name, or any).
+    pub name: String,
+    pub channel_selection: Option<ChannelSelectionParams>,
+    pub features: FeatureParams,
+    pub scaler: Option<StandardScalerParams>,
+    pub pca: Option<PcaParams>,
+    pub classifier: ClassifierParams,
+    /// Multiplies the RBF SVMs' `γ = 'scale'`: 1 is scikit-learn's `'scale'`; otherwise the
+    /// γ is resolved once on the training features (the Platt-calibration folds inside share it).
+    pub svm_gamma_scale: f64,
+}
+
+/// Unfitted pipeline settings: a single pipeline, and the single pipelines fused with it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(
+    try_from = "crate::model::ParamsRepr",
+    into = "crate::model::ParamsRepr"
+)]
+pub struct PipelineParams {
+    pub main: SingleParams,
+    /// Score fusion: further pipelines fitted on the same epochs, whose scores are combined with
+    /// this one's as [`fusion`](Self::fusion) says. Empty for one pipeline.
+    pub fused: Vec<SingleParams>,
+    /// How the scores of a fusion are combined (ignored without [`fused`](Self::fused)).
+    pub fusion: Fusion,
+}
+
+impl From<SingleParams> for PipelineParams {
+    fn from(main: SingleParams) -> Self {
+        Self {
+            main,
+            fused: Vec::new(),
+            fusion: Fusion::Standardised,
+        }
+    }
+}
+
+impl PipelineParams {
+    /// The [`Preset`] named `name` for epochs sampled at `sfreq` Hz.
+    pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
+        name.parse::<Preset>()?.params(sfreq)
+    }
+
+    /// The name for reports.
+    pub fn name(&self) -> &str {
+        &self.main.name
+    }
+
+    /// The same pipeline with the paper's channel selection (drop the `n_drop` channels whose
+    /// target responses correlate least with the others) in front.
+    pub fn with_channel_drop(mut self, n_drop: usize) -> Self {
+        self.main.channel_selection = Some(ChannelSelectionParams {
+            count: ChannelCount::Drop(n_drop),
+        });
+        self
+    }
+
+    /// Fits every step on training `epochs` `(n_epochs, n_channels, n_times)` with labels `y`.
+    /// A stacked fusion's inner folds are stratified by label ([`fit_grouped`](Self::fit_grouped)
+    /// keeps groups whole).
+    pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Pipeline> {
+        self.fit_grouped(epochs, y, None)
+    }
+
+    /// [`fit`](Self::fit) where epochs belong to `groups` (one id per epoch, e.g. the speller
+    /// character): a stacked fusion's inner folds keep each group whole, as
+    /// [`crate::tuning::cv_folds`] does. Only a stacked fusion reads the groups.
+    pub fn fit_grouped(
+        &self,
+        epochs: ArrayView3<f64>,
+        y: &[bool],
+        groups: Option<&[usize]>,
+    ) -> Result<Pipeline> {
+        let main = self.main.fit(epochs, y)?;
+        let mut pipeline = Pipeline {
+            main,
+            params: Some(self.clone()),
+            term: FusionTerm::UNIT,
+            fused: Vec::new(),
+            fusion_intercept: 0.0,
+        };
+        if self.fused.is_empty() {
+            return Ok(pipeline);
+        }
+        let mut members = Vec::with_capacity(self.fused.len());
+        for p in &self.fused {
+            members.push(FusedMember {
+                single: p.fit(epochs, y)?,
+                params: Some(p.clone()),
+                term: FusionTerm::UNIT,
+            });
+        }
+        pipeline.fused = members;
+        fusion::fit_terms(self, &mut pipeline, epochs, y, groups)?;
+        Ok(pipeline)
+    }
+
+    /// This pipeline and its fused ones, each alone.
+    fn singles(&self) -> impl Iterator<Item = &SingleParams> {
+        std::iter::once(&self.main).chain(&self.fused)
+    }
+}
+
+impl SingleParams {
+    /// Fits every step on `epochs` labelled `y`.
+    pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Single> {
+        let (n_epochs, n_channels, n_times) = epochs.dim();
+        if y.len() != n_epochs {
+            return Err(DecodeError::LabelCount {
+                n_samples: n_epochs,
+                n_labels: y.len(),
+            });
+        }
+        let n_targets = y.iter().filter(|&&t| t).count();
+        if n_targets == 0 || n_targets == n_epochs {
+            return Err(DecodeError::NeedBothClasses {
+                n_targets,
+                n_nontargets: n_epochs - n_targets,
+            });
+        }
+        let (front, x) = self.fit_front(epochs, y)?;
+        let n_front = front.n_channels(n_channels);
+        let Front { channels, features } = front;
+        let Head {
+            scaler,
+            pca,
+            classifier,
+        } = self.fit_head(x, y, n_front)?;
+        Ok(Single {
+            name: self.name.clone(),
+            n_channels,
+            n_times,
+            channels,
+            features,
+            scaler,
+            pca,
+            classifier,
+        })
+    }
+
+    /// Fits the channel selection and the features on `epochs`; returns them with the features
+    /// of `epochs`.
+    pub(crate) fn fit_front(
+        &self,
+        epochs: ArrayView3<f64>,
+        y: &[bool],
+    ) -> Result<(Front, FeatureData)> {
+        let channels = self
+            .channel_selection
+            .map(|p| p.fit(epochs, y))
+            .transpose()?;
+        let selected;
+        let epochs = match &channels {
+            Some(c) => {
+                selected = c.transform(epochs)?;
+                selected.view()
+            }
+            None => epochs.view(),
+        };
+        let features = self.features.fit(epochs, y)?;
+        let x = features.transform(epochs)?;
+        Ok((Front { channels, features }, x))
+    }
+
+    /// Whether `other` has the same channel selection and features (so one fitted front
+    /// serves both).
+    pub(crate) fn same_front(&self, other: &Self) -> bool {
+        self.channel_selection == other.channel_selection && self.features == other.features
+    }
+
+    /// Fits the steps after the features (scaler, PCA, classifier) on features `x` of epochs
+    /// with `n_channels` channels (after channel selection).
+    pub(crate) fn fit_head(&self, x: FeatureData, y: &[bool], n_channels: usize) -> Result<Head> {
+        let mut x = x;
+        let scaler = match &self.scaler {
+            Some(p) => {
+                let rows = x.into_rows("StandardScaler")?;
+                let s = p.fit(rows.view())?;
+                x = FeatureData::Rows(s.transform(rows.view())?);
+                Some(s)
+            }
+            None => None,
+        };
+        let pca = match &self.pca {
+            Some(p) => {
+                let rows = x.into_rows("PCA")?;
+                let m = p.fit(rows.view())?;
+                x = FeatureData::Rows(m.transform(rows.view())?);
+                Some(m)
+            }
+            None => None,
+        };
+        let classifier = with_gamma_factor(&self.classifier, x.view(), self.svm_gamma_scale)?.fit(
+            x.view(),
+            y,
+            n_channels,
+        )?;
+        Ok(Head {
+            scaler,
+            pca,
+            classifier,
+        })
+    }
+
+    /// Features of `epochs` when the front learns nothing (no channel selection, a stateless
+    /// feature map): the same rows whatever the training split. `None` otherwise.
+    pub(crate) fn stateless_features(
+        &self,
+        epochs: ArrayView3<f64>,
+    ) -> Option<Result<FeatureData>> {
+        if self.channel_selection.is_some() || !self.features.is_stateless() {
+            return None;
+        }
+        Some(
+            self.features
+                .fit(epochs, &[])
+                .and_then(|f| f.transform(epochs)),
+        )
+    }
+}
+
+/// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
+/// variance is 0), as [`crate::svm`] resolves it.
+fn gamma_scale(x: FeatureView<'_>) -> f64 {
+    let (sum, len, n_features) = match x {
+        FeatureView::Rows(r) => (r.sum(), r.len(), r.ncols()),
+        FeatureView::Spd(m) => (m.sum(), m.len(), m.dim().1 * m.dim().2),
+    };
+    let n = len as f64;
+    let mean = sum / n;
+    let sq = |v: &f64| (v - mean) * (v - mean);
+    let var = match x {
+        FeatureView::Rows(r) => r.iter().map(sq).sum::<f64>(),
+        FeatureView::Spd(m) => m.iter().map(sq).sum::<f64>(),
+    } / n;
+    if var > 0.0 {
+        1.0 / (n_features as f64 * var)
+    } else {
+        1.0
+    }
+}
+
+/// The same settings with every RBF SVM's `γ = 'scale'` replaced by `factor ×` the scale γ of
+/// the training features `x` (unchanged when `factor` is 1).
+fn with_gamma_factor(
+    classifier: &ClassifierParams,
+    x: FeatureView<'_>,
+    factor: f64,
+) -> Result<ClassifierParams> {
+    if !(factor.is_finite() && factor > 0.0) {
+        return Err(DecodeError::InvalidParameter {
+            name: "svm_gamma_scale",
+            value: factor.to_string(),
+            reason: "must be finite and > 0".into(),
+        });
+    }
+    if factor == 1.0 || x.is_empty() {
+        return Ok(classifier.clone());
+    }
+    Ok(classifier.with_scale_gamma(factor * gamma_scale(x)))
+}
+
+/// The fitted channel selection and features.
+#[derive(Debug)]
+pub(crate) struct Front {
+    channels: Option<ChannelSelection>,
+    features: Features,
+}
+
+impl Front {
+    /// Channels the features see, of `n_channels` given.
+    pub(crate) fn n_channels(&self, n_channels: usize) -> usize {
+        self.channels
+            .as_ref()
+            .map_or(n_channels, |c| c.selected.len())
+    }
+
+    /// Features of `epochs`.
+    pub(crate) fn transform(&self, epochs: ArrayView3<f64>) -> Result<FeatureData> {
+        match &self.channels {
+            Some(c) => self.features.transform(c.transform(epochs)?.view()),
+            None => self.features.transform(epochs),
+        }
+    }
+}
+
+/// The fitted steps after the features.
+#[derive(Debug)]
+pub(crate) struct Head {
+    scaler: Option<StandardScaler>,
+    pca: Option<Pca>,
+    classifier: Classifier,
+}
+
+/// Features `x` through the optional scaler and PCA.
+fn scale_and_project(
+    scaler: Option<&StandardScaler>,
+    pca: Option<&Pca>,
+    mut x: FeatureData,
+) -> Result<FeatureData> {
+    if let Some(s) = scaler {
+        x = FeatureData::Rows(s.transform(x.into_rows("StandardScaler")?.view())?);
+    }
+    if let Some(p) = pca {
+        x = FeatureData::Rows(p.transform(x.into_rows("PCA")?.view())?);
+    }
+    Ok(x)
+}
+
+impl Head {
+    /// Scores of features `x`.
+    pub(crate) fn decision_function(&self, x: FeatureData) -> Result<Array1<f64>> {
+        let x = scale_and_project(self.scaler.as_ref(), self.pca.as_ref(), x)?;
+        self.classifier.scorer().decision_function(x.view())
+    }
+}
+
+/// One fitted pipeline (no fusion).
+#[derive(Debug, Clone)]
+pub struct Single {
+    pub(crate) name: String,
+    pub(crate) n_channels: usize,
+    pub(crate) n_times: usize,
+    pub(crate) channels: Option<ChannelSelection>,
+    pub(crate) features: Features,
+    pub(crate) scaler: Option<StandardScaler>,
+    pub(crate) pca: Option<Pca>,
+    pub(crate) classifier: Classifier,
+}
+
+impl Single {
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Channels and samples per epoch it was fitted on.
+    pub fn epoch_shape(&self) -> (usize, usize) {
+        (self.n_channels, self.n_times)
+    }
+
+    /// The classifier's input for `epochs`: rows `(n_epochs, n_features)`, or SPD matrices
+    /// `(n_epochs, n, n)` for MDM.
+    pub fn features(&self, epochs: ArrayView3<f64>) -> Result<FeatureData> {
+        let (_, n_channels, n_times) = epochs.dim();
+        if (n_channels, n_times) != (self.n_channels, self.n_times) {
+            return Err(DecodeError::ShapeMismatch {
+                what: "epochs (n_channels, n_times)".into(),
+                expected: format!("({}, {})", self.n_channels, self.n_times),
+                got: format!("({n_channels}, {n_times})"),
+            });
+        }
+        let selected;
+        let epochs = match &self.channels {
+            Some(c) => {
+                selected = c.transform(epochs)?;
+                selected.view()
+            }
+            None => epochs.view(),
+        };
+        let x = self.features.transform(epochs)?;
+        scale_and_project(self.scaler.as_ref(), self.pca.as_ref(), x)
+    }
+
+    /// Decision values of `epochs`.
+    pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let x = self.features(epochs)?;
+        self.classifier.scorer().decision_function(x.view())
+    }
+}
+
+/// A fitted pipeline: a single pipeline and, in a score fusion, the single pipelines fused with
+/// it. Saved as [`crate::model`] describes.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(
+    try_from = "crate::model::PipelineRepr",
+    into = "crate::model::PipelineRepr"
+)]
+pub struct Pipeline {
+    pub(crate) main: Single,
+    /// The settings it was fitted with (absent in models saved before they were kept).
+    pub(crate) params: Option<PipelineParams>,
+    /// The main pipeline's share of a fused score.
+    pub(crate) term: FusionTerm,
+    /// Score fusion: the further pipelines whose scores are added (see
+    /// [`PipelineParams::fused`]).
+    pub(crate) fused: Vec<FusedMember>,
+    /// The fused score's offset (the stacking regression's intercept; 0 when standardised).
+    pub(crate) fusion_intercept: f64,
+}
+
+impl Pipeline {
+    pub fn name(&self) -> &str {
+        &self.main.name
+    }
+
+    /// The settings it was fitted with, if the model recorded them.
+    pub fn params(&self) -> Option<&PipelineParams> {
+        self.params.as_ref()
+    }
+
+    /// Channels and samples per epoch it was fitted on.
+    pub fn epoch_shape(&self) -> (usize, usize) {
+        self.main.epoch_shape()
+    }
+
+    /// Indices of the channels kept by channel selection (all when there is none).
+    pub fn selected_channels(&self) -> Vec<usize> {
+        match &self.main.channels {
+            Some(c) => c.selected.clone(),
+            None => (0..self.main.n_channels).collect(),
+        }
+    }
+
+    /// The fitted classifier.
+    pub fn classifier(&self) -> &Classifier {
+        &self.main.classifier
+    }
+
+    /// The fitted PCA, if the pipeline has one.
+    pub fn pca(&self) -> Option<&Pca> {
+        self.main.pca.as_ref()
+    }
+
+    /// The classifier's input for `epochs` (of the main pipeline of a fusion).
+    pub fn features(&self, epochs: ArrayView3<f64>) -> Result<FeatureData> {
+        self.main.features(epochs)
+    }
+
+    /// The pipelines fused with this one (empty for a single pipeline).
+    pub fn fused(&self) -> &[FusedMember] {
+        &self.fused
+    }
+
+    /// Continuous target evidence per epoch (larger = more target-like). For a score fusion,
+    /// the fused score (see [`Fusion`]).
+    pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let own = self.main.decision_function(epochs)?;
+        if self.fused.is_empty() {
+            return Ok(own);
+        }
+        let mut total = self.term.apply(own);
+        for m in &self.fused {
+            total += &m.term.apply(m.single.decision_function(epochs)?);
+        }
+        Ok(total + self.fusion_intercept)
+    }
+
+    /// P(target) per epoch. A score fusion has no calibrated probability: the logistic of its
+    /// fused score.
+    pub fn predict_proba(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        if !self.fused.is_empty() {
+            return Ok(self.decision_function(epochs)?.mapv(crate::linalg::sigmoid));
+        }
+        let x = self.main.features(epochs)?;
+        self.main.classifier.scorer().predict_proba(x.view())
+    }
+
+    /// Target evidence of one epoch `(n_channels, n_times)`, for online use.
+    pub fn score_epoch(&self, epoch: ArrayView2<f64>) -> Result<f64> {
+        let one = epoch.insert_axis(Axis(0));
+        Ok(self.decision_function(one)?[0])
+    }
+}
+
+#[cfg(test)]
+mod tests;
