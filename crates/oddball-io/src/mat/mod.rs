@@ -1,6 +1,6 @@
 //! MATLAB MAT files, versions 5 and 7 (v7 = v5 with zlib-compressed variables), read from
 //! scratch; and the BCI Competition layout (`signal` + per-sample `StimulusCode` / `Flashing` /
-//! `StimulusType`, data set IIb of BCI Competition II and II of III) as a speller [`Recording`]
+//! `StimulusType`, data set IIb of BCI Competition II and II of III) as a speller [`Recording`](crate::Recording)
 //! (see [`bci`]).
 //!
 //! # Why not a crate
