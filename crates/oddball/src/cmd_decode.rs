@@ -11,7 +11,7 @@ use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::tuning::TuningReport;
 use serde::Serialize;
 
-use crate::load::{load_epochs, load_model};
+use crate::load::{load_epochs, load_model, EventArgs};
 use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
 
 #[derive(Debug, clap::Args)]
@@ -41,6 +41,8 @@ pub struct TrainArgs {
     /// Folds of the tuning cross-validation.
     #[arg(long, default_value_t = 5, requires = "tune")]
     pub folds: usize,
+    #[command(flatten)]
+    pub events: EventArgs,
 }
 
 #[derive(Debug, clap::Args)]
@@ -85,6 +87,8 @@ pub struct EvaluateArgs {
     /// Also write the results as JSON here.
     #[arg(short, long, visible_alias = "json", value_name = "FILE")]
     pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub events: EventArgs,
 }
 
 /// A progress bar over `len` fits on stderr; indicatif hides it when stderr is not a terminal
@@ -201,7 +205,7 @@ fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
 
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
-    let recs = load_epochs(&args.files, &pre)?;
+    let recs = load_epochs(&args.files, &pre, &args.events)?;
     let mut report = Report::new(&args.pipeline);
     let trained = evaluate::train(
         &args.pipeline,
@@ -246,7 +250,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
                 return evaluate_sessions(args, &model, path);
             }
         }
-        let test = load_epochs(&args.test, &model.preprocess)?;
+        let test = load_epochs(&args.test, &model.preprocess, &args.events)?;
         for rec in &test {
             model
                 .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
@@ -258,8 +262,8 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let train = load_epochs(&args.train, &pre)?;
-    let test = load_epochs(&args.test, &pre)?;
+    let train = load_epochs(&args.train, &pre, &args.events)?;
+    let test = load_epochs(&args.test, &pre, &args.events)?;
     let params = EvaluateParams {
         presets: args.pipeline.0.clone(),
         folds: args.folds,

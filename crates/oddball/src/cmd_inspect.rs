@@ -31,12 +31,15 @@ pub struct InspectArgs {
     /// End of the plotted epoch relative to the onset, s.
     #[arg(long, default_value_t = 0.8)]
     pub tmax: f64,
+    #[command(flatten)]
+    pub events: crate::load::EventArgs,
 }
 
 pub fn run(args: &InspectArgs) -> Result<()> {
+    let mapping = args.events.mapping()?;
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let rec = crate::load::read(path)?;
+        let rec = crate::load::read_mapped(path, mapping.as_ref())?;
         print!("{}", summary(&rec));
         recordings.push(rec);
     }

@@ -21,8 +21,8 @@ mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
-mod pilot;
 mod load;
+mod pilot;
 mod plot;
 mod preset_arg;
 
