@@ -77,7 +77,7 @@ pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,
 };
-pub use speller::{CodeOrder, Speller};
+pub use speller::{CodeOrder, Speller, TextLabelError};
 pub use xdf::{
     parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,
     XdfFile, XdfFormat, XdfInfo, XdfMarker, XdfOptions, XdfStream, XdfStreamData, XdfStreamInfo,

@@ -11,6 +11,19 @@ use std::collections::BTreeMap;
 use oddball_signal::{Event, Events};
 use serde::{Deserialize, Serialize};
 
+/// A spelled text that does not fit a recording ([`Speller::label_from_text`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum TextLabelError {
+    #[error("the text {text:?} has {symbols} symbols but the recording has {blocks} characters")]
+    Length {
+        blocks: usize,
+        symbols: usize,
+        text: String,
+    },
+    #[error("symbol {index} of the text, {symbol:?}, is not in the speller matrix")]
+    NotInMatrix { symbol: String, index: usize },
+}
+
 /// The character written by [`Speller::decode`] for a block whose target row or column is unknown.
 pub const UNDECIDED: char = '\u{FFFD}';
 
@@ -170,6 +183,42 @@ impl Speller {
             .collect()
     }
 
+    /// The events with target flags from the text that was spelled (for runs recorded without
+    /// labels, e.g. a competition's test runs): in character block `k`, a flash is a target when
+    /// its row or column holds the `k`-th symbol of `text`. Events that flash no row or column
+    /// keep their flag.
+    pub fn label_from_text(&self, events: &Events, text: &str) -> Result<Events, TextLabelError> {
+        let symbols: Vec<String> = text.chars().map(String::from).collect();
+        let blocks = self.character_blocks(events);
+        if blocks.len() != symbols.len() {
+            return Err(TextLabelError::Length {
+                blocks: blocks.len(),
+                symbols: symbols.len(),
+                text: text.chars().take(80).collect(),
+            });
+        }
+        let mut out = Vec::with_capacity(events.len());
+        for (k, (block, sym)) in blocks.iter().zip(&symbols).enumerate() {
+            let (r, c) = self
+                .position(sym)
+                .ok_or_else(|| TextLabelError::NotInMatrix {
+                    symbol: sym.clone(),
+                    index: k,
+                })?;
+            for e in block.iter() {
+                let target = if let Some(row) = self.row_of_code(e.code) {
+                    Some(row == r)
+                } else {
+                    self.col_of_code(e.code).map(|col| col == c).or(e.target)
+                };
+                let mut e = e.clone();
+                e.target = target;
+                out.push(e);
+            }
+        }
+        Ok(Events::new(out))
+    }
+
     /// The spelled text: the symbols of [`Speller::decode_blocks`] joined, with [`UNDECIDED`]
     /// for a block that has no target row or column.
     pub fn decode(&self, events: &Events) -> String {
@@ -183,6 +232,33 @@ impl Speller {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn labels_from_the_spelled_text_decode_back_to_it() {
+        let s = speller();
+        let labelled = events_for(&s, "Q7");
+        let bare = Events::new(
+            labelled
+                .iter()
+                .map(|e| Event::new(e.onset, e.code))
+                .collect(),
+        );
+        let relabelled = s.label_from_text(&bare, "Q7").unwrap();
+        assert_eq!(relabelled, labelled);
+        assert_eq!(s.decode(&relabelled), "Q7");
+        assert!(matches!(
+            s.label_from_text(&bare, "Q"),
+            Err(TextLabelError::Length {
+                blocks: 2,
+                symbols: 1,
+                ..
+            })
+        ));
+        assert!(matches!(
+            s.label_from_text(&bare, "Q!"),
+            Err(TextLabelError::NotInMatrix { index: 1, .. })
+        ));
+    }
 
     fn speller() -> Speller {
         let mut s =

@@ -69,6 +69,15 @@ pub struct EvaluateArgs {
         )
     )]
     pub test: Vec<PathBuf>,
+    /// The text each test recording spelled, for speller runs recorded without labels (e.g.
+    /// the BCI Competition's test runs): one per test file, comma-separated (e.g. HAM,PIE).
+    #[arg(
+        long,
+        value_name = "TEXT[,TEXT…]",
+        value_delimiter = ',',
+        requires = "test"
+    )]
+    pub test_text: Vec<String>,
     /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
     /// paper, paper-svm, paper-knn), or `all`.
     #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
@@ -205,7 +214,7 @@ fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
 
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
-    let recs = load_epochs(&args.files, &pre, &args.events)?;
+    let recs = load_epochs(&args.files, &pre, &args.events, &[])?;
     let mut report = Report::new(&args.pipeline);
     let trained = evaluate::train(
         &args.pipeline,
@@ -250,7 +259,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
                 return evaluate_sessions(args, &model, path);
             }
         }
-        let test = load_epochs(&args.test, &model.preprocess, &args.events)?;
+        let test = load_epochs(&args.test, &model.preprocess, &args.events, &args.test_text)?;
         for rec in &test {
             model
                 .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
@@ -262,8 +271,8 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let train = load_epochs(&args.train, &pre, &args.events)?;
-    let test = load_epochs(&args.test, &pre, &args.events)?;
+    let train = load_epochs(&args.train, &pre, &args.events, &[])?;
+    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
     let params = EvaluateParams {
         presets: args.pipeline.0.clone(),
         folds: args.folds,

@@ -70,7 +70,8 @@ fn check_labelled(rec: &Recording) -> Result<()> {
         anyhow::bail!(
             "{} has {} events but none is labelled target or non-target (its events: {}); say \
              which are with --target-events and --nontarget-events (codes or marker texts, e.g. \
-             --target-events 2 --nontarget-events 1)",
+             --target-events 2 --nontarget-events 1), or for a speller run give the text it \
+             spelled with --test-text",
             rec.path.display(),
             events.len(),
             describe_events(events)
@@ -94,18 +95,46 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
     })
 }
 
-/// Reads, labels (see [`EventArgs`]) and epochs each recording; a recording whose events carry
-/// no labels is an error saying how to label them.
+/// Target flags from the text spelled in a speller recording recorded without labels.
+fn label_from_text(rec: &mut Recording, text: &str) -> Result<()> {
+    let path = rec.path.display().to_string();
+    let Some(speller) = rec.speller.as_mut() else {
+        anyhow::bail!("{path}: --test-text needs a speller recording, and this one is not");
+    };
+    let events = speller
+        .label_from_text(rec.raw.events(), text)
+        .with_context(|| format!("labelling {path} from the text {text:?}"))?;
+    speller.text_to_spell = Some(text.to_string());
+    rec.raw
+        .set_events(events)
+        .with_context(|| format!("labelling {path}"))
+}
+
+/// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
+/// recorded without labels) and epochs each recording; a recording whose events carry no
+/// labels is an error saying how to label them.
 pub fn load_epochs(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
+    texts: &[String],
 ) -> Result<Vec<EpochedRecording>> {
+    if !texts.is_empty() && texts.len() != paths.len() {
+        anyhow::bail!(
+            "--test-text gives {} texts for {} test files (one per file)",
+            texts.len(),
+            paths.len()
+        );
+    }
     let mapping = events.mapping()?;
     paths
         .iter()
-        .map(|p| {
-            let rec = read_mapped(p, mapping.as_ref())?;
+        .enumerate()
+        .map(|(i, p)| {
+            let mut rec = read_mapped(p, mapping.as_ref())?;
+            if let Some(text) = texts.get(i) {
+                label_from_text(&mut rec, text)?;
+            }
             check_labelled(&rec)?;
             epoch(rec, pre)
         })
