@@ -275,7 +275,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
 fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
     if let Some(path) = &args.plot {
         if results.iter().any(|r| r.speller_accuracy.is_some()) {
-            crate::plot::accuracy::draw_accuracy(path, results)?;
+            oddball_plot::accuracy::draw_accuracy(path, results)?;
             println!("wrote {}", path.display());
         } else {
             println!(

@@ -273,13 +273,17 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
     fs::write(args.out.join("model.json"), &prep.model_json)
         .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
-    crate::plot::task::draw_calibration_erp(&args.out.join("erp.png"), &prep.erp)?;
+    let erp_png = args.out.join("erp.png");
+    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+        .with_context(|| format!("drawing {}", erp_png.display()))?;
     let expected: Vec<Vector2<f64>> = pen
         .expected_m
         .iter()
         .map(|p| Vector2::new(p[0], p[1]))
         .collect();
-    crate::plot::arm::draw_pen_trace(&arm, &expected, &args.out.join("pen_trace.png"))?;
+    let pen_png = args.out.join("pen_trace.png");
+    oddball_plot::arm::draw_pen_trace(&arm, &expected, &pen_png)
+        .with_context(|| format!("drawing {}", pen_png.display()))?;
     let calibration = CalibrationSummary::from(&prep.calibration);
     let subject_label = prep.subject.clone();
     let fit_seconds = prep.calibration.fit_seconds;

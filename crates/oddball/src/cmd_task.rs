@@ -210,7 +210,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         )
         .collect();
     write_common(&args.out, &prep, &report.steps, &expected)?;
-    crate::plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
+    oddball_plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
     write_summary(&args.out, "track", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
@@ -250,8 +250,12 @@ fn write_common(
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
     fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
-    crate::plot::task::draw_calibration_erp(&out.join("erp.png"), &prep.erp)?;
-    crate::plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &out.join("pen_trace.png"))
+    let erp_png = out.join("erp.png");
+    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+        .with_context(|| format!("drawing {}", erp_png.display()))?;
+    let pen_png = out.join("pen_trace.png");
+    oddball_plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &pen_png)
+        .with_context(|| format!("drawing {}", pen_png.display()))
 }
 
 /// summary.json: what ran, the calibration and the task's report.

@@ -21,9 +21,8 @@ mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
-mod pilot;
 mod load;
-mod plot;
+mod pilot;
 mod preset_arg;
 
 #[derive(Debug, Parser)]
