@@ -263,3 +263,49 @@ pub fn draw_text(r: &DrawReport) -> String {
         r.totals
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(index: usize, intended: Command, decided: Option<Command>) -> DecisionRow {
+        DecisionRow {
+            index,
+            intended: Some(intended),
+            decided,
+            abstained: decided.is_none(),
+            rounds: 4,
+            confidence: 0.9,
+            seconds: 2.0,
+            arm_refusal: None,
+            pen_m: None,
+        }
+    }
+
+    #[test]
+    fn scores_count_right_wrong_and_abstained_decisions() {
+        let rows = [
+            row(1, Command::Up, Some(Command::Up)),
+            row(2, Command::Left, Some(Command::Right)),
+            row(3, Command::Down, None),
+            row(4, Command::Down, Some(Command::Down)),
+        ];
+        let s = scores(&rows, &DecisionRule::Fixed { rounds: 4 });
+        assert_eq!(s.rule, "fixed 4 rounds");
+        assert_eq!((s.decisions, s.correct, s.abstained), (4, 2, 1));
+        assert_eq!(s.accuracy, 0.5);
+        assert_eq!(s.mean_rounds, 4.0);
+        assert_eq!(s.itr, Itr::new(4, 0.5, 2.0));
+    }
+
+    #[test]
+    fn a_row_prints_its_mark_and_an_abstention() {
+        let ok = row_text(&row(1, Command::Up, Some(Command::Up)));
+        assert_eq!(
+            ok,
+            "decision  1: intended up    decided up      ok    rounds 4  confidence 0.900  2.00 s"
+        );
+        let abstained = row_text(&row(12, Command::Up, None));
+        assert!(abstained.starts_with("decision 12: intended up    decided abstain WRONG"));
+    }
+}
