@@ -17,6 +17,15 @@ pub fn draw_pen_trace(
     draw(arm, &keys, expected, path)
 }
 
+/// The pen's recorded positions (x, z), metres.
+pub(crate) fn pen_trace_xz(sim: &ArmSim) -> Vec<(f64, f64)> {
+    sim.trace()
+        .points()
+        .iter()
+        .map(|p| (p.p[0], p.p[1]))
+        .collect()
+}
+
 /// Joint angles at the given simulation times (the recorded samples nearest to them).
 pub fn configurations_at(sim: &ArmSim, times: &[f64]) -> Vec<(f64, Vector2<f64>)> {
     let samples = sim.samples();
@@ -140,12 +149,7 @@ pub fn draw(
     const H: u32 = 720;
     let model = *sim.plant();
     let board = sim.workspace().board;
-    let trace: Vec<(f64, f64)> = sim
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
+    let trace = pen_trace_xz(sim);
     let expected_xy: Vec<(f64, f64)> = expected.iter().map(|p| (p[0], p[1])).collect();
 
     let mut overview_pts: Vec<Vector2<f64>> = board.corners().to_vec();

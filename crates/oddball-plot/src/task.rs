@@ -26,12 +26,7 @@ pub fn draw_calibration_erp(path: &Path, erp: &Epochs) -> Result<(), PlotError> 
 
 /// Targets (numbered), the pen's path and each target's minimal path (x first, then z).
 pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<(), PlotError> {
-    let trace: Vec<(f64, f64)> = arm
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
+    let trace = crate::arm::pen_trace_xz(arm);
     let mut xs: Vec<f64> = trace.iter().map(|p| p.0).collect();
     let mut zs: Vec<f64> = trace.iter().map(|p| p.1).collect();
     for t in &r.targets {
