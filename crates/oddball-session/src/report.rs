@@ -1,9 +1,10 @@
 //! What a copy task's run reports (`oddball demo`'s `summary.json` and printed lines): one row
 //! per decision, accuracy and ITR under a stopping rule, the pen's corners against the path of
 //! the executed commands, the calibration without its wall-clock time, and their text (and the
-//! drawing task's line).
+//! drawing task's line), and a session file's decisions re-made offline ([`SessionResult`]).
 
 use std::fmt::Write as _;
+use std::path::PathBuf;
 
 use nalgebra::Vector2;
 use oddball_arm::{planned_path, ArmSim, Command};
@@ -13,6 +14,7 @@ use serde::Serialize;
 
 use crate::engine::{CalibrationReport, TrialOutcome};
 use crate::paradigm::FourBulbParams;
+use crate::record::Redecision;
 use crate::replay::ReplayDecision;
 use crate::task::{DrawReport, Step};
 
@@ -261,6 +263,94 @@ pub fn draw_text(r: &DrawReport) -> String {
         r.mean_deviation_m * 1e3,
         r.max_deviation_m * 1e3,
         r.totals
+    )
+}
+
+/// A session file's decisions made again offline by a model and scored (`oddball evaluate
+/// --model model.json --test session.dat`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SessionResult {
+    pub file: PathBuf,
+    pub decisions: Vec<Redecision>,
+    /// Decisions equal to the recorded ones.
+    pub identical_to_recorded: usize,
+    pub accuracy: f64,
+    pub itr: Itr,
+}
+
+impl SessionResult {
+    /// Scores `decisions` re-made from `file`: Wolpaw ITR with 4 choices.
+    pub fn new(file: PathBuf, decisions: Vec<Redecision>) -> Self {
+        let same = decisions
+            .iter()
+            .filter(|d| d.decided() == d.recorded)
+            .count();
+        let n = decisions.len().max(1) as f64;
+        let correct = Self::count_correct(&decisions);
+        let seconds = decisions.iter().map(|d| d.seconds).sum::<f64>() / n;
+        let accuracy = correct as f64 / n;
+        Self {
+            file,
+            identical_to_recorded: same,
+            decisions,
+            accuracy,
+            itr: Itr::new(4, accuracy, seconds),
+        }
+    }
+
+    fn count_correct(decisions: &[Redecision]) -> usize {
+        decisions
+            .iter()
+            .filter(|d| d.decided().is_some() && d.decided() == d.intended)
+            .count()
+    }
+
+    /// Decisions equal to the intended command.
+    pub fn correct(&self) -> usize {
+        Self::count_correct(&self.decisions)
+    }
+
+    /// `  N online decisions: K identical to the recorded ones; accuracy …, ITR …`.
+    pub fn summary_line(&self) -> String {
+        format!(
+            "  {} online decisions: {} identical to the recorded ones; accuracy {:.1} % ({}/{}), ITR {:.2} bits/decision, {:.2} bits/min",
+            self.decisions.len(),
+            self.identical_to_recorded,
+            100.0 * self.accuracy,
+            self.correct(),
+            self.decisions.len(),
+            self.itr.bits_per_selection,
+            self.itr.bits_per_minute
+        )
+    }
+}
+
+/// One re-made decision as printed, the session's bulbs naming the codes (`—` for none).
+pub fn redecision_line(d: &Redecision, bulbs: &[Command]) -> String {
+    let name = |c: Option<u32>| {
+        c.and_then(|c| bulbs.get(c as usize - 1))
+            .map_or("—".to_string(), |b| b.to_string())
+    };
+    let decided = match d.outcome {
+        TrialOutcome::Chosen { code } => name(Some(code)),
+        _ => "abstain".into(),
+    };
+    format!(
+        "  trial {:>3}: intended {:<5} decided {:<7} rounds {}  recorded {:<7} {}",
+        d.number,
+        name(d.intended),
+        decided,
+        d.rounds,
+        if d.recorded.is_some() {
+            name(d.recorded)
+        } else {
+            "abstain".into()
+        },
+        if d.decided() == d.recorded {
+            "same"
+        } else {
+            "DIFFERENT"
+        }
     )
 }
 
