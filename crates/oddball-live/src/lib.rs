@@ -10,10 +10,14 @@
 //!   (`sim`, `nic:HOST:PORT`, `lsl:NAME`, `replay:FILE`).
 //! * [`nic`]: Neuroelectrics NIC's TCP stream as a live source (reconnecting), and a simulated
 //!   Starstim serving one; the byte codec is `oddball_io::nic`.
+//! * [`online`]: what `oddball online` reports of a live session (`summary.json`, its lines).
+//! * [`pilot`]: the calibrated pilot of `demo` and `task` (a live session or a replayed
+//!   recording) and what its run leaves behind.
 //! * [`playback`]: a recording played back as a live source (`--source replay:FILE`).
 //! * [`record`]: the recording, XDF flushed per block.
 //! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
-//!   decisions out) and the simulated subject as a live LSL amplifier.
+//!   decisions out), LSL as a live source (`lsl_live`) and the simulated subject as a live LSL
+//!   amplifier (`lsl_sim`).
 //!
 //! # Example
 //! The timing report's summary of a list of delays (population standard deviation):
@@ -33,8 +37,12 @@ pub mod live;
 pub mod lsl;
 #[cfg(feature = "lsl")]
 pub mod lsl_live;
+#[cfg(feature = "lsl")]
+pub mod lsl_sim;
 pub mod nic;
+pub mod online;
 pub mod panel;
+pub mod pilot;
 pub mod playback;
 pub mod record;
 pub mod source;

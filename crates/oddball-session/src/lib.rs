@@ -10,6 +10,8 @@
 //!   presenter, the observer (a [`roles::Subject`] is all three).
 //! * [`engine`]: the session: calibration, training, online decisions driving the arm.
 //! * [`task`]: tasks people do with a pilot (copy, tracking, drawing).
+//! * [`report`]: what a copy task's run reports: decision rows, accuracy and ITR, the pen's
+//!   corners, and their text.
 //!
 //! # Example
 //! The paper's four-bulb panel gives each command its own stimulus code:
@@ -30,6 +32,7 @@ pub mod online;
 pub mod paradigm;
 pub mod record;
 pub mod replay;
+pub mod report;
 pub mod roles;
 pub mod subject;
 pub mod task;

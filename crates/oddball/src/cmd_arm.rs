@@ -76,7 +76,7 @@ pub fn run(args: &ArmArgs) -> Result<()> {
     }
     let expected = expected_path(start, &report);
     let keys = key_configurations(&sim, &report);
-    crate::plot::arm::draw(&sim, &keys, &expected, &plot_path)
+    oddball_plot::arm::draw(&sim, &keys, &expected, &plot_path)
         .with_context(|| format!("drawing {}", plot_path.display()))?;
 
     print!("{}", table(&sim, &config, &report, &expected));
@@ -219,5 +219,5 @@ fn key_configurations(sim: &ArmSim, report: &ProgramReport) -> Vec<(f64, Vector2
     let times: Vec<f64> = std::iter::once(0.0)
         .chain(report.outcomes.iter().map(|o| o.stats().t_end_s))
         .collect();
-    crate::plot::arm::configurations_at(sim, &times)
+    oddball_plot::arm::configurations_at(sim, &times)
 }

@@ -6,10 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress};
-use oddball_decode::metrics::Itr;
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::tuning::TuningReport;
-use serde::Serialize;
 
 use crate::load::{load_epochs, load_model, EventArgs};
 use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
@@ -288,7 +286,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
 fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
     if let Some(path) = &args.plot {
         if results.iter().any(|r| r.speller_accuracy.is_some()) {
-            crate::plot::accuracy::draw_accuracy(path, results)?;
+            oddball_plot::accuracy::draw_accuracy(path, results)?;
             println!("wrote {}", path.display());
         } else {
             println!(
@@ -352,17 +350,9 @@ fn print_row(r: &PipelineResult) {
 /// Re-evaluates oddball session files (`oddball demo` writes `session.dat`) with a model:
 /// every online decision recomputed from the raw EEG, compared with the recorded one.
 fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> Result<()> {
-    use oddball_session::engine::TrialOutcome;
     use oddball_session::record::{read_session, reevaluate};
+    use oddball_session::report::{redecision_line, SessionResult};
 
-    #[derive(Serialize)]
-    struct SessionResult {
-        file: PathBuf,
-        decisions: Vec<oddball_session::record::Redecision>,
-        identical_to_recorded: usize,
-        accuracy: f64,
-        itr: Itr,
-    }
     let mut results = Vec::new();
     for path in &args.test {
         let rec = crate::load::read(path)?;
@@ -374,61 +364,13 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
                 model_path.display()
             )
         })?;
-        let name = |c: Option<u32>| {
-            c.and_then(|c| saved.bulbs.get(c as usize - 1))
-                .map_or("—".to_string(), |b| b.to_string())
-        };
         println!("{}:", path.display());
         for d in &decisions {
-            let decided = match d.outcome {
-                TrialOutcome::Chosen { code } => name(Some(code)),
-                _ => "abstain".into(),
-            };
-            println!(
-                "  trial {:>3}: intended {:<5} decided {:<7} rounds {}  recorded {:<7} {}",
-                d.number,
-                name(d.intended),
-                decided,
-                d.rounds,
-                if d.recorded.is_some() {
-                    name(d.recorded)
-                } else {
-                    "abstain".into()
-                },
-                if d.decided() == d.recorded {
-                    "same"
-                } else {
-                    "DIFFERENT"
-                }
-            );
+            println!("{}", redecision_line(d, &saved.bulbs));
         }
-        let same = decisions
-            .iter()
-            .filter(|d| d.decided() == d.recorded)
-            .count();
-        let n = decisions.len().max(1) as f64;
-        let correct = decisions
-            .iter()
-            .filter(|d| d.decided().is_some() && d.decided() == d.intended)
-            .count();
-        let seconds = decisions.iter().map(|d| d.seconds).sum::<f64>() / n;
-        let accuracy = correct as f64 / n;
-        let itr = Itr::new(4, accuracy, seconds);
-        println!(
-            "  {} online decisions: {same} identical to the recorded ones; accuracy {:.1} % ({correct}/{}), ITR {:.2} bits/decision, {:.2} bits/min",
-            decisions.len(),
-            100.0 * accuracy,
-            decisions.len(),
-            itr.bits_per_selection,
-            itr.bits_per_minute
-        );
-        results.push(SessionResult {
-            file: path.clone(),
-            identical_to_recorded: same,
-            decisions,
-            accuracy,
-            itr,
-        });
+        let result = SessionResult::new(path.clone(), decisions);
+        println!("{}", result.summary_line());
+        results.push(result);
     }
     if let Some(path) = &args.out {
         std::fs::write(path, serde_json::to_string_pretty(&results)?)

@@ -46,7 +46,7 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     if let Some(plot) = &args.plot {
         let (target, nontarget) = erp_epochs(&recordings, args)?;
         let band = format!("{}–{} Hz", args.l_freq, args.h_freq);
-        crate::plot::erp::draw_erp(plot, &target, &nontarget, &band)?;
+        oddball_plot::erp::draw_erp(plot, &target, &nontarget, &band)?;
         println!("wrote {}", plot.display());
     }
     Ok(())

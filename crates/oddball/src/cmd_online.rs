@@ -13,15 +13,17 @@ use oddball_arm::{planned_path, Command};
 use oddball_decode::pipeline::Model;
 use oddball_live::clock::Clock;
 use oddball_live::live::{EegSource, LiveSubject, Summary};
+use oddball_live::online::{
+    coincidence, decision_line, free_recording_path, is_recording_end, recording_samples,
+    stop_reason, OnlineSummary,
+};
 use oddball_live::panel::PanelConfig;
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
-use oddball_live::LiveError;
-use oddball_session::engine::{Session, ShownFlash};
+use oddball_session::engine::Session;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
-use serde::Serialize;
 
 use crate::args::{
     commands_arg, recording_arm, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
@@ -56,55 +58,6 @@ pub struct OnlineArgs {
     pub out: PathBuf,
 }
 
-#[derive(Debug, Serialize)]
-struct DecisionRow {
-    index: usize,
-    intended: String,
-    decided: Option<String>,
-    rounds: usize,
-    confidence: f64,
-    seconds: f64,
-}
-
-#[derive(Debug, Serialize)]
-struct TimingRow {
-    n: usize,
-    mean_ms: f64,
-    sd_ms: f64,
-    min_ms: f64,
-    max_ms: f64,
-}
-
-impl From<Summary> for TimingRow {
-    fn from(s: Summary) -> Self {
-        Self {
-            n: s.n,
-            mean_ms: s.mean,
-            sd_ms: s.sd,
-            min_ms: s.min,
-            max_ms: s.max,
-        }
-    }
-}
-
-#[derive(Debug, Serialize)]
-struct OnlineSummary {
-    source: String,
-    decisions: Vec<DecisionRow>,
-    correct: usize,
-    abstained: usize,
-    flash_on_time: Option<TimingRow>,
-    flash_onset_error: Option<TimingRow>,
-    stamp_delay: Option<TimingRow>,
-    undrawn_flashes: usize,
-    decision_latency: Option<TimingRow>,
-    recording: String,
-    /// `--source replay:…`: how many flashes fell on the file's flashes.
-    replay: Option<String>,
-    /// What stopped the session early (the replayed file's end).
-    ended: Option<String>,
-}
-
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
@@ -133,30 +86,6 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     run_with(args, source, markers, clock, rule, &args.commands)
 }
 
-/// How many of this session's flashes fall on a flash of the same bulb in the replayed file.
-fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String> {
-    let AnySource::Playback(source) = source else {
-        return None;
-    };
-    // A P300 spans hundreds of ms: a page's few ms of onset jitter do not matter.
-    let tolerance = (REPLAY_TOLERANCE_S * source.sfreq()).round().max(1.0) as u64;
-    let shown: Vec<(u64, u32)> = flashes.iter().map(|f| (f.onset, f.code)).collect();
-    let k = source.coincidence(&shown, tolerance);
-    let mut line = format!(
-        "replay: {k} of {} flashes of this session fall on a flash of the same bulb in the file (±{tolerance} samples)",
-        shown.len()
-    );
-    if k < shown.len() {
-        line.push_str(
-            "; the others met EEG with no response to them (replay with the recording's --seed and --commands)",
-        );
-    }
-    Some(line)
-}
-
-/// Flashes of a replayed session within this of a flash in the file coincide with it, s.
-const REPLAY_TOLERANCE_S: f64 = 0.010;
-
 fn run_with(
     args: &OnlineArgs,
     source: AnySource,
@@ -182,14 +111,7 @@ fn run_with(
         }
         None => None,
     };
-    // Never overwrite an earlier recording: session.xdf, else session-1.xdf, session-2.xdf, …
-    let record_path = (0..)
-        .map(|i| match i {
-            0 => args.out.join("session.xdf"),
-            i => args.out.join(format!("session-{i}.xdf")),
-        })
-        .find(|p| !p.exists())
-        .expect("a free name");
+    let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
         &record_path,
         source.ch_names(),
@@ -255,52 +177,20 @@ fn run_with(
         1.5,
         is_recording_end,
         |i, s| {
-            println!(
-                "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
-                i + 1,
-                s.intended,
-                s.decided.map_or("abstain", |c| c.name()),
-                match s.decided {
-                    Some(d) if d == s.intended => " ✓",
-                    Some(_) => " ✗",
-                    None => "",
-                },
-                s.confidence,
-                s.rounds,
-                s.seconds
-            );
+            println!("{}", decision_line(i, s));
             if let Some(r) = &s.arm_refusal {
                 println!("  the arm refused: {r}");
             }
         },
     )
     .context("running the commands")?;
-    let rows: Vec<DecisionRow> = run
-        .steps
-        .iter()
-        .enumerate()
-        .map(|(i, s)| DecisionRow {
-            index: i + 1,
-            intended: s.intended.name().to_string(),
-            decided: s.decided.map(|c| c.name().to_string()),
-            rounds: s.rounds,
-            confidence: s.confidence,
-            seconds: s.seconds,
-        })
-        .collect();
     let ended = run.stopped.map(|(e, deciding)| {
-        // The live source's own words (the recording's end), not the engine's wrapper.
-        let end = LiveError::from_session(&e).map_or_else(|| e.to_string(), |l| l.to_string());
+        let end = stop_reason(&e);
         if deciding {
-            println!("decision {}: {end}", rows.len() + 1);
+            println!("decision {}: {end}", run.steps.len() + 1);
         }
         end
     });
-    let correct = rows
-        .iter()
-        .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
-        .count();
-    let abstained = rows.iter().filter(|r| r.decided.is_none()).count();
     if let Some(r) = session.channel_report() {
         println!("{r}");
     }
@@ -309,20 +199,19 @@ fn run_with(
         println!("{r}");
     }
     let subject = session.subject_mut();
+    let summary = OnlineSummary::new(
+        args.source.source.to_string(),
+        &run.steps,
+        &subject.timing,
+        &subject.decision_latency_ms,
+        &record_path,
+        replay,
+        ended,
+    );
     let timing = subject.timing.clone();
     let latency = subject.decision_latency_ms.clone();
     let health = subject.stream_health();
-    let mut summary_line = format!(
-        "{correct}/{} decisions right, {abstained} abstained",
-        rows.len()
-    );
-    if ended.is_some() {
-        summary_line.push_str(&format!(
-            " ({} of {} made before the recording ended)",
-            rows.len(),
-            commands.len()
-        ));
-    }
+    let summary_line = summary.line(commands.len());
     subject.end(&summary_line);
     if let Some(panel) = subject.panel() {
         let s = panel.stats();
@@ -339,44 +228,14 @@ fn run_with(
     if let Some(h) = health {
         println!("stream: {h}");
     }
-    let (log, _, _) = session.finish();
-    let summary = OnlineSummary {
-        source: args.source.source.to_string(),
-        decisions: rows,
-        correct,
-        abstained,
-        flash_on_time: Summary::of(&timing.on_ms).map(Into::into),
-        flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
-        stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
-        undrawn_flashes: timing.undrawn,
-        decision_latency: Summary::of(&latency).map(Into::into),
-        recording: record_path.display().to_string(),
-        replay,
-        ended: ended.map(|e| e.to_string()),
-    };
-    let _ = log;
+    let _ = session.finish();
     let path = args.out.join("summary.json");
     fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("writing {}", path.display()))?;
     println!(
         "recording: {} ({} samples)",
         record_path.display(),
-        summary_samples(&record_path)
+        recording_samples(&record_path)
     );
     Ok(())
-}
-
-/// The replayed file's end: what stops a session cleanly.
-fn is_recording_end(e: &oddball_session::SessionError) -> bool {
-    matches!(
-        LiveError::from_session(e),
-        Some(LiveError::RecordingEnded { .. })
-    )
-}
-
-fn summary_samples(path: &std::path::Path) -> String {
-    match oddball_io::read(path) {
-        Ok(r) => r.raw.n_times().to_string(),
-        Err(e) => format!("unreadable: {e}"),
-    }
 }

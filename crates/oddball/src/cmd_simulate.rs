@@ -18,6 +18,8 @@
 use std::net::{SocketAddr, TcpListener};
 
 use anyhow::{bail, Context, Result};
+#[cfg(feature = "lsl")]
+use oddball_live::lsl_sim::SimEvent;
 use oddball_live::nic::serve_simulated;
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
 
@@ -85,13 +87,36 @@ fn run_lsl(args: &SimulateArgs, name: &str, preset: SubjectPreset) -> Result<()>
         .with_seed(args.seed)
         .build()
         .context("building the simulated subject")?;
-    lsl_sim::serve(
+    let (n_channels, sfreq) = (subject.n_channels(), subject.sfreq());
+    let latency_s = args.latency_ms / 1000.0;
+    let markers = &args.markers;
+    let report = oddball_live::lsl_sim::serve_simulated(
         subject,
         name,
-        &args.markers,
-        args.latency_ms / 1000.0,
+        markers,
+        latency_s,
         args.duration_s,
+        |event| match event {
+            SimEvent::Streaming { t0 } => println!(
+                "streaming LSL EEG {name}: {n_channels} channels at {sfreq} Hz from t0 = {t0} (LSL clock), {:.0} ms behind; following the marker stream {markers}",
+                latency_s * 1000.0
+            ),
+            SimEvent::Following(m) => println!("following markers from {m}"),
+            SimEvent::MarkersLost(e) => eprintln!("oddball simulate: marker stream: {e}"),
+            SimEvent::Ignored(text) => eprintln!("oddball simulate: ignoring the marker {text:?}"),
+        },
     )
+    .with_context(|| format!("creating the LSL stream {name}"))?;
+    println!(
+        "streamed {} samples ({:.1} s), {} flashes ({} attended), {} markers too late, {} not understood",
+        report.samples,
+        report.samples as f64 / report.sfreq,
+        report.flashes,
+        report.attended,
+        report.late,
+        report.unknown
+    );
+    Ok(())
 }
 
 fn run_nic(args: &SimulateArgs, nic: &str, preset: SubjectPreset) -> Result<()> {
@@ -129,258 +154,4 @@ fn run_nic(args: &SimulateArgs, nic: &str, preset: SubjectPreset) -> Result<()> 
         report.flashes
     );
     Ok(())
-}
-
-/// The simulated subject as a live LSL amplifier that watches the panel's marker stream.
-#[cfg(feature = "lsl")]
-mod lsl_sim {
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::{mpsc, Arc};
-    use std::time::Duration;
-
-    use anyhow::{Context, Result};
-    use oddball_live::lsl::{local_clock, EegOutlet, MarkerInlet, StreamQuery};
-    use oddball_live::LiveError;
-    use oddball_session::subject::SimulatedSubject;
-
-    /// What the marker thread reports.
-    enum FromMarkers {
-        Connected(String),
-        Marker(String, f64),
-        Lost(String),
-    }
-
-    /// What one marker did.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-    pub(super) enum Applied {
-        Cue,
-        Flash { onset: u64, attended: bool },
-        TooLate,
-        Other,
-        Unknown,
-        End,
-    }
-
-    /// The person in front of the panel: the cue they follow and the flashes they see, on the
-    /// EEG's sample clock (sample i at `t0 + i / sfreq`).
-    #[derive(Debug)]
-    pub(super) struct Viewer {
-        t0: f64,
-        sfreq: f64,
-        cue: u32,
-        pub flashes: u64,
-        pub attended: u64,
-        pub late: u64,
-        pub unknown: u64,
-    }
-
-    impl Viewer {
-        pub fn new(t0: f64, sfreq: f64) -> Self {
-            Self {
-                t0,
-                sfreq,
-                cue: 0,
-                flashes: 0,
-                attended: 0,
-                late: 0,
-                unknown: 0,
-            }
-        }
-
-        /// Applies one marker stamped `ts` (LSL clock) to `subject`.
-        pub fn apply(&mut self, subject: &mut SimulatedSubject, text: &str, ts: f64) -> Applied {
-            let mut words = text.split_whitespace();
-            let code = |w: Option<&str>| w.and_then(|c| c.parse::<u32>().ok());
-            match (words.next(), code(words.next()), words.next()) {
-                (Some("cue"), Some(c), None) => {
-                    self.cue = c;
-                    Applied::Cue
-                }
-                (Some("flash"), Some(c), None) => {
-                    let onset = ((ts - self.t0) * self.sfreq).round();
-                    let attended = self.cue != 0 && c == self.cue;
-                    if onset < subject.position() as f64 || !onset.is_finite() {
-                        self.late += 1;
-                        return Applied::TooLate;
-                    }
-                    let onset = onset as u64;
-                    match subject.flash(onset, attended) {
-                        Ok(()) => {
-                            self.flashes += 1;
-                            self.attended += u64::from(attended);
-                            Applied::Flash { onset, attended }
-                        }
-                        Err(_) => {
-                            self.late += 1;
-                            Applied::TooLate
-                        }
-                    }
-                }
-                (Some("decision"), Some(_), None) | (Some("abstain"), None, None) => Applied::Other,
-                (Some("end"), None, None) => Applied::End,
-                _ => {
-                    self.unknown += 1;
-                    Applied::Unknown
-                }
-            }
-        }
-    }
-
-    /// Finds the marker stream (retrying until `stop`), then forwards its markers.
-    fn follow(query: StreamQuery, tx: mpsc::Sender<FromMarkers>, stop: Arc<AtomicBool>) {
-        while !stop.load(Ordering::Relaxed) {
-            // Each attempt listens 1 s for the stream's answer (0.5 s missed it under load).
-            let mut inlet = match MarkerInlet::resolve(&query, 1.0) {
-                Ok(inlet) => inlet,
-                Err(LiveError::StreamNotFound { .. }) => continue,
-                Err(e) => {
-                    let _ = tx.send(FromMarkers::Lost(e.to_string()));
-                    std::thread::sleep(Duration::from_millis(500));
-                    continue;
-                }
-            };
-            if tx
-                .send(FromMarkers::Connected(inlet.name().to_string()))
-                .is_err()
-            {
-                return;
-            }
-            while !stop.load(Ordering::Relaxed) {
-                match inlet.pull() {
-                    Ok(markers) => {
-                        for (text, ts) in markers {
-                            if tx.send(FromMarkers::Marker(text, ts)).is_err() {
-                                return;
-                            }
-                        }
-                    }
-                    Err(e) => {
-                        let _ = tx.send(FromMarkers::Lost(e.to_string()));
-                        break;
-                    }
-                }
-                std::thread::sleep(Duration::from_millis(2));
-            }
-        }
-    }
-
-    /// Streams `subject` as the LSL EEG outlet `name` until `end`, or `duration_s`.
-    pub fn serve(
-        mut subject: SimulatedSubject,
-        name: &str,
-        markers: &str,
-        latency_s: f64,
-        duration_s: Option<f64>,
-    ) -> Result<()> {
-        let sfreq = subject.sfreq();
-        let outlet = EegOutlet::new(
-            name,
-            subject.ch_names(),
-            sfreq,
-            &format!("oddball-simulate-{name}"),
-        )
-        .with_context(|| format!("creating the LSL stream {name}"))?;
-        // Sample i is stamped t0 + i / sfreq.
-        let t0 = local_clock();
-        println!(
-            "streaming LSL EEG {name}: {} channels at {sfreq} Hz from t0 = {t0} (LSL clock), {:.0} ms behind; following the marker stream {markers}",
-            subject.n_channels(),
-            latency_s * 1000.0
-        );
-        let stop = Arc::new(AtomicBool::new(false));
-        let (tx, rx) = mpsc::channel();
-        let follower = {
-            let (query, stop) = (StreamQuery::Name(markers.to_string()), stop.clone());
-            std::thread::spawn(move || follow(query, tx, stop))
-        };
-
-        let mut viewer = Viewer::new(t0, sfreq);
-        let mut ended = false;
-        while !ended {
-            for msg in rx.try_iter() {
-                match msg {
-                    FromMarkers::Connected(m) => println!("following markers from {m}"),
-                    FromMarkers::Lost(e) => eprintln!("oddball simulate: marker stream: {e}"),
-                    FromMarkers::Marker(text, ts) => match viewer.apply(&mut subject, &text, ts) {
-                        Applied::End => ended = true,
-                        Applied::Unknown => {
-                            eprintln!("oddball simulate: ignoring the marker {text:?}")
-                        }
-                        _ => {}
-                    },
-                }
-            }
-            let now = local_clock();
-            // Sample i is sent once t0 + i / sfreq + latency has passed.
-            let due = (((now - latency_s - t0) * sfreq).floor() + 1.0).max(0.0) as u64;
-            let position = subject.position();
-            if due > position {
-                let chunk = subject.render((due - position) as usize);
-                outlet.push_chunk(chunk.view(), t0 + position as f64 / sfreq);
-            }
-            if duration_s.is_some_and(|d| now - t0 >= d) {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(4));
-        }
-        stop.store(true, Ordering::Relaxed);
-        let _ = follower.join();
-        println!(
-            "streamed {} samples ({:.1} s), {} flashes ({} attended), {} markers too late, {} not understood",
-            subject.position(),
-            subject.position() as f64 / sfreq,
-            viewer.flashes,
-            viewer.attended,
-            viewer.late,
-            viewer.unknown
-        );
-        Ok(())
-    }
-
-    #[cfg(test)]
-    mod tests {
-        use super::*;
-        use oddball_session::subject::{SubjectParams, SubjectPreset};
-
-        #[test]
-        fn markers_become_flashes_on_the_sample_clock() {
-            let mut s = SubjectParams::preset(SubjectPreset::Typical)
-                .build()
-                .unwrap();
-            let t0 = 1000.0;
-            let mut v = Viewer::new(t0, 500.0);
-            assert_eq!(v.apply(&mut s, "cue 2", t0), Applied::Cue);
-            assert_eq!(
-                v.apply(&mut s, "flash 2", t0 + 0.5011),
-                Applied::Flash {
-                    onset: 251,
-                    attended: true
-                }
-            );
-            assert_eq!(
-                v.apply(&mut s, "flash 3", t0 + 0.75),
-                Applied::Flash {
-                    onset: 375,
-                    attended: false
-                }
-            );
-            s.render(300);
-            assert_eq!(v.apply(&mut s, "flash 1", t0 + 0.5), Applied::TooLate);
-            assert_eq!(v.apply(&mut s, "flash 1", t0 - 1.0), Applied::TooLate);
-            assert_eq!(v.apply(&mut s, "cue 0", t0), Applied::Cue);
-            assert_eq!(
-                v.apply(&mut s, "flash 2", t0 + 1.0),
-                Applied::Flash {
-                    onset: 500,
-                    attended: false
-                }
-            );
-            assert_eq!(v.apply(&mut s, "decision 2", t0), Applied::Other);
-            assert_eq!(v.apply(&mut s, "abstain", t0), Applied::Other);
-            assert_eq!(v.apply(&mut s, "flash x", t0 + 2.0), Applied::Unknown);
-            assert_eq!(v.apply(&mut s, "end", t0), Applied::End);
-            assert_eq!((v.flashes, v.attended, v.late, v.unknown), (3, 1, 2, 1));
-            assert_eq!(s.n_pending_flashes(), 3);
-        }
-    }
 }

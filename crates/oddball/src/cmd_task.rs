@@ -14,10 +14,9 @@ use anyhow::{Context, Result};
 use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
-use oddball_session::engine::CalibrationReport;
-use oddball_session::replay::REPLAY_NOTE;
+use oddball_session::report::draw_text;
 use oddball_session::task::{
-    drawing_path, run_drawing, run_tracking, task_targets, DrawReport, Pilot, Step, TrackParams,
+    drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
 use serde::Serialize;
 
@@ -210,7 +209,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         )
         .collect();
     write_common(&args.out, &prep, &report.steps, &expected)?;
-    crate::plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
+    oddball_plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
     write_summary(&args.out, "track", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
@@ -250,8 +249,12 @@ fn write_common(
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
     fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
-    crate::plot::task::draw_calibration_erp(&out.join("erp.png"), &prep.erp)?;
-    crate::plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &out.join("pen_trace.png"))
+    let erp_png = out.join("erp.png");
+    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+        .with_context(|| format!("drawing {}", erp_png.display()))?;
+    let pen_png = out.join("pen_trace.png");
+    oddball_plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &pen_png)
+        .with_context(|| format!("drawing {}", pen_png.display()))
 }
 
 /// summary.json: what ran, the calibration and the task's report.
@@ -262,47 +265,19 @@ fn write_summary<T: Serialize>(
     prep: &Prepared,
     report: &T,
 ) -> Result<()> {
-    #[derive(Serialize)]
-    struct Summary<'a, T> {
-        task: &'static str,
-        subject: &'a str,
-        pipeline: &'a str,
-        seed: u64,
-        calibration: &'a CalibrationReport,
-        #[serde(skip_serializing_if = "Option::is_none")]
-        note: Option<&'static str>,
-        report: &'a T,
-    }
-    let summary = Summary {
-        task,
-        subject: &prep.subject,
-        pipeline: &opts.pipeline,
-        seed: opts.seed,
-        calibration: &prep.calibration,
-        note: matches!(prep.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
-        report,
-    };
+    let summary = prep.task_summary(task, &opts.pipeline, opts.seed, report);
     let json = serde_json::to_string_pretty(&summary)?;
     fs::write(out.join("summary.json"), json + "\n").context("writing summary.json")
 }
 
 /// Saves a live session's raw EEG and prints the wall time.
 fn finish(prep: Prepared, out: &Path, wall: Instant) -> Result<()> {
-    prep.save_session(out, &format!("task over: report in {}", out.display()))?;
+    crate::pilot::save_session(
+        prep,
+        out,
+        &format!("task over: report in {}", out.display()),
+    )?;
     println!("report in {}", out.display());
     eprintln!("wall time {:.2} s", wall.elapsed().as_secs_f64());
     Ok(())
-}
-
-fn draw_text(r: &DrawReport) -> String {
-    format!(
-        "drew {:?}: {} in {} decisions (plan {} moves); pen trace from the plan: mean {:.4} mm, max {:.4} mm\n{}",
-        r.text,
-        if r.completed { "completed" } else { "NOT completed" },
-        r.decisions,
-        r.min_decisions,
-        r.mean_deviation_m * 1e3,
-        r.max_deviation_m * 1e3,
-        r.totals
-    )
 }

@@ -3,36 +3,30 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::PlotError;
 use oddball_arm::ArmSim;
 use oddball_session::task::TrackReport;
 use oddball_signal::Epochs;
 
 /// Target and non-target averages of the accepted calibration epochs: a report's `erp.png`.
-pub fn draw_calibration_erp(path: &Path, erp: &Epochs) -> Result<()> {
+pub fn draw_calibration_erp(path: &Path, erp: &Epochs) -> Result<(), PlotError> {
     let idx = |want: bool| -> Vec<usize> {
         (0..erp.n_epochs())
             .filter(|&i| erp.events()[i].target == Some(want))
             .collect()
     };
     let (target, nontarget) = (erp.select(&idx(true)), erp.select(&idx(false)));
-    crate::plot::erp::draw_erp(
+    crate::erp::draw_erp(
         path,
         &target,
         &nontarget,
         "calibration epochs, causal 1–15 Hz",
     )
-    .with_context(|| format!("drawing {}", path.display()))
 }
 
 /// Targets (numbered), the pen's path and each target's minimal path (x first, then z).
-pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<()> {
-    let trace: Vec<(f64, f64)> = arm
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
+pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<(), PlotError> {
+    let trace = crate::arm::pen_trace_xz(arm);
     let mut xs: Vec<f64> = trace.iter().map(|p| p.0).collect();
     let mut zs: Vec<f64> = trace.iter().map(|p| p.1).collect();
     for t in &r.targets {
@@ -45,14 +39,14 @@ pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<()> {
     let (cx, cz) = ((x0 + x1) / 2.0, (z0 + z1) / 2.0);
     crate::with_backend!(path, (900, 900), |root| {
         use plotters::prelude::*;
-        let err = |e: &dyn std::fmt::Debug| anyhow::anyhow!("{e:?}");
+        let err = |e: &dyn std::fmt::Debug| PlotError::draw(path, format!("{e:?}"));
         let mut chart = ChartBuilder::on(&root)
             .caption(
                 format!(
                     "Tracking: {}/{} targets reached (black: pen, dashed: minimal path)",
                     r.n_reached, r.n_attempted
                 ),
-                (crate::plot::FONT_FAMILY, 18),
+                (crate::FONT_FAMILY, 18),
             )
             .margin(12)
             .x_label_area_size(40)
@@ -63,7 +57,7 @@ pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<()> {
             .configure_mesh()
             .x_desc("x (m)")
             .y_desc("z (m)")
-            .label_style((crate::plot::FONT_FAMILY, 13))
+            .label_style((crate::FONT_FAMILY, 13))
             .draw()
             .map_err(|e| err(&e))?;
         for t in &r.targets {
@@ -96,11 +90,7 @@ pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<()> {
                 };
                 EmptyElement::at((t.target_m[0], t.target_m[1]))
                     + Circle::new((0, 0), 8, colour.stroke_width(3))
-                    + Text::new(
-                        t.index.to_string(),
-                        (10, -20),
-                        (crate::plot::FONT_FAMILY, 16),
-                    )
+                    + Text::new(t.index.to_string(), (10, -20), (crate::FONT_FAMILY, 16))
             }))
             .map_err(|e| err(&e))?;
         Ok(())

@@ -3,12 +3,17 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use crate::PlotError;
 use ndarray::Array2;
 use oddball_signal::Epochs;
 
 /// A grid of per-channel averages: targets red, non-targets blue; `band` names the filter.
-pub fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, band: &str) -> Result<()> {
+pub fn draw_erp(
+    path: &Path,
+    target: &Epochs,
+    nontarget: &Epochs,
+    band: &str,
+) -> Result<(), PlotError> {
     let t_avg: Array2<f64> = target.average().expect("non-empty");
     let n_avg: Array2<f64> = nontarget.average().expect("non-empty");
     let times_ms: Vec<f64> = target.times().iter().map(|t| t * 1000.0).collect();
@@ -34,25 +39,25 @@ pub fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, band: &str) ->
             nontarget.n_epochs(),
         );
         let root = root
-            .titled(&title, (crate::plot::FONT_FAMILY, 20))
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .titled(&title, (crate::FONT_FAMILY, 20))
+            .map_err(|e| PlotError::draw(path, e))?;
         let panels = root.split_evenly((rows, cols));
         for (c, panel) in panels.iter().enumerate().take(n_channels) {
             let mut chart = ChartBuilder::on(panel)
-                .caption(&target.ch_names()[c], (crate::plot::FONT_FAMILY, 16))
+                .caption(&target.ch_names()[c], (crate::FONT_FAMILY, 16))
                 .margin(6)
                 .x_label_area_size(24)
                 .y_label_area_size(40)
                 .build_cartesian_2d(x0..x1, y0..y1)
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+                .map_err(|e| PlotError::draw(path, e))?;
             chart
                 .configure_mesh()
                 .x_labels(5)
                 .y_labels(5)
                 .x_desc("ms")
-                .label_style((crate::plot::FONT_FAMILY, 11))
+                .label_style((crate::FONT_FAMILY, 11))
                 .draw()
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+                .map_err(|e| PlotError::draw(path, e))?;
             for (avg, color) in [(&n_avg, BLUE), (&t_avg, RED)] {
                 chart
                     .draw_series(LineSeries::new(
@@ -62,7 +67,7 @@ pub fn draw_erp(path: &Path, target: &Epochs, nontarget: &Epochs, band: &str) ->
                             .map(|(&t, &v)| (t, v)),
                         color.stroke_width(2),
                     ))
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                    .map_err(|e| PlotError::draw(path, e))?;
             }
         }
         Ok(())

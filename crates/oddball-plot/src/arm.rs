@@ -4,13 +4,26 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use crate::PlotError;
 use oddball_arm::{ArmModel, ArmSim, Board, Vector2};
 
 /// The arm at the start and at the end over the pen trace: a report's `pen_trace.png`.
-pub fn draw_pen_trace(arm: &ArmSim, expected: &[Vector2<f64>], path: &Path) -> Result<()> {
+pub fn draw_pen_trace(
+    arm: &ArmSim,
+    expected: &[Vector2<f64>],
+    path: &Path,
+) -> Result<(), PlotError> {
     let keys = configurations_at(arm, &[0.0, arm.time_s()]);
-    draw(arm, &keys, expected, path).with_context(|| format!("drawing {}", path.display()))
+    draw(arm, &keys, expected, path)
+}
+
+/// The pen's recorded positions (x, z), metres.
+pub(crate) fn pen_trace_xz(sim: &ArmSim) -> Vec<(f64, f64)> {
+    sim.trace()
+        .points()
+        .iter()
+        .map(|p| (p.p[0], p.p[1]))
+        .collect()
 }
 
 /// Joint angles at the given simulation times (the recorded samples nearest to them).
@@ -131,17 +144,12 @@ pub fn draw(
     keys: &[(f64, Vector2<f64>)],
     expected: &[Vector2<f64>],
     path: &Path,
-) -> Result<()> {
+) -> Result<(), PlotError> {
     const W: u32 = 1500;
     const H: u32 = 720;
     let model = *sim.plant();
     let board = sim.workspace().board;
-    let trace: Vec<(f64, f64)> = sim
-        .trace()
-        .points()
-        .iter()
-        .map(|p| (p.p[0], p.p[1]))
-        .collect();
+    let trace = pen_trace_xz(sim);
     let expected_xy: Vec<(f64, f64)> = expected.iter().map(|p| (p[0], p[1])).collect();
 
     let mut overview_pts: Vec<Vector2<f64>> = board.corners().to_vec();
@@ -171,7 +179,7 @@ pub fn draw(
 
     crate::with_backend!(path, (W, H), |root| {
         use plotters::prelude::*;
-        let err = |e: &dyn std::fmt::Debug| anyhow::anyhow!("{e:?}");
+        let err = |e: &dyn std::fmt::Debug| PlotError::draw(path, format!("{e:?}"));
         let (left, right) = root.split_horizontally(W / 2);
         let n_keys = keys.len().max(2);
         let key_colour = |i: usize| {
@@ -197,7 +205,7 @@ pub fn draw(
         ] {
             let (xr, zr) = equal_aspect(pts, margin, W / 2 - 90, H - 110);
             let mut chart = ChartBuilder::on(area)
-                .caption(title, (crate::plot::FONT_FAMILY, 20))
+                .caption(title, (crate::FONT_FAMILY, 20))
                 .margin(12)
                 .x_label_area_size(40)
                 .y_label_area_size(60)
@@ -207,7 +215,7 @@ pub fn draw(
                 .configure_mesh()
                 .x_desc("x (m)")
                 .y_desc("z (m)")
-                .label_style((crate::plot::FONT_FAMILY, 13))
+                .label_style((crate::FONT_FAMILY, 13))
                 .x_label_formatter(&|v| tick(*v))
                 .y_label_formatter(&|v| tick(*v))
                 .light_line_style(RGBColor(235, 235, 235))
@@ -266,7 +274,7 @@ pub fn draw(
                     .draw_series(corner_labels(expected).into_iter().map(|(p, label)| {
                         EmptyElement::at((p[0], p[1]))
                             + Circle::new((0, 0), 5, RGBColor(230, 90, 30).stroke_width(2))
-                            + Text::new(label, (7, -18), (crate::plot::FONT_FAMILY, 15))
+                            + Text::new(label, (7, -18), (crate::FONT_FAMILY, 15))
                     }))
                     .map_err(|e| err(&e))?;
             }
@@ -295,7 +303,7 @@ pub fn draw(
                 chart
                     .draw_series(std::iter::once(
                         EmptyElement::at((b[0], b[1]))
-                            + Text::new("shoulder", (8, 6), (crate::plot::FONT_FAMILY, 14)),
+                            + Text::new("shoulder", (8, 6), (crate::FONT_FAMILY, 14)),
                     ))
                     .map_err(|e| err(&e))?;
                 let t_last = keys[keys.len() - 1].0;
@@ -314,7 +322,7 @@ pub fn draw(
                 .position(SeriesLabelPosition::UpperLeft)
                 .background_style(WHITE.mix(0.85))
                 .border_style(RGBColor(180, 180, 180))
-                .label_font((crate::plot::FONT_FAMILY, 14))
+                .label_font((crate::FONT_FAMILY, 14))
                 .draw()
                 .map_err(|e| err(&e))?;
         }

@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use crate::PlotError;
 use oddball_decode::evaluate::PipelineResult;
 
 /// Character accuracy (%) vs repetitions, one line per preset, chance level dashed.
-pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
+pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<(), PlotError> {
     let curves: Vec<(&str, &[f64])> = results
         .iter()
         .filter_map(|r| Some((r.pipeline.as_str(), r.speller_accuracy.as_deref()?)))
@@ -28,13 +28,13 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
         let mut chart = ChartBuilder::on(&root)
             .caption(
                 format!("character accuracy vs repetitions ({n_chars} characters)"),
-                (crate::plot::FONT_FAMILY, 22),
+                (crate::FONT_FAMILY, 22),
             )
             .margin(14)
             .x_label_area_size(44)
             .y_label_area_size(56)
             .build_cartesian_2d(0.5f64..n_reps as f64 + 0.5, 0f64..105.0)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .map_err(|e| PlotError::draw(path, e))?;
         chart
             .configure_mesh()
             .x_labels(n_reps.min(20))
@@ -43,9 +43,9 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
             .y_label_formatter(&|y| format!("{y:.0}"))
             .x_desc("repetitions (flashes of every row and column)")
             .y_desc("characters right, %")
-            .label_style((crate::plot::FONT_FAMILY, 14))
+            .label_style((crate::FONT_FAMILY, 14))
             .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .map_err(|e| PlotError::draw(path, e))?;
         // Earlier curves drawn wider, so curves that coincide stay visible under later ones.
         for (i, (name, acc)) in curves.iter().enumerate() {
             let color = Palette99::pick(i).to_rgba();
@@ -57,7 +57,7 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
                 .collect();
             chart
                 .draw_series(LineSeries::new(points.clone(), color.stroke_width(width)))
-                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .map_err(|e| PlotError::draw(path, e))?
                 .label(*name)
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
@@ -68,7 +68,7 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
                         .iter()
                         .map(|&p| Circle::new(p, 2 + width / 2, color.filled())),
                 )
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+                .map_err(|e| PlotError::draw(path, e))?;
         }
         chart
             .draw_series(DashedLineSeries::new(
@@ -77,7 +77,7 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
                 4,
                 BLACK.stroke_width(1),
             ))
-            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .map_err(|e| PlotError::draw(path, e))?
             .label(format!("chance (1/{n_choices} = {chance:.1} %)"))
             .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
         chart
@@ -85,9 +85,9 @@ pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<()> {
             .position(SeriesLabelPosition::MiddleRight)
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
-            .label_font((crate::plot::FONT_FAMILY, 14))
+            .label_font((crate::FONT_FAMILY, 14))
             .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .map_err(|e| PlotError::draw(path, e))?;
         Ok(())
     })
 }

@@ -1,0 +1,205 @@
+//! What `oddball online` reports of a live session: one row per decision, the flash timing, the
+//! replayed file's coincidence, and `summary.json` ([`OnlineSummary`]); the printed lines' text.
+
+use std::path::{Path, PathBuf};
+
+use oddball_session::engine::ShownFlash;
+use oddball_session::task::Step;
+use oddball_session::SessionError;
+use serde::Serialize;
+
+use crate::live::{EegSource, FlashTiming, Summary};
+use crate::source::AnySource;
+use crate::LiveError;
+
+/// One decision of a live session.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DecisionRow {
+    pub index: usize,
+    pub intended: String,
+    pub decided: Option<String>,
+    pub rounds: usize,
+    pub confidence: f64,
+    pub seconds: f64,
+}
+
+/// A [`Summary`] of delays with its unit in the field names (ms).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TimingRow {
+    pub n: usize,
+    pub mean_ms: f64,
+    pub sd_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+}
+
+impl From<Summary> for TimingRow {
+    fn from(s: Summary) -> Self {
+        Self {
+            n: s.n,
+            mean_ms: s.mean,
+            sd_ms: s.sd,
+            min_ms: s.min,
+            max_ms: s.max,
+        }
+    }
+}
+
+/// `summary.json` of `oddball online`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OnlineSummary {
+    pub source: String,
+    pub decisions: Vec<DecisionRow>,
+    pub correct: usize,
+    pub abstained: usize,
+    pub flash_on_time: Option<TimingRow>,
+    pub flash_onset_error: Option<TimingRow>,
+    pub stamp_delay: Option<TimingRow>,
+    pub undrawn_flashes: usize,
+    pub decision_latency: Option<TimingRow>,
+    pub recording: String,
+    /// `--source replay:…`: how many flashes fell on the file's flashes.
+    pub replay: Option<String>,
+    /// What stopped the session early (the replayed file's end).
+    pub ended: Option<String>,
+}
+
+impl OnlineSummary {
+    /// The summary of `steps` with the panel's `timing` and the decision latencies (ms).
+    pub fn new(
+        source: String,
+        steps: &[Step],
+        timing: &FlashTiming,
+        latency_ms: &[f64],
+        recording: &Path,
+        replay: Option<String>,
+        ended: Option<String>,
+    ) -> Self {
+        let decisions: Vec<DecisionRow> = steps
+            .iter()
+            .enumerate()
+            .map(|(i, s)| DecisionRow {
+                index: i + 1,
+                intended: s.intended.name().to_string(),
+                decided: s.decided.map(|c| c.name().to_string()),
+                rounds: s.rounds,
+                confidence: s.confidence,
+                seconds: s.seconds,
+            })
+            .collect();
+        let correct = decisions
+            .iter()
+            .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
+            .count();
+        let abstained = decisions.iter().filter(|r| r.decided.is_none()).count();
+        Self {
+            source,
+            decisions,
+            correct,
+            abstained,
+            flash_on_time: Summary::of(&timing.on_ms).map(Into::into),
+            flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
+            stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
+            undrawn_flashes: timing.undrawn,
+            decision_latency: Summary::of(latency_ms).map(Into::into),
+            recording: recording.display().to_string(),
+            replay,
+            ended,
+        }
+    }
+
+    /// `3/4 decisions right, 1 abstained`, and when the recording ended early how many of the
+    /// `n_commands` were made.
+    pub fn line(&self, n_commands: usize) -> String {
+        let mut line = format!(
+            "{}/{} decisions right, {} abstained",
+            self.correct,
+            self.decisions.len(),
+            self.abstained
+        );
+        if self.ended.is_some() {
+            line.push_str(&format!(
+                " ({} of {n_commands} made before the recording ended)",
+                self.decisions.len(),
+            ));
+        }
+        line
+    }
+}
+
+/// One decision as printed: `decision 1: up → up ✓ (p 0.998, 4 rounds, 2.40 s)`.
+pub fn decision_line(index: usize, s: &Step) -> String {
+    format!(
+        "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
+        index + 1,
+        s.intended,
+        s.decided.map_or("abstain", |c| c.name()),
+        match s.decided {
+            Some(d) if d == s.intended => " ✓",
+            Some(_) => " ✗",
+            None => "",
+        },
+        s.confidence,
+        s.rounds,
+        s.seconds
+    )
+}
+
+/// The first free recording name in `out`, never overwriting an earlier one: session.xdf, else
+/// session-1.xdf, session-2.xdf, …
+pub fn free_recording_path(out: &Path) -> PathBuf {
+    (0..)
+        .map(|i| match i {
+            0 => out.join("session.xdf"),
+            i => out.join(format!("session-{i}.xdf")),
+        })
+        .find(|p| !p.exists())
+        .expect("a free name")
+}
+
+/// Flashes of a replayed session within this of a flash in the file coincide with it, s.
+pub const REPLAY_TOLERANCE_S: f64 = 0.010;
+
+/// How many of this session's flashes fall on a flash of the same bulb in the replayed file;
+/// `None` unless `source` plays a file back.
+pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String> {
+    let AnySource::Playback(source) = source else {
+        return None;
+    };
+    // A P300 spans hundreds of ms: a page's few ms of onset jitter do not matter.
+    let tolerance = (REPLAY_TOLERANCE_S * source.sfreq()).round().max(1.0) as u64;
+    let shown: Vec<(u64, u32)> = flashes.iter().map(|f| (f.onset, f.code)).collect();
+    let k = source.coincidence(&shown, tolerance);
+    let mut line = format!(
+        "replay: {k} of {} flashes of this session fall on a flash of the same bulb in the file (±{tolerance} samples)",
+        shown.len()
+    );
+    if k < shown.len() {
+        line.push_str(
+            "; the others met EEG with no response to them (replay with the recording's --seed and --commands)",
+        );
+    }
+    Some(line)
+}
+
+/// The replayed file's end: what stops a session cleanly.
+pub fn is_recording_end(e: &SessionError) -> bool {
+    matches!(
+        LiveError::from_session(e),
+        Some(LiveError::RecordingEnded { .. })
+    )
+}
+
+/// What stopped a session, in the live source's own words (the recording's end) rather than
+/// the engine's wrapper.
+pub fn stop_reason(e: &SessionError) -> String {
+    LiveError::from_session(e).map_or_else(|| e.to_string(), |l| l.to_string())
+}
+
+/// The number of samples in the recording at `path`, or why it cannot be read.
+pub fn recording_samples(path: &Path) -> String {
+    match oddball_io::read(path) {
+        Ok(r) => r.raw.n_times().to_string(),
+        Err(e) => format!("unreadable: {e}"),
+    }
+}

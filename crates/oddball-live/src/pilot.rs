@@ -1,0 +1,162 @@
+//! The calibrated pilot of `oddball demo` and `oddball task`: a session over any live source, or
+//! a replayed speller recording, as one [`Pilot`]; what a run of it leaves behind (the raw EEG of
+//! the session, `decisions.csv`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use oddball_arm::{ArmSim, Command, Vector2};
+use oddball_session::engine::{CalibrationReport, Session};
+use oddball_session::record::{save_session, save_session_easy};
+use oddball_session::replay::REPLAY_NOTE;
+use oddball_session::roles::EegStream;
+use oddball_session::task::{Pilot, ReplayPilot, Step};
+use oddball_session::SessionError;
+use oddball_signal::Epochs;
+use serde::Serialize;
+
+use crate::live::LiveSubject;
+use crate::source::AnySource;
+
+/// A session over a live source, or a replayed recording, as one pilot.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug)]
+pub enum AnyPilot {
+    Live(Session<LiveSubject<AnySource>>),
+    Replay(ReplayPilot),
+}
+
+impl Pilot for AnyPilot {
+    fn decide(&mut self, intended: Command) -> Result<Option<Step>, SessionError> {
+        match self {
+            AnyPilot::Live(s) => Pilot::decide(s, intended),
+            AnyPilot::Replay(r) => r.decide(intended),
+        }
+    }
+    fn arm(&self) -> &ArmSim {
+        match self {
+            AnyPilot::Live(s) => Pilot::arm(s),
+            AnyPilot::Replay(r) => r.arm(),
+        }
+    }
+    fn wait(&mut self, seconds: f64) -> Result<(), SessionError> {
+        match self {
+            AnyPilot::Live(s) => s.wait(seconds),
+            AnyPilot::Replay(r) => r.wait(seconds),
+        }
+    }
+    fn time_s(&self) -> f64 {
+        match self {
+            AnyPilot::Live(s) => Pilot::time_s(s),
+            AnyPilot::Replay(r) => r.time_s(),
+        }
+    }
+}
+
+/// The calibrated pilot, its calibration, the calibration epochs and the model (JSON).
+#[derive(Debug)]
+pub struct Prepared {
+    pub pilot: AnyPilot,
+    pub calibration: CalibrationReport,
+    pub erp: Epochs,
+    pub model_json: String,
+    /// How the subject is named in reports.
+    pub subject: String,
+    pub pen_start: Vector2<f64>,
+}
+
+impl Prepared {
+    /// A live stream's health (samples lost, reconnections); `None` for simulated sources.
+    pub fn stream_health(&self) -> Option<String> {
+        match &self.pilot {
+            AnyPilot::Live(s) => s.subject().stream_health(),
+            AnyPilot::Replay(_) => None,
+        }
+    }
+
+    /// Where [`Self::save_session`] writes in `out`: `session.easy` (NIC's format) for a NIC
+    /// stream, `session.dat` (BCI2000) otherwise; `None` for a replayed recording.
+    pub fn session_file(&self, out: &Path) -> Option<PathBuf> {
+        match &self.pilot {
+            AnyPilot::Live(s) => Some(if matches!(s.subject().source(), AnySource::Nic(_)) {
+                out.join("session.easy")
+            } else {
+                out.join("session.dat")
+            }),
+            AnyPilot::Replay(_) => None,
+        }
+    }
+
+    /// Ends a live session with the panel message `end` and saves its raw EEG to `path` (see
+    /// [`Self::session_file`]); does nothing for a replayed recording.
+    pub fn save_session(self, path: &Path, end: &str) -> Result<(), SessionError> {
+        let AnyPilot::Live(mut session) = self.pilot else {
+            return Ok(());
+        };
+        session.subject_mut().end(end);
+        let nic = matches!(session.subject().source(), AnySource::Nic(_));
+        let paradigm = session.params().paradigm;
+        let (log, _, _) = session.finish();
+        if nic {
+            save_session_easy(path, &log, &paradigm, 0).map(|_| ())
+        } else {
+            save_session(path, &log, &paradigm).map(|_| ())
+        }
+    }
+}
+
+/// `summary.json` of a task: what ran, the calibration and the task's report.
+#[derive(Debug, Serialize)]
+pub struct TaskSummary<'a, T> {
+    pub task: &'static str,
+    pub subject: &'a str,
+    pub pipeline: &'a str,
+    pub seed: u64,
+    pub calibration: &'a CalibrationReport,
+    /// What a replayed recording's decisions mean ([`REPLAY_NOTE`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<&'static str>,
+    pub report: &'a T,
+}
+
+impl Prepared {
+    /// The summary of the task `task` run by this pilot with `pipeline` and `seed`.
+    pub fn task_summary<'a, T>(
+        &'a self,
+        task: &'static str,
+        pipeline: &'a str,
+        seed: u64,
+        report: &'a T,
+    ) -> TaskSummary<'a, T> {
+        TaskSummary {
+            task,
+            subject: &self.subject,
+            pipeline,
+            seed,
+            calibration: &self.calibration,
+            note: matches!(self.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
+            report,
+        }
+    }
+}
+
+/// The text of `decisions.csv`: one row per step (commas in an arm's refusal become `;`).
+pub fn decisions_csv(steps: &[Step]) -> String {
+    let mut csv =
+        String::from("decision,intended,decided,abstained,rounds,confidence,seconds,arm_refusal\n");
+    for (i, s) in steps.iter().enumerate() {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{:.6},{:.4},{}",
+            i + 1,
+            s.intended,
+            s.decided.map(|c| c.to_string()).unwrap_or_default(),
+            s.abstained,
+            s.rounds,
+            s.confidence,
+            s.seconds,
+            s.arm_refusal.as_deref().unwrap_or("").replace(',', ";")
+        );
+    }
+    csv
+}

@@ -1,0 +1,401 @@
+//! What a copy task's run reports (`oddball demo`'s `summary.json` and printed lines): one row
+//! per decision, accuracy and ITR under a stopping rule, the pen's corners against the path of
+//! the executed commands, the calibration without its wall-clock time, and their text (and the
+//! drawing task's line), and a session file's decisions re-made offline ([`SessionResult`]).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use nalgebra::Vector2;
+use oddball_arm::{planned_path, ArmSim, Command};
+use oddball_decode::decision::DecisionRule;
+use oddball_decode::metrics::Itr;
+use serde::Serialize;
+
+use crate::engine::{CalibrationReport, TrialOutcome};
+use crate::paradigm::FourBulbParams;
+use crate::record::Redecision;
+use crate::replay::ReplayDecision;
+use crate::task::{DrawReport, Step};
+
+/// One decision as reported.
+#[derive(Debug, Clone, Serialize)]
+pub struct DecisionRow {
+    pub index: usize,
+    pub intended: Option<Command>,
+    pub decided: Option<Command>,
+    pub abstained: bool,
+    pub rounds: usize,
+    pub confidence: f64,
+    pub seconds: f64,
+    pub arm_refusal: Option<String>,
+    /// Pen (x, z) in metres when the decision was made, before its command.
+    pub pen_m: Option<[f64; 2]>,
+}
+
+impl DecisionRow {
+    /// The `index`-th (from 1) step of a task.
+    pub fn of(index: usize, s: &Step) -> Self {
+        Self {
+            index,
+            intended: Some(s.intended),
+            decided: s.decided,
+            abstained: s.abstained,
+            rounds: s.rounds,
+            confidence: s.confidence,
+            seconds: s.seconds,
+            arm_refusal: s.arm_refusal.clone(),
+            pen_m: s.pen_m,
+        }
+    }
+
+    /// The `index`-th (from 1) decision of a replayed recording (no arm: nothing refused, no pen).
+    pub fn of_replayed(index: usize, d: &ReplayDecision, paradigm: &FourBulbParams) -> Self {
+        Self {
+            index,
+            intended: Some(d.intended),
+            decided: d.decided(paradigm),
+            abstained: d.outcome == TrialOutcome::Abstained,
+            rounds: d.rounds,
+            confidence: d.confidence(),
+            seconds: d.seconds,
+            arm_refusal: None,
+            pen_m: None,
+        }
+    }
+}
+
+/// Accuracy, rounds and ITR of a list of decisions.
+#[derive(Debug, Clone, Serialize)]
+pub struct Scores {
+    pub rule: String,
+    pub decisions: usize,
+    pub correct: usize,
+    pub abstained: usize,
+    pub accuracy: f64,
+    pub mean_rounds: f64,
+    pub itr: Itr,
+}
+
+/// Accuracy, mean rounds and ITR (Wolpaw, 4 choices) of `rows` under `rule`.
+pub fn scores(rows: &[DecisionRow], rule: &DecisionRule) -> Scores {
+    let n = rows.len().max(1) as f64;
+    let correct = rows
+        .iter()
+        .filter(|r| r.decided.is_some() && r.decided == r.intended)
+        .count();
+    let accuracy = correct as f64 / n;
+    let seconds = rows.iter().map(|r| r.seconds).sum::<f64>() / n;
+    Scores {
+        rule: rule_name(rule),
+        decisions: rows.len(),
+        correct,
+        abstained: rows.iter().filter(|r| r.abstained).count(),
+        accuracy,
+        mean_rounds: rows.iter().map(|r| r.rounds as f64).sum::<f64>() / n,
+        itr: Itr::new(4, accuracy, seconds),
+    }
+}
+
+/// The stopping rule in words (`fixed 10 rounds`, `dynamic stopping (p >= …, at most … rounds)`).
+pub fn rule_name(rule: &DecisionRule) -> String {
+    match rule {
+        DecisionRule::Fixed { rounds } => format!("fixed {rounds} rounds"),
+        DecisionRule::Dynamic {
+            threshold,
+            max_rounds,
+            ..
+        } => format!("dynamic stopping (p >= {threshold}, at most {max_rounds} rounds)"),
+    }
+}
+
+/// The pen's corners against the path of the commands the arm executed.
+#[derive(Debug, Clone, Serialize)]
+pub struct PenReport {
+    /// Pen at each decision and at the end, metres.
+    pub corners_m: Vec<[f64; 2]>,
+    /// Where the executed commands put the reference, metres.
+    pub expected_m: Vec<[f64; 2]>,
+    pub max_corner_error_mm: f64,
+    /// Every decision was the intended command and the arm executed it.
+    pub drew_intended_path: bool,
+}
+
+/// The calibration report without its wall-clock fit time (the files must not depend on it).
+#[derive(Debug, Serialize)]
+pub struct CalibrationSummary {
+    pub trials: usize,
+    pub epochs: usize,
+    pub targets: usize,
+    pub rejected: usize,
+    pub cv_auc: f64,
+    pub d_prime: f64,
+}
+
+impl From<&CalibrationReport> for CalibrationSummary {
+    fn from(c: &CalibrationReport) -> Self {
+        Self {
+            trials: c.n_trials,
+            epochs: c.n_epochs,
+            targets: c.n_targets,
+            rejected: c.n_rejected,
+            cv_auc: c.cv_auc,
+            d_prime: c.d_prime,
+        }
+    }
+}
+
+/// Corners: the pen after each executed command (at the next decision, or at the end)
+/// against where the executed commands put the reference.
+pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[DecisionRow]) -> PenReport {
+    let executed = rows
+        .iter()
+        .filter_map(|r| r.decided.filter(|_| r.arm_refusal.is_none()));
+    let expected = planned_path(pen_start, executed, arm.settings().step_m);
+    let end_pen = [arm.pen()[0], arm.pen()[1]];
+    let mut measured = Vec::new();
+    let mut errors = Vec::new();
+    let mut intended_ok = true;
+    let mut target = expected.iter().skip(1);
+    for (k, row) in rows.iter().enumerate() {
+        let executed = row.decided.filter(|_| row.arm_refusal.is_none());
+        intended_ok &= executed.is_some() && row.decided == row.intended;
+        if executed.is_some() {
+            let target = target.next().expect("one target per executed command");
+            // The pen when the next decision comes (or at the end) shows where this one left it.
+            let pen = rows.get(k + 1).and_then(|r| r.pen_m).unwrap_or(end_pen);
+            measured.push(pen);
+            errors.push((Vector2::new(pen[0], pen[1]) - target).norm());
+        }
+    }
+    PenReport {
+        corners_m: measured,
+        expected_m: expected.iter().map(|p| [p[0], p[1]]).collect(),
+        max_corner_error_mm: errors.iter().copied().fold(0.0, f64::max) * 1000.0,
+        drew_intended_path: intended_ok,
+    }
+}
+
+/// One decision as printed (`decision  1: intended up    decided up      ok    rounds …`).
+pub fn row_text(r: &DecisionRow) -> String {
+    let name = |c: Option<Command>| c.map_or("—".to_string(), |c| c.to_string());
+    let decided = if r.abstained {
+        "abstain".to_string()
+    } else {
+        name(r.decided)
+    };
+    let mark = if r.decided.is_some() && r.decided == r.intended {
+        "ok"
+    } else {
+        "WRONG"
+    };
+    let mut s = format!(
+        "decision {:>2}: intended {:<5} decided {:<7} {:<5} rounds {}  confidence {:.3}  {:.2} s",
+        r.index,
+        name(r.intended),
+        decided,
+        mark,
+        r.rounds,
+        r.confidence,
+        r.seconds
+    );
+    if let Some(e) = &r.arm_refusal {
+        let _ = write!(s, "  (arm refused: {e})");
+    }
+    s
+}
+
+/// The closing lines: accuracy and ITR under the rule (and the fixed-rounds comparison), the pen.
+pub fn report_text(
+    simulated_seconds: f64,
+    result: &Scores,
+    comparison: Option<&Scores>,
+    pen: &PenReport,
+) -> String {
+    let mut s = String::new();
+    let line = |s: &mut String, sc: &Scores| {
+        let _ = writeln!(
+            s,
+            "  {:<48} accuracy {:>5.1} % ({}/{}, {} abstained)  mean rounds {:.2}  {:.2} s/decision  ITR {:.2} bits/decision, {:.2} bits/min",
+            sc.rule,
+            100.0 * sc.accuracy,
+            sc.correct,
+            sc.decisions,
+            sc.abstained,
+            sc.mean_rounds,
+            sc.itr.seconds_per_selection,
+            sc.itr.bits_per_selection,
+            sc.itr.bits_per_minute
+        );
+    };
+    let _ = writeln!(
+        s,
+        "command accuracy and information transfer rate (Wolpaw, 4 choices):"
+    );
+    line(&mut s, result);
+    if let Some(c) = comparison {
+        line(&mut s, c);
+    }
+    let _ = writeln!(
+        s,
+        "pen: {} corners, max error {:.1e} mm from the path of the executed commands; {}",
+        pen.corners_m.len(),
+        pen.max_corner_error_mm,
+        if pen.drew_intended_path {
+            "drew the intended path"
+        } else {
+            "did NOT draw the intended path (wrong, abstained or refused decisions)"
+        }
+    );
+    let _ = writeln!(s, "simulated time {:.1} s", simulated_seconds);
+    s
+}
+
+/// What a drawing task printed: the text, completion, decisions against the plan, the pen's
+/// deviation from the plan (mm) and the task's totals.
+pub fn draw_text(r: &DrawReport) -> String {
+    format!(
+        "drew {:?}: {} in {} decisions (plan {} moves); pen trace from the plan: mean {:.4} mm, max {:.4} mm\n{}",
+        r.text,
+        if r.completed { "completed" } else { "NOT completed" },
+        r.decisions,
+        r.min_decisions,
+        r.mean_deviation_m * 1e3,
+        r.max_deviation_m * 1e3,
+        r.totals
+    )
+}
+
+/// A session file's decisions made again offline by a model and scored (`oddball evaluate
+/// --model model.json --test session.dat`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SessionResult {
+    pub file: PathBuf,
+    pub decisions: Vec<Redecision>,
+    /// Decisions equal to the recorded ones.
+    pub identical_to_recorded: usize,
+    pub accuracy: f64,
+    pub itr: Itr,
+}
+
+impl SessionResult {
+    /// Scores `decisions` re-made from `file`: Wolpaw ITR with 4 choices.
+    pub fn new(file: PathBuf, decisions: Vec<Redecision>) -> Self {
+        let same = decisions
+            .iter()
+            .filter(|d| d.decided() == d.recorded)
+            .count();
+        let n = decisions.len().max(1) as f64;
+        let correct = Self::count_correct(&decisions);
+        let seconds = decisions.iter().map(|d| d.seconds).sum::<f64>() / n;
+        let accuracy = correct as f64 / n;
+        Self {
+            file,
+            identical_to_recorded: same,
+            decisions,
+            accuracy,
+            itr: Itr::new(4, accuracy, seconds),
+        }
+    }
+
+    fn count_correct(decisions: &[Redecision]) -> usize {
+        decisions
+            .iter()
+            .filter(|d| d.decided().is_some() && d.decided() == d.intended)
+            .count()
+    }
+
+    /// Decisions equal to the intended command.
+    pub fn correct(&self) -> usize {
+        Self::count_correct(&self.decisions)
+    }
+
+    /// `  N online decisions: K identical to the recorded ones; accuracy …, ITR …`.
+    pub fn summary_line(&self) -> String {
+        format!(
+            "  {} online decisions: {} identical to the recorded ones; accuracy {:.1} % ({}/{}), ITR {:.2} bits/decision, {:.2} bits/min",
+            self.decisions.len(),
+            self.identical_to_recorded,
+            100.0 * self.accuracy,
+            self.correct(),
+            self.decisions.len(),
+            self.itr.bits_per_selection,
+            self.itr.bits_per_minute
+        )
+    }
+}
+
+/// One re-made decision as printed, the session's bulbs naming the codes (`—` for none).
+pub fn redecision_line(d: &Redecision, bulbs: &[Command]) -> String {
+    let name = |c: Option<u32>| {
+        c.and_then(|c| bulbs.get(c as usize - 1))
+            .map_or("—".to_string(), |b| b.to_string())
+    };
+    let decided = match d.outcome {
+        TrialOutcome::Chosen { code } => name(Some(code)),
+        _ => "abstain".into(),
+    };
+    format!(
+        "  trial {:>3}: intended {:<5} decided {:<7} rounds {}  recorded {:<7} {}",
+        d.number,
+        name(d.intended),
+        decided,
+        d.rounds,
+        if d.recorded.is_some() {
+            name(d.recorded)
+        } else {
+            "abstain".into()
+        },
+        if d.decided() == d.recorded {
+            "same"
+        } else {
+            "DIFFERENT"
+        }
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(index: usize, intended: Command, decided: Option<Command>) -> DecisionRow {
+        DecisionRow {
+            index,
+            intended: Some(intended),
+            decided,
+            abstained: decided.is_none(),
+            rounds: 4,
+            confidence: 0.9,
+            seconds: 2.0,
+            arm_refusal: None,
+            pen_m: None,
+        }
+    }
+
+    #[test]
+    fn scores_count_right_wrong_and_abstained_decisions() {
+        let rows = [
+            row(1, Command::Up, Some(Command::Up)),
+            row(2, Command::Left, Some(Command::Right)),
+            row(3, Command::Down, None),
+            row(4, Command::Down, Some(Command::Down)),
+        ];
+        let s = scores(&rows, &DecisionRule::Fixed { rounds: 4 });
+        assert_eq!(s.rule, "fixed 4 rounds");
+        assert_eq!((s.decisions, s.correct, s.abstained), (4, 2, 1));
+        assert_eq!(s.accuracy, 0.5);
+        assert_eq!(s.mean_rounds, 4.0);
+        assert_eq!(s.itr, Itr::new(4, 0.5, 2.0));
+    }
+
+    #[test]
+    fn a_row_prints_its_mark_and_an_abstention() {
+        let ok = row_text(&row(1, Command::Up, Some(Command::Up)));
+        assert_eq!(
+            ok,
+            "decision  1: intended up    decided up      ok    rounds 4  confidence 0.900  2.00 s"
+        );
+        let abstained = row_text(&row(12, Command::Up, None));
+        assert!(abstained.starts_with("decision 12: intended up    decided abstain WRONG"));
+    }
+}
