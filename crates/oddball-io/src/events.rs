@@ -247,6 +247,39 @@ impl EventMapping {
     }
 }
 
+/// Why a recording's events could not be labelled.
+#[derive(Debug, Error)]
+pub enum LabelError {
+    #[error(transparent)]
+    Mapping(#[from] EventMapError),
+    #[error(transparent)]
+    Text(#[from] crate::speller::TextLabelError),
+    #[error("a spelled text labels speller recordings, and this one is not")]
+    NotSpeller,
+    #[error(transparent)]
+    Signal(#[from] oddball_signal::SignalError),
+}
+
+impl crate::Recording {
+    /// Labels the events by `mapping` ([`EventMapping::apply`]: events matching neither class
+    /// are left out).
+    pub fn map_events(&mut self, mapping: &EventMapping) -> Result<MappingReport, LabelError> {
+        let (events, report) = mapping.apply(self.raw.events())?;
+        self.raw.set_events(events)?;
+        Ok(report)
+    }
+
+    /// Labels a speller recording's flashes from the text it spelled
+    /// ([`crate::Speller::label_from_text`]) and records the text as the text to spell.
+    pub fn label_from_text(&mut self, text: &str) -> Result<(), LabelError> {
+        let speller = self.speller.as_mut().ok_or(LabelError::NotSpeller)?;
+        let events = speller.label_from_text(self.raw.events(), text)?;
+        speller.text_to_spell = Some(text.to_string());
+        self.raw.set_events(events)?;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

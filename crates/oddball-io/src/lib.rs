@@ -72,7 +72,7 @@ pub use edf::{
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
 };
 pub use error::{IoError, StateProblem};
-pub use events::{EventKey, EventMapError, EventMapping, MappingReport};
+pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,

@@ -52,11 +52,7 @@ pub fn read(path: &Path) -> Result<Recording> {
 pub fn read_mapped(path: &Path, mapping: Option<&EventMapping>) -> Result<Recording> {
     let mut rec = read(path)?;
     if let Some(m) = mapping {
-        let (events, _report) = m
-            .apply(rec.raw.events())
-            .with_context(|| format!("labelling the events of {}", path.display()))?;
-        rec.raw
-            .set_events(events)
+        rec.map_events(m)
             .with_context(|| format!("labelling the events of {}", path.display()))?;
     }
     Ok(rec)
@@ -95,21 +91,6 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
     })
 }
 
-/// Target flags from the text spelled in a speller recording recorded without labels.
-fn label_from_text(rec: &mut Recording, text: &str) -> Result<()> {
-    let path = rec.path.display().to_string();
-    let Some(speller) = rec.speller.as_mut() else {
-        anyhow::bail!("{path}: --test-text needs a speller recording, and this one is not");
-    };
-    let events = speller
-        .label_from_text(rec.raw.events(), text)
-        .with_context(|| format!("labelling {path} from the text {text:?}"))?;
-    speller.text_to_spell = Some(text.to_string());
-    rec.raw
-        .set_events(events)
-        .with_context(|| format!("labelling {path}"))
-}
-
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
 /// recorded without labels) and epochs each recording; a recording whose events carry no
 /// labels is an error saying how to label them.
@@ -133,7 +114,8 @@ pub fn load_epochs(
         .map(|(i, p)| {
             let mut rec = read_mapped(p, mapping.as_ref())?;
             if let Some(text) = texts.get(i) {
-                label_from_text(&mut rec, text)?;
+                rec.label_from_text(text)
+                    .with_context(|| format!("labelling {} from the text {text:?}", p.display()))?;
             }
             check_labelled(&rec)?;
             epoch(rec, pre)
