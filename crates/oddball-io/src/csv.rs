@@ -22,7 +22,7 @@
 use std::path::Path;
 
 use ndarray::Array2;
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 use serde::{Deserialize, Serialize};
 
 use crate::error::read_file;
@@ -469,11 +469,7 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
             what: format!("CSV layout: {e}"),
         }
     })?;
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     Ok(Recording {
         raw,
         format: Format::Csv,

@@ -1,9 +1,9 @@
 //! The one error type of `oddball-io`: every variant names the file and carries the facts
 //! (field, byte offset or line/column, what was expected and what was found).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use oddball_signal::SignalError;
+use oddball_signal::{Event, Events, Raw, SignalError};
 
 /// What went wrong while reading or writing a recording.
 ///
@@ -119,7 +119,39 @@ pub enum IoError {
     },
 }
 
+/// The [`Raw`] of a reader's parts; a part the signal crate refuses (shape, rate, names, events
+/// out of range) is an error naming the file.
+pub(crate) fn new_raw(
+    path: &Path,
+    data: ndarray::Array2<f64>,
+    sfreq: f64,
+    ch_names: Vec<String>,
+    events: Vec<Event>,
+) -> Result<Raw, IoError> {
+    Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 impl IoError {
+    /// A field with an unexpected value at a byte offset (every binary reader's error).
+    pub(crate) fn invalid_field(
+        path: &Path,
+        field: impl Into<String>,
+        offset: u64,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> Self {
+        IoError::InvalidField {
+            path: path.to_path_buf(),
+            field: field.into(),
+            offset,
+            expected: expected.into(),
+            found: found.into(),
+        }
+    }
+
     /// The file the error is about.
     pub fn path(&self) -> &std::path::Path {
         match self {

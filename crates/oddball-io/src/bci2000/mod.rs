@@ -40,7 +40,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 use serde::{Deserialize, Serialize};
 
 pub use params::{ParamCell, ParamValue, Parameter, Parameters};
@@ -235,13 +235,7 @@ impl Ctx<'_> {
         expected: impl Into<String>,
         found: impl Into<String>,
     ) -> IoError {
-        IoError::InvalidField {
-            path: self.path.to_path_buf(),
-            field: field.into(),
-            offset,
-            expected: expected.into(),
-            found: found.into(),
-        }
+        IoError::invalid_field(self.path, field, offset, expected, found)
     }
 
     fn truncated(&self, field: impl Into<String>, offset: u64, needed: u64) -> IoError {
@@ -827,11 +821,7 @@ pub fn parse_bci2000(
     }
 
     let speller = speller_from(&ctx, &parameters)?;
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     Ok(Recording {
         raw,
         format: Format::Bci2000,

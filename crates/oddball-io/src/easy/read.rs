@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use ndarray::Array2;
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 
 use crate::csv::csv_err;
 use crate::error::read_file;
@@ -468,11 +468,7 @@ pub fn parse_easy(
     } else {
         None
     };
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     let (device_class, entries) = match parsed {
         Some(p) => (p.device_class, p.entries),
         None => (None, Vec::new()),

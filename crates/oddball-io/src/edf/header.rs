@@ -34,13 +34,7 @@ impl Ctx<'_> {
         expected: impl Into<String>,
         found: impl Into<String>,
     ) -> IoError {
-        IoError::InvalidField {
-            path: self.path.to_path_buf(),
-            field: field.into(),
-            offset: offset as u64,
-            expected: expected.into(),
-            found: found.into(),
-        }
+        IoError::invalid_field(self.path, field, offset as u64, expected, found)
     }
 
     pub(super) fn truncated(

@@ -4,7 +4,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 
 use crate::error::read_file;
 use crate::units::volt_factor_to_uv;
@@ -233,11 +233,7 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         path: path.to_path_buf(),
         what: format!("data layout: {e}"),
     })?;
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     Ok(Recording {
         raw,
         format,

@@ -31,7 +31,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 
 use super::{MatArray, MatFile, MatHeader, MatValue, MatVariable};
 use crate::bci2000::STANDARD_64_CHANNELS;
@@ -287,11 +287,7 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
     };
 
     let sfreq = options.sfreq.unwrap_or(BCI_COMPETITION_SFREQ);
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     let variables = file
         .variables
         .iter()

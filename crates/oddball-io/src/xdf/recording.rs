@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 use serde::{Deserialize, Serialize};
 
 use crate::error::read_file;
@@ -404,11 +404,7 @@ pub fn parse_xdf_with(
         });
     }
 
-    let raw =
-        Raw::new(data, sfreq, ch_names, Events::new(events)).map_err(|source| IoError::Signal {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     let eeg_timestamps = synced.swap_remove(eeg);
     let info = XdfInfo {
         version: file.version,
