@@ -142,9 +142,14 @@ fn as_version(text: &str, version: u32) -> String {
     serde_json::to_string(&v).unwrap()
 }
 
-/// Models saved by the code before the pipeline was opened up (commit bf0714e: every preset in
-/// format 3, the small single ones also as format 1, the score fusion as format 2) load and give the
-/// scores they gave then, bit for bit. `ODDBALL_WRITE_MODEL_FIXTURES=1` rewrites the fixture
+/// The presets left out of the frozen fixture: their models hold training rows and support vectors
+/// (about 0.5 MB of JSON each), too large for a fixture. Their layout was checked against bf0714e
+/// when the pipeline was opened up; fresh models of them round-trip in the tests above.
+const NOT_FROZEN: [&str; 3] = ["paper", "paper-svm", "paper-knn"];
+
+/// Models saved by the code before the pipeline was opened up (commit bf0714e: every preset but
+/// [`NOT_FROZEN`] in format 3, the small single ones also as format 1, the score fusion as format
+/// 2) load and give the scores they gave then, bit for bit. `ODDBALL_WRITE_MODEL_FIXTURES=1` rewrites the fixture
 /// (only ever from the code whose scores are the reference).
 #[test]
 fn saved_models_of_earlier_versions_score_the_same() {
@@ -157,6 +162,9 @@ fn saved_models_of_earlier_versions_score_the_same() {
     if std::env::var_os("ODDBALL_WRITE_MODEL_FIXTURES").is_some() {
         let mut entries = Vec::new();
         for (name, json) in preset_models() {
+            if NOT_FROZEN.contains(&name.as_str()) {
+                continue;
+            }
             let mut texts = vec![(3, json.clone())];
             if name == "lda+riemann" {
                 texts.push((2, as_version(&json, 2)));
@@ -172,12 +180,12 @@ fn saved_models_of_earlier_versions_score_the_same() {
                 }));
             }
         }
-        let text = serde_json::to_string_pretty(&serde_json::Value::from(entries)).unwrap();
+        let text = serde_json::to_string(&serde_json::Value::from(entries)).unwrap();
         std::fs::write(saved_models_fixture(), text).unwrap();
     }
     let text = std::fs::read_to_string(saved_models_fixture()).expect("the saved-model fixture");
     let entries: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
-    assert_eq!(entries.len(), PRESETS.len() + 5);
+    assert_eq!(entries.len(), PRESETS.len() - NOT_FROZEN.len() + 5);
     for e in &entries {
         let what = format!("{} (format {})", e["name"], e["format_version"]);
         let m = Model::from_json(e["model"].as_str().unwrap())
