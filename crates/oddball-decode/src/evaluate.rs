@@ -97,6 +97,8 @@ pub struct PipelineResult {
     pub speller_accuracy: Option<Vec<f64>>,
     /// Cells of the speller matrix (chance accuracy is one over this).
     pub speller_choices: Option<usize>,
+    /// Characters scored (speller test files), the denominator of `speller_accuracy`.
+    pub speller_n_chars: Option<usize>,
     /// Characters picked with all repetitions.
     pub speller_text: Option<String>,
     /// Fewest repetitions from which every character stays right with every further repetition
@@ -462,6 +464,7 @@ pub fn score_test(
         auc_folds: vec![auc],
         speller_accuracy: None,
         speller_choices: None,
+        speller_n_chars: None,
         speller_text: None,
         reps_for_all_correct: None,
         itr_at_best: None,
@@ -494,6 +497,7 @@ pub fn score_test(
             .max_by(|a, b| a.bits_per_minute.total_cmp(&b.bits_per_minute));
         result.reps_for_all_correct = reps_from_which_all_correct(&acc);
         result.speller_choices = Some(first.n_choices);
+        result.speller_n_chars = Some(n_chars);
         result.speller_text = Some(spellers.iter().map(|s| s.text.as_str()).collect());
         result.speller_accuracy = Some(acc);
     }
@@ -574,6 +578,7 @@ pub fn cross_validate(
         auc_folds: aucs,
         speller_accuracy: None,
         speller_choices: None,
+        speller_n_chars: None,
         speller_text: None,
         reps_for_all_correct: None,
         itr_at_best: None,

@@ -32,7 +32,9 @@
 //! # Ok::<(), oddball_decode::DecodeError>(())
 //! ```
 
+pub mod benchmark;
 pub mod classifiers;
+pub mod dataset;
 pub mod decision;
 mod error;
 pub mod evaluate;

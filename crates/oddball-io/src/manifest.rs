@@ -3,6 +3,8 @@
 //!
 //! ```toml
 //! name = "bnci-like"
+//! root = "../data"         # optional: run paths are relative to this folder (itself relative
+//!                          # to the manifest's folder); `oddball benchmark --data DIR` replaces it
 //! [events]                 # codes or annotation texts; not needed when the files flag targets
 //! target = [2]
 //! nontarget = [1]
@@ -16,6 +18,9 @@
 //! train = ["s1_train.bdf"] # paths relative to the manifest
 //! test = ["s1_test.bdf"]
 //! test_text = ["WATER"]    # optional, one per test file without labels
+//! [subject.sessions]       # optional: runs recorded together, for within-session evaluation
+//! "1" = ["s1_train.bdf"]   # (without it, all of a subject's runs are one session)
+//! "2" = ["s1_test.bdf"]
 //! ```
 //!
 //! [`Manifest::load`] checks everything that can be checked before any EEG is read: unknown keys
@@ -23,7 +28,7 @@
 //! the speller's codes distinct and matching its matrix, one `test_text` per test file. serde +
 //! `toml` do the parsing; the checks are ours.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
@@ -108,12 +113,30 @@ pub struct Subject {
     pub test: Vec<PathBuf>,
     /// The text spelled in each test run whose file carries no labels, in the order of `test`.
     pub test_text: Option<Vec<String>>,
+    /// Sessions (runs recorded together), each a list of this subject's runs; `None`: all runs
+    /// are one session.
+    pub sessions: Option<BTreeMap<String, Vec<PathBuf>>>,
 }
 
 impl Subject {
     /// Every run, training runs first.
     pub fn runs(&self) -> impl Iterator<Item = &PathBuf> {
         self.train.iter().chain(&self.test)
+    }
+
+    /// The spelled text of a run, for test runs recorded without labels.
+    pub fn text_of(&self, run: &Path) -> Option<&str> {
+        let i = self.test.iter().position(|r| r == run)?;
+        self.test_text.as_ref()?.get(i).map(String::as_str)
+    }
+
+    /// The sessions and their runs, in name order; all runs as one session `"all"` when the
+    /// manifest names none.
+    pub fn session_runs(&self) -> Vec<(String, Vec<PathBuf>)> {
+        match &self.sessions {
+            Some(s) => s.iter().map(|(k, v)| (k.clone(), v.clone())).collect(),
+            None => vec![("all".to_string(), self.runs().cloned().collect())],
+        }
     }
 }
 
@@ -122,6 +145,8 @@ impl Subject {
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
     pub name: String,
+    /// The folder run paths are relative to, itself relative to the manifest's folder.
+    pub root: Option<PathBuf>,
     /// Which events are targets; `None` when the files flag targets themselves.
     pub events: Option<EventMapping>,
     pub speller: Option<SpellerSpec>,
@@ -162,16 +187,34 @@ pub enum ManifestError {
 
 impl Manifest {
     /// Reads and checks a manifest; run paths become paths relative to the manifest's folder
-    /// (absolute paths are kept).
+    /// joined with its `root` (absolute paths are kept).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ManifestError> {
+        Self::load_with_root(path, None)
+    }
+
+    /// As [`Manifest::load`], with run paths relative to `root` instead of the manifest's own
+    /// `root` (e.g. the data kept in another folder).
+    pub fn load_with_root(
+        path: impl AsRef<Path>,
+        root: Option<&Path>,
+    ) -> Result<Self, ManifestError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
             path: path.to_path_buf(),
             source,
         })?;
         let mut m = Self::parse(&text, path)?;
-        let dir = path.parent().unwrap_or(Path::new("."));
+        let dir = match (root, &m.root) {
+            (Some(r), _) => r.to_path_buf(),
+            (None, Some(r)) => path.parent().unwrap_or(Path::new(".")).join(r),
+            (None, None) => path.parent().unwrap_or(Path::new(".")).to_path_buf(),
+        };
+        m.root = Some(dir.clone());
         for s in &mut m.subjects {
+            let sessions = s.sessions.iter_mut().flat_map(|t| t.values_mut().flatten());
+            for run in sessions {
+                *run = dir.join(&*run);
+            }
             for run in s.train.iter_mut().chain(s.test.iter_mut()) {
                 *run = dir.join(&*run);
                 if !run.is_file() {
@@ -245,6 +288,32 @@ impl Manifest {
                         "subject {:?}: test_text needs a [speller] table",
                         s.id
                     )));
+                }
+            }
+            if let Some(sessions) = &s.sessions {
+                let mut seen = BTreeSet::new();
+                for (name, runs) in sessions {
+                    if runs.is_empty() {
+                        return Err(self
+                            .invalid(format!("subject {:?}: session {name:?} has no runs", s.id)));
+                    }
+                    for run in runs {
+                        if !s.runs().any(|r| r == run) {
+                            return Err(self.invalid(format!(
+                                "subject {:?}: session {name:?} names {}, which is not one of \
+                                 the subject's train or test runs",
+                                s.id,
+                                run.display()
+                            )));
+                        }
+                        if !seen.insert(run) {
+                            return Err(self.invalid(format!(
+                                "subject {:?}: run {} is in two sessions",
+                                s.id,
+                                run.display()
+                            )));
+                        }
+                    }
                 }
             }
         }

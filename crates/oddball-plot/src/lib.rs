@@ -1,5 +1,5 @@
 //! The pictures of oddball's reports, for the people reading them: one module per picture
-//! ([`erp`], [`accuracy`], [`arm`], [`task`]), and what they share: an embedded font (DejaVu Sans,
+//! ([`erp`], [`accuracy`], [`benchmark`], [`arm`], [`task`]), and what they share: an embedded font (DejaVu Sans,
 //! `assets/`, so no system font libraries are needed) and the choice of PNG or SVG by file
 //! extension.
 //!
@@ -16,6 +16,7 @@ use std::sync::Once;
 
 pub mod accuracy;
 pub mod arm;
+pub mod benchmark;
 pub mod erp;
 pub mod task;
 

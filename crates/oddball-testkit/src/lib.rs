@@ -22,7 +22,7 @@
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
-use ndarray::Array3;
+use ndarray::{Array2, Array3};
 
 /// What a test needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -182,6 +182,66 @@ impl AsRef<Path> for TempDir {
     fn as_ref(&self) -> &Path {
         self.0.path()
     }
+}
+
+/// A continuous synthetic oddball recording at 256 Hz, `(n_channels, n_times)` µV and one marker
+/// per sample: 240 flashes every 0.4 s from 1 s on, every fifth (`k % 5 == 2`) code 2 (a target,
+/// with a 2 µV half-sine bump 300–500 ms later on every channel), the others code 1, 0 between
+/// flashes; uniform noise of 10 µV peak-to-peak from an LCG seeded by `seed`, drawn sample by
+/// sample. Returns `(data, markers, sfreq)`.
+pub fn synthetic_oddball(n_channels: usize, seed: u64) -> (Array2<f64>, Vec<u32>, f64) {
+    let sfreq = 256.0;
+    let n_flash = 240;
+    let step = (0.4 * sfreq) as usize;
+    let n_times = 256 + n_flash * step + 256;
+    let mut markers = vec![0u32; n_times];
+    for k in 0..n_flash {
+        markers[256 + k * step] = if k % 5 == 2 { 2 } else { 1 };
+    }
+    let mut state: u64 = seed;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 10.0
+    };
+    let mut bump = vec![0.0f64; n_times];
+    for (i, m) in markers.iter().enumerate() {
+        if *m == 2 {
+            let (a, b) = (i + (0.3 * sfreq) as usize, i + (0.5 * sfreq) as usize);
+            for (j, v) in bump.iter_mut().enumerate().take(b.min(n_times)).skip(a) {
+                let x = (j - a) as f64 / (b - a) as f64;
+                *v += 2.0 * (std::f64::consts::PI * x).sin();
+            }
+        }
+    }
+    let mut data = Array2::zeros((n_channels, n_times));
+    for i in 0..n_times {
+        for c in 0..n_channels {
+            data[[c, i]] = noise() + bump[i];
+        }
+    }
+    (data, markers, sfreq)
+}
+
+/// Writes a recording as CSV: a `time` column (s, 6 decimals), `ch0..chN` (µV, 4 decimals) and a
+/// `stim` column of markers (0 = none).
+pub fn write_codes_csv(path: &Path, data: &Array2<f64>, markers: &[u32], sfreq: f64) {
+    use std::fmt::Write as _;
+    let (n_ch, n_times) = data.dim();
+    let mut text = String::from("time");
+    for c in 0..n_ch {
+        let _ = write!(text, ",ch{c}");
+    }
+    text.push_str(",stim\n");
+    for i in 0..n_times {
+        let _ = write!(text, "{:.6}", i as f64 / sfreq);
+        for c in 0..n_ch {
+            let _ = write!(text, ",{:.4}", data[[c, i]]);
+        }
+        let _ = writeln!(text, ",{}", markers[i]);
+    }
+    std::fs::write(path, text).expect("the CSV is written");
 }
 
 /// Synthetic epochs `(n_epochs, 4, 64)` at 64 Hz: uniform noise of `noise` µV peak-to-peak, a

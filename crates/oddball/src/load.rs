@@ -3,9 +3,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use oddball_decode::dataset;
 use oddball_decode::evaluate::EpochedRecording;
 use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_io::events::describe_events;
 use oddball_io::{EventMapping, Recording};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
@@ -58,69 +58,24 @@ pub fn read_mapped(path: &Path, mapping: Option<&EventMapping>) -> Result<Record
     Ok(rec)
 }
 
-/// An error when a recording has events but none says whether it is a target, telling how to
-/// label them.
-fn check_labelled(rec: &Recording) -> Result<()> {
-    let events = rec.raw.events();
-    if !events.is_empty() && events.iter().all(|e| e.target.is_none()) {
-        anyhow::bail!(
-            "{} has {} events but none is labelled target or non-target (its events: {}); say \
-             which are with --target-events and --nontarget-events (codes or marker texts, e.g. \
-             --target-events 2 --nontarget-events 1), or for a speller run give the text it \
-             spelled with --test-text",
-            rec.path.display(),
-            events.len(),
-            describe_events(events)
-        );
-    }
-    Ok(())
-}
-
-/// The epochs of one recording cut by `pre` (the one preprocessing path,
-/// [`Preprocess::params`]).
-pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
-    let (epochs, _dropped) = pre
-        .params()
-        .epochs(&rec.raw)
-        .with_context(|| format!("epoching {}", rec.path.display()))?;
-    Ok(EpochedRecording {
-        name: rec.path.display().to_string(),
-        n_events: rec.raw.events().len(),
-        speller: rec.speller,
-        epochs,
-    })
-}
-
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
-/// recorded without labels) and epochs each recording; a recording whose events carry no
-/// labels is an error saying how to label them.
+/// recorded without labels) and epochs each recording
+/// ([`oddball_decode::dataset::load_epochs`]); a recording whose events carry no labels is an
+/// error saying how to label them.
 pub fn load_epochs(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
     texts: &[String],
 ) -> Result<Vec<EpochedRecording>> {
-    if !texts.is_empty() && texts.len() != paths.len() {
-        anyhow::bail!(
-            "--test-text gives {} texts for {} test files (one per file)",
-            texts.len(),
-            paths.len()
-        );
-    }
     let mapping = events.mapping()?;
-    paths
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let mut rec = read_mapped(p, mapping.as_ref())?;
-            if let Some(text) = texts.get(i) {
-                rec.label_from_text(text)
-                    .with_context(|| format!("labelling {} from the text {text:?}", p.display()))?;
-            }
-            check_labelled(&rec)?;
-            epoch(rec, pre)
-        })
-        .collect()
+    Ok(dataset::load_epochs(
+        paths,
+        pre,
+        mapping.as_ref(),
+        texts,
+        None,
+    )?)
 }
 
 /// Reads a saved model.

@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 
 mod args;
 mod cmd_arm;
+mod cmd_benchmark;
 mod cmd_decode;
 mod cmd_demo;
 mod cmd_inspect;
@@ -52,6 +53,8 @@ enum Command {
     Train(cmd_decode::TrainArgs),
     /// Score pipelines on held-out recordings (or by cross-validation): AUC, speller accuracy vs repetitions, ITR.
     Evaluate(cmd_decode::EvaluateArgs),
+    /// Every preset on every subject of dataset manifests (MOABB's protocols): per-subject rows, means, paired tests, JSON/CSV/plot.
+    Benchmark(cmd_benchmark::BenchmarkArgs),
     /// Simulate the 2-DoF arm following direction commands (the paper's G by default).
     Arm(cmd_arm::ArmArgs),
 }
@@ -95,6 +98,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => cmd_inspect::run(&args),
         Command::Train(args) => cmd_decode::run_train(&args),
         Command::Evaluate(args) => cmd_decode::run_evaluate(&args),
+        Command::Benchmark(args) => cmd_benchmark::run(&args),
         Command::Arm(args) => cmd_arm::run(&args),
     };
     match result {

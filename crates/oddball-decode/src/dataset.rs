@@ -1,0 +1,228 @@
+//! Recordings into labelled epochs, the one place that does it for `train`, `evaluate` and
+//! `benchmark`: read ([`oddball_io::read`]), label (an [`EventMapping`], MNE's `event_id`; or the
+//! text a speller run spelled), give a speller geometry to recordings that lack one (a
+//! manifest's `[speller]`), and cut epochs with the [`Preprocess`] of the model.
+//!
+//! A recording with events of which none says target or non-target is an error that says how
+//! to label them (an event mapping, or the spelled text).
+
+use std::path::{Path, PathBuf};
+
+use oddball_io::events::{describe_events, LabelError};
+use oddball_io::manifest::SpellerSpec;
+use oddball_io::{CodeOrder, EventMapping, IoError, Recording, Speller};
+use oddball_signal::SignalError;
+use thiserror::Error;
+
+use crate::evaluate::EpochedRecording;
+use crate::preprocess::Preprocess;
+
+/// Why a recording could not become labelled epochs; every variant names the file.
+#[derive(Debug, Error)]
+pub enum DatasetError {
+    #[error("reading {}", path.display())]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: IoError,
+    },
+    #[error("labelling the events of {}", path.display())]
+    Label {
+        path: PathBuf,
+        #[source]
+        source: LabelError,
+    },
+    #[error("labelling {} from the text {text:?}", path.display())]
+    Text {
+        path: PathBuf,
+        text: String,
+        #[source]
+        source: LabelError,
+    },
+    #[error(
+        "{} has {n_events} events but none is labelled target or non-target (its events: \
+         {events}); say which are with --target-events and --nontarget-events (codes or marker \
+         texts, e.g. --target-events 2 --nontarget-events 1) or an [events] table in a dataset \
+         manifest, or for a speller run give the text it spelled with --test-text (test_text \
+         in a manifest)",
+        path.display()
+    )]
+    Unlabelled {
+        path: PathBuf,
+        n_events: usize,
+        /// The codes and texts present, e.g. `code 1 ×192, code 2 ×48`.
+        events: String,
+    },
+    #[error("{}: the speller geometry does not fit: {what}", path.display())]
+    Speller { path: PathBuf, what: String },
+    #[error("{given} spelled texts for {files} files (one per file)")]
+    TextCount { given: usize, files: usize },
+    #[error("epoching {}", path.display())]
+    Epoch {
+        path: PathBuf,
+        #[source]
+        source: SignalError,
+    },
+}
+
+/// How to label one recording.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Labelling<'a> {
+    /// Which events are targets; replaces the file's own flags.
+    pub mapping: Option<&'a EventMapping>,
+    /// The text a speller run spelled (runs recorded without labels).
+    pub text: Option<&'a str>,
+    /// The speller geometry, for recordings that do not carry one.
+    pub speller: Option<&'a SpellerSpec>,
+}
+
+/// The [`Speller`] of a manifest's geometry: its codes must be the rows then the columns, or the
+/// columns then the rows, numbered from 1 (the two layouts BCI2000 and the BCI Competitions use).
+pub fn speller_of(spec: &SpellerSpec) -> Result<Speller, String> {
+    let mut speller = Speller::from_rows(&spec.matrix)
+        .ok_or_else(|| "the matrix has no symbols or rows of different lengths".to_string())?;
+    let (n_rows, n_cols) = (spec.rows.len() as u32, spec.columns.len() as u32);
+    let seq = |from: u32, n: u32| (from..from + n).collect::<Vec<u32>>();
+    if spec.rows == seq(1, n_rows) && spec.columns == seq(n_rows + 1, n_cols) {
+        speller.code_order = CodeOrder::RowsFirst;
+    } else if spec.columns == seq(1, n_cols) && spec.rows == seq(n_cols + 1, n_rows) {
+        speller.code_order = CodeOrder::ColumnsFirst;
+    } else {
+        return Err(format!(
+            "rows {:?} and columns {:?}: the codes must be 1..{} for the rows then the columns, \
+             or for the columns then the rows",
+            spec.rows,
+            spec.columns,
+            n_rows + n_cols
+        ));
+    }
+    speller.flashes_per_character = spec.flashes_per_character();
+    Ok(speller)
+}
+
+/// Reads and labels a recording (see [`Labelling`]); not yet epoched.
+pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, DatasetError> {
+    let mut rec = oddball_io::read(path).map_err(|source| DatasetError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if let Some(spec) = how.speller {
+        let mut speller = speller_of(spec).map_err(|what| DatasetError::Speller {
+            path: path.to_path_buf(),
+            what,
+        })?;
+        match &rec.speller {
+            // The file's own geometry must agree with the manifest's.
+            Some(own)
+                if own.matrix() != speller.matrix() || own.code_order != speller.code_order =>
+            {
+                return Err(DatasetError::Speller {
+                    path: path.to_path_buf(),
+                    what: "the file's own speller matrix or code order differs from the \
+                           manifest's"
+                        .into(),
+                })
+            }
+            Some(_) => {}
+            None => {
+                speller.text_to_spell = None;
+                rec.speller = Some(speller);
+            }
+        }
+    }
+    if let Some(m) = how.mapping {
+        rec.map_events(m).map_err(|source| DatasetError::Label {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    }
+    if let Some(text) = how.text {
+        rec.label_from_text(text)
+            .map_err(|source| DatasetError::Text {
+                path: path.to_path_buf(),
+                text: text.to_string(),
+                source,
+            })?;
+    }
+    let events = rec.raw.events();
+    if !events.is_empty() && events.iter().all(|e| e.target.is_none()) {
+        return Err(DatasetError::Unlabelled {
+            path: path.to_path_buf(),
+            n_events: events.len(),
+            events: describe_events(events),
+        });
+    }
+    Ok(rec)
+}
+
+/// The epochs of a labelled recording, cut by `pre` (the one preprocessing path).
+pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording, DatasetError> {
+    let (epochs, _dropped) =
+        pre.params()
+            .epochs(&rec.raw)
+            .map_err(|source| DatasetError::Epoch {
+                path: rec.path.clone(),
+                source,
+            })?;
+    Ok(EpochedRecording {
+        name: rec.path.display().to_string(),
+        n_events: rec.raw.events().len(),
+        speller: rec.speller,
+        epochs,
+    })
+}
+
+/// Reads, labels and epochs each recording; `texts` is empty or one spelled text per file.
+pub fn load_epochs(
+    paths: &[PathBuf],
+    pre: &Preprocess,
+    mapping: Option<&EventMapping>,
+    texts: &[String],
+    speller: Option<&SpellerSpec>,
+) -> Result<Vec<EpochedRecording>, DatasetError> {
+    if !texts.is_empty() && texts.len() != paths.len() {
+        return Err(DatasetError::TextCount {
+            given: texts.len(),
+            files: paths.len(),
+        });
+    }
+    paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let how = Labelling {
+                mapping,
+                text: texts.get(i).map(String::as_str),
+                speller,
+            };
+            epoch(read_labelled(p, how)?, pre)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(rows: &[u32], columns: &[u32]) -> SpellerSpec {
+        SpellerSpec {
+            matrix: vec!["AB".into(), "CD".into(), "EF".into()],
+            rows: rows.to_vec(),
+            columns: columns.to_vec(),
+            repetitions: Some(5),
+        }
+    }
+
+    #[test]
+    fn speller_codes_in_either_order_and_nothing_else() {
+        let s = speller_of(&spec(&[1, 2, 3], &[4, 5])).unwrap();
+        assert_eq!(s.code_order, CodeOrder::RowsFirst);
+        assert_eq!((s.code_of_row(2), s.code_of_col(0)), (3, 4));
+        assert_eq!(s.flashes_per_character, Some(25));
+        let s = speller_of(&spec(&[3, 4, 5], &[1, 2])).unwrap();
+        assert_eq!(s.code_order, CodeOrder::ColumnsFirst);
+        assert_eq!((s.code_of_row(0), s.code_of_col(1)), (3, 2));
+        let err = speller_of(&spec(&[1, 3, 5], &[2, 4])).unwrap_err();
+        assert!(err.contains("1..5"), "{err}");
+    }
+}

@@ -1,0 +1,221 @@
+//! `oddball benchmark --plot`: the figure a paper shows. Left, each subject's AUC per preset
+//! (one dot per subject, the mean as a bar), one protocol; right, the mean character accuracy
+//! against repetitions per preset over the speller subjects, chance dashed.
+
+use std::path::Path;
+
+use oddball_decode::benchmark::{BenchmarkReport, Protocol};
+
+use crate::PlotError;
+
+/// Draws the benchmark figure for `protocol` (the first protocol with results when `None`).
+pub fn draw_benchmark(
+    path: &Path,
+    report: &BenchmarkReport,
+    protocol: Option<Protocol>,
+) -> Result<(), PlotError> {
+    let protocol = protocol
+        .or_else(|| report.results.first().map(|r| r.protocol))
+        .unwrap_or(Protocol::TrainTest);
+    let rows: Vec<_> = report
+        .results
+        .iter()
+        .filter(|r| r.protocol == protocol)
+        .collect();
+    let mut presets: Vec<&str> = Vec::new();
+    for r in &rows {
+        if !presets.contains(&r.preset.as_str()) {
+            presets.push(&r.preset);
+        }
+    }
+    let mut subjects: Vec<(String, Option<String>)> = Vec::new();
+    for r in &rows {
+        let key = (format!("{}/{}", r.dataset, r.subject), r.session.clone());
+        if !subjects.contains(&key) {
+            subjects.push(key);
+        }
+    }
+    let curves: Vec<(&str, &[f64])> = report
+        .summary
+        .iter()
+        .filter(|s| s.protocol == protocol)
+        .filter_map(|s| Some((s.preset.as_str(), s.char_accuracy_by_reps.as_deref()?)))
+        .collect();
+    let lo = rows
+        .iter()
+        .map(|r| r.auc)
+        .fold(1.0f64, f64::min)
+        .min(0.5)
+        .max(0.0);
+    let n_presets = presets.len().max(1);
+    let width = if curves.is_empty() { 800 } else { 1500 };
+    crate::with_backend!(path, (width, 620), |root| {
+        let (left, right) = if curves.is_empty() {
+            (root.clone(), None)
+        } else {
+            let (l, r) = root.split_horizontally(800);
+            (l, Some(r))
+        };
+        let mut chart = ChartBuilder::on(&left)
+            .caption(
+                format!(
+                    "epoch ROC-AUC per subject ({protocol}, {} subject{})",
+                    subjects.len(),
+                    if subjects.len() == 1 { "" } else { "s" }
+                ),
+                (crate::FONT_FAMILY, 20),
+            )
+            .margin(14)
+            .x_label_area_size(70)
+            .y_label_area_size(56)
+            .build_cartesian_2d(-0.5f64..n_presets as f64 - 0.5, lo..1.0f64)
+            .map_err(|e| PlotError::draw(path, e))?;
+        let names = presets.clone();
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(n_presets)
+            .x_label_formatter(&|x| {
+                let i = x.round();
+                if (x - i).abs() < 1e-6 && i >= 0.0 {
+                    names
+                        .get(i as usize)
+                        .map(|s| s.to_string())
+                        .unwrap_or_default()
+                } else {
+                    String::new()
+                }
+            })
+            .y_labels(11)
+            .y_label_formatter(&|y| format!("{y:.2}"))
+            .y_desc("ROC-AUC (0.5 = chance)")
+            .label_style((crate::FONT_FAMILY, 14))
+            .draw()
+            .map_err(|e| PlotError::draw(path, e))?;
+        // Chance.
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(-0.5, 0.5), (n_presets as f64 - 0.5, 0.5)],
+                6,
+                4,
+                BLACK.stroke_width(1),
+            ))
+            .map_err(|e| PlotError::draw(path, e))?;
+        for (s, key) in subjects.iter().enumerate() {
+            let color = Palette99::pick(s).to_rgba();
+            // Subjects spread a little sideways so that equal AUCs stay visible.
+            let dx = if subjects.len() > 1 {
+                -0.25 + 0.5 * s as f64 / (subjects.len() - 1) as f64
+            } else {
+                0.0
+            };
+            let points: Vec<(f64, f64)> = rows
+                .iter()
+                .filter(|r| (format!("{}/{}", r.dataset, r.subject), r.session.clone()) == *key)
+                .filter_map(|r| {
+                    let i = presets.iter().position(|p| *p == r.preset)?;
+                    Some((i as f64 + dx, r.auc))
+                })
+                .collect();
+            let label = match &key.1 {
+                Some(session) => format!("{} ({session})", key.0),
+                None => key.0.clone(),
+            };
+            chart
+                .draw_series(points.iter().map(|&p| Circle::new(p, 5, color.filled())))
+                .map_err(|e| PlotError::draw(path, e))?
+                .label(label)
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+        }
+        // The mean per preset.
+        for (i, preset) in presets.iter().enumerate() {
+            let aucs: Vec<f64> = rows
+                .iter()
+                .filter(|r| r.preset == *preset)
+                .map(|r| r.auc)
+                .collect();
+            let mean = aucs.iter().sum::<f64>() / aucs.len().max(1) as f64;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(i as f64 - 0.35, mean), (i as f64 + 0.35, mean)],
+                    BLACK.stroke_width(3),
+                )))
+                .map_err(|e| PlotError::draw(path, e))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::LowerRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font((crate::FONT_FAMILY, 13))
+            .draw()
+            .map_err(|e| PlotError::draw(path, e))?;
+
+        if let Some(right) = right {
+            let n_reps = curves
+                .iter()
+                .map(|(_, a)| a.len())
+                .max()
+                .unwrap_or(1)
+                .max(1);
+            let n_spellers = rows
+                .iter()
+                .filter(|r| r.chars_by_reps.is_some())
+                .map(|r| (&r.dataset, &r.subject))
+                .collect::<std::collections::BTreeSet<_>>()
+                .len();
+            let mut chart = ChartBuilder::on(&right)
+                .caption(
+                    format!(
+                        "mean character accuracy ({n_spellers} speller subject{})",
+                        if n_spellers == 1 { "" } else { "s" }
+                    ),
+                    (crate::FONT_FAMILY, 20),
+                )
+                .margin(14)
+                .x_label_area_size(70)
+                .y_label_area_size(56)
+                .build_cartesian_2d(0.5f64..n_reps as f64 + 0.5, 0f64..105.0)
+                .map_err(|e| PlotError::draw(path, e))?;
+            chart
+                .configure_mesh()
+                .x_labels(n_reps.min(20))
+                .x_label_formatter(&|x| format!("{x:.0}"))
+                .y_labels(11)
+                .y_label_formatter(&|y| format!("{y:.0}"))
+                .x_desc("repetitions")
+                .y_desc("characters right, %")
+                .label_style((crate::FONT_FAMILY, 14))
+                .draw()
+                .map_err(|e| PlotError::draw(path, e))?;
+            for (i, (name, acc)) in curves.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                let width = 2 + (curves.len() - 1 - i) as u32;
+                let points: Vec<(f64, f64)> = acc
+                    .iter()
+                    .enumerate()
+                    .map(|(r, a)| ((r + 1) as f64, 100.0 * a))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(points.clone(), color.stroke_width(width)))
+                    .map_err(|e| PlotError::draw(path, e))?
+                    .label(*name)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
+                    });
+                chart
+                    .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(|e| PlotError::draw(path, e))?;
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::LowerRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font((crate::FONT_FAMILY, 14))
+                .draw()
+                .map_err(|e| PlotError::draw(path, e))?;
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,280 @@
+//! `oddball benchmark`: the arguments, the progress bar, the tables and the files. The
+//! evaluation itself is `oddball_decode::benchmark`'s.
+
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use oddball_decode::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
+use oddball_decode::pipeline::Preprocess;
+use oddball_io::Manifest;
+
+use crate::preset_arg::{PipelineList, DEFAULT_PIPELINE};
+
+/// `--protocol a,b` or `all`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ProtocolList(pub Vec<Protocol>);
+
+impl FromStr for ProtocolList {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s.trim() == "all" {
+            return Ok(Self(Protocol::ALL.to_vec()));
+        }
+        let mut out = Vec::new();
+        for p in s.split(',') {
+            let p: Protocol = p.parse().map_err(|e| format!("{e}, or all"))?;
+            if !out.contains(&p) {
+                out.push(p);
+            }
+        }
+        Ok(Self(out))
+    }
+}
+
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Example:\n  oddball benchmark datasets/*.toml --pipeline all --protocol \
+                        train-test,within-session --json bench.json --csv bench.csv --plot \
+                        bench.png"
+)]
+pub struct BenchmarkArgs {
+    /// Dataset manifests (TOML: subjects, train/test runs, event mapping, speller geometry;
+    /// shipped ones in datasets/).
+    #[arg(required = true, value_name = "MANIFEST")]
+    pub manifests: Vec<PathBuf>,
+    /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
+    /// paper, paper-svm, paper-knn), or `all`.
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
+    pub pipeline: PipelineList,
+    /// Evaluation protocols, comma-separated, or `all`: train-test (the manifest's train runs →
+    /// its test runs), within-session (k-fold CV in each session), cross-subject (leave one
+    /// subject out).
+    #[arg(long, default_value = "train-test", value_name = "NAME[,NAME…]|all")]
+    pub protocol: ProtocolList,
+    /// Folds of the within-session cross-validation.
+    #[arg(long, default_value_t = 5)]
+    pub folds: usize,
+    /// The folder the manifests' run paths are relative to, instead of each manifest's `root`.
+    #[arg(long, value_name = "DIR")]
+    pub data: Option<PathBuf>,
+    /// Threads for the evaluations (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Write every row, the summary and the comparisons as JSON here.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Write every row as CSV here.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Draw per-subject AUC per preset and mean character accuracy vs repetitions (.png/.svg).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+}
+
+pub fn run(args: &BenchmarkArgs) -> Result<()> {
+    // Everything checked before any EEG is read: output files' folders, manifests, the plan.
+    for out in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
+        let dir = out.parent().filter(|d| !d.as_os_str().is_empty());
+        if let Some(dir) = dir {
+            anyhow::ensure!(
+                dir.is_dir(),
+                "{}: the folder {} does not exist",
+                out.display(),
+                dir.display()
+            );
+        }
+    }
+    if let Some(plot) = &args.plot {
+        oddball_plot::PlotFormat::from_path(plot)?;
+    }
+    if args.threads == Some(0) {
+        anyhow::bail!("--threads must be at least 1");
+    }
+    let manifests = args
+        .manifests
+        .iter()
+        .map(|m| Manifest::load_with_root(m, args.data.as_deref()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let params = BenchmarkParams {
+        presets: args.pipeline.0.clone(),
+        protocols: args.protocol.0.clone(),
+        folds: args.folds,
+        preprocess: Preprocess::peer(),
+    };
+    let plan = params.plan(&manifests)?;
+    for s in &plan.skipped {
+        println!("skipped: {s}");
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .context("starting the worker threads")?;
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    let on = |p: Progress<'_>| match p {
+        Progress::Plan { subjects, units } => {
+            bar.set_length((subjects + units) as u64);
+            bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
+        }
+        Progress::Loaded { .. } => bar.inc(1),
+        Progress::Done { .. } => bar.inc(1),
+    };
+    let report = pool.install(|| benchmark::run(&params, &manifests, &on));
+    bar.finish_and_clear();
+    let report = report?;
+    print_report(&report);
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.csv {
+        std::fs::write(path, benchmark::to_csv(&report.results))
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.plot {
+        oddball_plot::benchmark::draw_benchmark(path, &report, None)
+            .with_context(|| format!("drawing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+fn print_report(report: &BenchmarkReport) {
+    let mut last = None;
+    for r in &report.results {
+        let key = (&r.dataset, &r.subject, &r.session, r.protocol);
+        if last != Some(key) {
+            println!(
+                "\n{} / subject {}{} ({}): {} epochs, {} targets{}",
+                r.dataset,
+                r.subject,
+                r.session
+                    .as_ref()
+                    .map(|s| format!(" / session {s}"))
+                    .unwrap_or_default(),
+                r.protocol,
+                r.n_epochs,
+                r.n_targets,
+                r.n_chars
+                    .map(|n| format!(", {n} characters"))
+                    .unwrap_or_default()
+            );
+            last = Some(key);
+        }
+        let chars = r
+            .chars_by_reps
+            .as_ref()
+            .map(|c| {
+                format!(
+                    "  chars right by reps: {}",
+                    c.iter()
+                        .map(|v| v.to_string())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                )
+            })
+            .unwrap_or_default();
+        println!(
+            "  {:<12} AUC {:.3}  fit {:>7.3} s{}{}",
+            r.preset,
+            r.auc,
+            r.fit_s,
+            chars,
+            r.itr_bits_per_min
+                .map(|v| format!("  ITR {v:.1} bits/min"))
+                .unwrap_or_default()
+        );
+    }
+    println!("\nmean ± sd over subjects:");
+    for s in &report.summary {
+        println!(
+            "  {:<15} {:<12} AUC {:.3} ± {}  (n = {}){}",
+            s.protocol.name(),
+            s.preset,
+            s.auc_mean,
+            s.auc_sd
+                .map(|v| format!("{v:.3}"))
+                .unwrap_or_else(|| "  –  ".into()),
+            s.n,
+            s.char_accuracy_by_reps
+                .as_ref()
+                .map(|a| format!(
+                    "  chars % by reps: {}",
+                    a.iter()
+                        .map(|v| format!("{:.0}", 100.0 * v))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                ))
+                .unwrap_or_default()
+        );
+    }
+    for protocol in Protocol::ALL {
+        let cs: Vec<_> = report
+            .comparisons
+            .iter()
+            .filter(|c| c.protocol == protocol)
+            .collect();
+        let Some(n) = cs.iter().map(|c| c.n).max() else {
+            continue;
+        };
+        let mut names: Vec<&str> = Vec::new();
+        for c in &cs {
+            if !names.contains(&c.a.as_str()) {
+                names.push(&c.a);
+            }
+        }
+        println!(
+            "\n{protocol}: p of the one-sided Wilcoxon signed-rank test that the row's AUC is \
+             larger than the column's (paired by subject, n = {n}):"
+        );
+        print!("  {:<12}", "");
+        for b in &names {
+            print!(" {b:>12}");
+        }
+        println!();
+        for a in &names {
+            print!("  {a:<12}");
+            for b in &names {
+                let cell = cs
+                    .iter()
+                    .find(|c| c.a == *a && c.b == *b)
+                    .map(|c| match c.pvalue {
+                        Some(p) => format!("{p:.3}"),
+                        None => "tie".into(),
+                    })
+                    .unwrap_or_else(|| "–".into());
+                print!(" {cell:>12}");
+            }
+            println!();
+        }
+    }
+    println!(
+        "\nwall time {:.1} s on {} thread(s)",
+        report.wall_s, report.threads
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn protocol_lists() {
+        let l: ProtocolList = "within-session,train-test,train-test".parse().unwrap();
+        assert_eq!(l.0, [Protocol::WithinSession, Protocol::TrainTest]);
+        assert_eq!("all".parse::<ProtocolList>().unwrap().0.len(), 3);
+        assert!("nope"
+            .parse::<ProtocolList>()
+            .unwrap_err()
+            .contains("or all"));
+    }
+}

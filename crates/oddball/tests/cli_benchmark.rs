@@ -1,0 +1,252 @@
+//! `oddball benchmark`: every preset on every subject of dataset manifests, with MOABB's
+//! protocols, its files (JSON, CSV, plot), and its checks before any work.
+
+mod common;
+
+use std::path::Path;
+
+use common::{data_dir, oddball, tmp_dir};
+
+/// Three synthetic subjects of two 8-channel CSV runs each (markers 1 = non-target, 2 =
+/// target), and a manifest naming them with the event mapping; subject s1's runs are two
+/// sessions.
+fn synthetic_dataset(dir: &Path) -> std::path::PathBuf {
+    let mut subjects = String::new();
+    for (s, seed) in [("s1", 11u64), ("s2", 22), ("s3", 33)] {
+        for run in 0..2 {
+            let (data, markers, sfreq) = oddball_testkit::synthetic_oddball(8, seed + run);
+            oddball_testkit::write_codes_csv(
+                &dir.join(format!("{s}_run{run}.csv")),
+                &data,
+                &markers,
+                sfreq,
+            );
+        }
+        subjects.push_str(&format!(
+            "\n[[subject]]\nid = \"{s}\"\ntrain = [\"{s}_run0.csv\"]\ntest = [\"{s}_run1.csv\"]\n"
+        ));
+        if s == "s1" {
+            subjects.push_str(
+                "[subject.sessions]\n\"a\" = [\"s1_run0.csv\"]\n\"b\" = [\"s1_run1.csv\"]\n",
+            );
+        }
+    }
+    let manifest = dir.join("synthetic.toml");
+    std::fs::write(
+        &manifest,
+        format!("name = \"synthetic\"\n[events]\ntarget = [2]\nnontarget = [1]\n{subjects}"),
+    )
+    .unwrap();
+    manifest
+}
+
+#[test]
+fn every_protocol_on_a_synthetic_dataset_writes_rows_summary_tests_and_files() {
+    let dir = tmp_dir("cli-benchmark");
+    let manifest = synthetic_dataset(dir.path());
+    let (json, csv, plot) = (
+        dir.join("bench.json"),
+        dir.join("bench.csv"),
+        dir.join("bench.png"),
+    );
+    let (ok, out, err) = oddball(&[
+        "benchmark",
+        manifest.to_str().unwrap(),
+        "--pipeline",
+        "lda,mdm",
+        "--protocol",
+        "all",
+        "--folds",
+        "3",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}\n{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["results"].as_array().unwrap();
+    let count = |protocol: &str| rows.iter().filter(|r| r["protocol"] == protocol).count();
+    // 3 subjects × 2 presets; within session s1 has 2 sessions, the others one each.
+    assert_eq!(count("train-test"), 6, "{out}");
+    assert_eq!(count("within-session"), 8, "{out}");
+    assert_eq!(count("cross-subject"), 6, "{out}");
+    for r in rows {
+        for key in [
+            "dataset",
+            "subject",
+            "protocol",
+            "preset",
+            "auc",
+            "n_epochs",
+            "n_targets",
+            "n_chars",
+            "chars_by_reps",
+            "itr_bits_per_min",
+        ] {
+            assert!(r.get(key).is_some(), "row without {key}: {r}");
+        }
+        assert!(r["chars_by_reps"].is_null(), "not a speller: {r}");
+        assert_eq!(r["dataset"], "synthetic");
+        let auc = r["auc"].as_f64().unwrap();
+        // The 2 µV bump under 10 µV noise separates well on every split.
+        assert!(auc > 0.75, "{r}");
+        let n = r["n_epochs"].as_u64().unwrap();
+        let expected = match r["protocol"].as_str().unwrap() {
+            // one test run
+            "train-test" => 240,
+            // all runs of the left-out subject
+            "cross-subject" => 480,
+            _ if r["subject"] == "s1" => 240,
+            _ => 480,
+        };
+        assert_eq!(n, expected, "{r}");
+        assert_eq!(r["n_targets"].as_u64().unwrap() * 5, n, "{r}");
+    }
+    // Summary: one line per protocol and preset, over 3 subjects (4 subject-sessions).
+    let summary = v["summary"].as_array().unwrap();
+    assert_eq!(summary.len(), 6);
+    for s in summary {
+        let n = s["n"].as_u64().unwrap();
+        let want = if s["protocol"] == "within-session" {
+            4
+        } else {
+            3
+        };
+        assert_eq!(n, want, "{s}");
+        assert!(s["auc_sd"].as_f64().unwrap() >= 0.0);
+    }
+    // Paired tests for both orders of the two presets, per protocol.
+    let comparisons = v["comparisons"].as_array().unwrap();
+    assert_eq!(comparisons.len(), 6);
+    for c in comparisons {
+        assert_eq!(
+            c["n"].as_u64(),
+            Some(if c["protocol"] == "within-session" {
+                4
+            } else {
+                3
+            })
+        );
+        // No p-value only when the two presets tie on every subject.
+        match c["pvalue"].as_f64() {
+            Some(p) => assert!((0.0..=1.0).contains(&p), "{c}"),
+            None => assert_eq!(c["mean_auc_diff"].as_f64(), Some(0.0), "{c}"),
+        }
+    }
+    // The CSV: a header and one line per row.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), rows.len() + 1);
+    assert!(text.starts_with("dataset,subject,session,protocol,preset,auc"));
+    // The plot is a PNG.
+    let png = std::fs::read(&plot).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    // The printed report: per-subject blocks, means, the test table.
+    assert!(
+        out.contains("synthetic / subject s2 (cross-subject)"),
+        "{out}"
+    );
+    assert!(out.contains("mean ± sd over subjects"), "{out}");
+    assert!(out.contains("one-sided Wilcoxon"), "{out}");
+}
+
+#[test]
+fn mistakes_are_refused_before_any_eeg_is_read() {
+    let dir = tmp_dir("cli-benchmark-bad");
+    let manifest = synthetic_dataset(dir.path());
+    let m = manifest.to_str().unwrap();
+    let (ok, _, err) = oddball(&["benchmark", m, "--protocol", "loso"]);
+    assert!(!ok && err.contains("cross-subject"), "{err}");
+    let (ok, _, err) = oddball(&["benchmark", m, "--pipeline", "nope"]);
+    assert!(!ok && err.contains("unknown pipeline"), "{err}");
+    let missing = dir.join("no/such/dir/x.json");
+    let (ok, _, err) = oddball(&["benchmark", m, "--json", missing.to_str().unwrap()]);
+    assert!(!ok && err.contains("does not exist"), "{err}");
+    let (ok, _, err) = oddball(&["benchmark", m, "--plot", "x.jpg"]);
+    assert!(!ok && err.contains(".png or .svg"), "{err}");
+    // A run the manifest names but the folder lacks.
+    std::fs::remove_file(dir.join("s3_run1.csv")).unwrap();
+    let (ok, _, err) = oddball(&["benchmark", m]);
+    assert!(
+        !ok && err.contains("s3_run1.csv") && err.contains("does not exist"),
+        "{err}"
+    );
+    // Cross-subject on a one-subject data set is skipped with the reason; nothing else to run
+    // is an error that says why.
+    let one = dir.join("one.toml");
+    std::fs::write(
+        &one,
+        "name = \"one\"\n[events]\ntarget = [2]\nnontarget = [1]\n[[subject]]\nid = \"s1\"\ntrain = [\"s1_run0.csv\"]\n",
+    )
+    .unwrap();
+    let (ok, _, err) = oddball(&[
+        "benchmark",
+        one.to_str().unwrap(),
+        "--protocol",
+        "cross-subject",
+    ]);
+    assert!(!ok && err.contains("one subject"), "{err}");
+}
+
+/// The shipped manifests on the real data: every data set reads, labels and scores.
+#[test]
+fn shipped_manifests_score_the_real_recordings() {
+    let Some(data) = data_dir() else { return };
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = tmp_dir("cli-benchmark-real");
+    let json = dir.join("real.json");
+    let manifests: Vec<String> = [
+        "bci2000-eeg3",
+        "bci2000-eeg2",
+        "muse-visual-p300",
+        "bci-competition-ii-iib",
+    ]
+    .iter()
+    .map(|m| {
+        repo.join(format!("datasets/{m}.toml"))
+            .display()
+            .to_string()
+    })
+    .collect();
+    let mut args: Vec<&str> = vec!["benchmark"];
+    args.extend(manifests.iter().map(String::as_str));
+    // --data replaces each manifest's root (../../shared/data), as ODDBALL_DATA does for tests.
+    let data = data.display().to_string();
+    args.extend(["--data", &data, "--json", json.to_str().unwrap()]);
+    let (ok, out, err) = oddball(&args);
+    assert!(ok, "{err}\n{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 4, "{out}");
+    let row = |d: &str| rows.iter().find(|r| r["dataset"] == d).unwrap();
+    // The peer's shrinkage LDA on the same splits: eeg3 0.937, eeg2 0.969, Muse 0.721, IIb 0.942.
+    for (d, min_auc, chars) in [
+        ("bci2000-eeg3", 0.93, Some(4)),
+        ("bci2000-eeg2", 0.96, None),
+        ("muse-visual-p300", 0.70, None),
+        ("bci-competition-ii-iib", 0.935, Some(6)),
+    ] {
+        let r = row(d);
+        let auc = r["auc"].as_f64().unwrap();
+        assert!(auc >= min_auc, "{d}: AUC {auc} < {min_auc}");
+        assert_eq!(r["n_chars"].as_u64(), chars, "{r}");
+        if let Some(n) = chars {
+            let by_reps = r["chars_by_reps"].as_array().unwrap();
+            assert_eq!(by_reps.len(), 15);
+            assert_eq!(
+                by_reps[14].as_u64(),
+                Some(n),
+                "{d}: all right at 15 repetitions"
+            );
+            assert!(r["itr_bits_per_min"].as_f64().unwrap() > 0.0);
+        }
+    }
+    // The IIb test runs are labelled from the manifest's words: 540 flashes each, 90 targets.
+    let iib = row("bci-competition-ii-iib");
+    assert_eq!(iib["n_epochs"].as_u64(), Some(1080));
+    assert_eq!(iib["n_targets"].as_u64(), Some(180));
+}
