@@ -244,6 +244,57 @@ pub fn write_codes_csv(path: &Path, data: &Array2<f64>, markers: &[u32], sfreq: 
     std::fs::write(path, text).expect("the CSV is written");
 }
 
+/// Writes a minimal uncompressed little-endian MAT v5 file of real double matrices, each
+/// `(name, n_rows, n_cols, values column-major)` (MATLAB's layout: element `(i, j)` at
+/// `i + j·n_rows`), for tests of the MAT reader's users.
+pub fn write_mat_v5(path: &Path, vars: &[(&str, usize, usize, &[f64])]) {
+    fn tag(out: &mut Vec<u8>, ty: u32, len: usize) {
+        out.extend_from_slice(&ty.to_le_bytes());
+        out.extend_from_slice(&(len as u32).to_le_bytes());
+    }
+    fn pad8(out: &mut Vec<u8>) {
+        while out.len() % 8 != 0 {
+            out.push(0);
+        }
+    }
+    let mut out = Vec::new();
+    let mut text = b"MATLAB 5.0 MAT-file, written by oddball-testkit".to_vec();
+    text.resize(116, b' ');
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&[0u8; 8]);
+    out.extend_from_slice(&0x0100u16.to_le_bytes());
+    out.extend_from_slice(b"IM");
+    for (name, rows, cols, values) in vars {
+        assert_eq!(
+            rows * cols,
+            values.len(),
+            "{name}: dimensions and values disagree"
+        );
+        let mut body = Vec::new();
+        // Array flags: class double (6).
+        tag(&mut body, 6, 8);
+        body.extend_from_slice(&6u32.to_le_bytes());
+        body.extend_from_slice(&0u32.to_le_bytes());
+        // Dimensions.
+        tag(&mut body, 5, 8);
+        body.extend_from_slice(&(*rows as i32).to_le_bytes());
+        body.extend_from_slice(&(*cols as i32).to_le_bytes());
+        // Name (miINT8).
+        tag(&mut body, 1, name.len());
+        body.extend_from_slice(name.as_bytes());
+        pad8(&mut body);
+        // Real part (miDOUBLE).
+        tag(&mut body, 9, values.len() * 8);
+        for v in *values {
+            body.extend_from_slice(&v.to_le_bytes());
+        }
+        pad8(&mut body);
+        tag(&mut out, 14, body.len());
+        out.extend_from_slice(&body);
+    }
+    std::fs::write(path, out).expect("the MAT file is written");
+}
+
 /// Synthetic epochs `(n_epochs, 4, 64)` at 64 Hz: uniform noise of `noise` µV peak-to-peak, a
 /// 10 Hz sine, and on targets (`i % every == phase`) a Gaussian bump of `bump` × (channel + 1)
 /// µV at 300 ms. Deterministic in `seed` (an LCG).

@@ -7,9 +7,11 @@
 //!   64 channels, else `ch1..chN`, unless [`MatOptions::ch_names`] says otherwise.
 //! * One value per sample for each BCI2000 state, e.g. `StimulusCode`, `Flashing`,
 //!   `StimulusType`, `PhaseInSequence`, `trialnr`; all kept in [`MatInfo::states`].
-//! * The files do **not** store the sampling rate. The competitions' rate is 240 Hz, which is
-//!   this reader's default ([`BCI_COMPETITION_SFREQ`]); [`MatOptions::sfreq`] overrides it, and
-//!   [`MatInfo::sfreq_given`] records which it was.
+//! * The competition files do **not** store the sampling rate. The competitions' rate is 240 Hz,
+//!   which is this reader's default ([`BCI_COMPETITION_SFREQ`]); a file with a real scalar
+//!   variable named one of [`SFREQ_VARIABLES`] (`sfreq`, `fs`, `srate`, `SamplingRate`) gives its
+//!   own, and [`MatOptions::sfreq`] overrides both; [`MatInfo::sfreq_given`] records whether the
+//!   rate came from the file or the options.
 //! * The files store raw amplifier units and no gain; the samples are passed on unscaled (the
 //!   [`Recording`]'s "µV" are these units here; [`MatInfo::units`] says so).
 //!
@@ -19,7 +21,8 @@
 //!   when the file has `StimulusType` (training runs), else `None` (test runs).
 //!   Without `Flashing`, events are where `StimulusCode` goes 0 → non-zero (BCI2000's rule);
 //!   without either, the recording has no events and no speller.
-//! * The speller: the 6 × 6 matrix `ABCDEF / GHIJKL / MNOPQR / STUVWX / YZ1234 / 56789_`
+//! * The speller, when the flashes' codes are exactly 1–12 (other files, e.g. an oddball with
+//!   codes 1 and 2, are not spellers): the 6 × 6 matrix `ABCDEF / GHIJKL / MNOPQR / STUVWX / YZ1234 / 56789_`
 //!   (`_` = space) with codes 1–6 for the columns and 7–12 for the rows
 //!   ([`CodeOrder::ColumnsFirst`], the opposite of BCI2000's P3Speller files). Flashes per
 //!   character from [`MatOptions::flashes_per_character`], else from the pauses between
@@ -42,6 +45,9 @@ use crate::{Details, Format, IoError, Recording};
 /// The sampling rate of BCI Competition II data set IIb and III data set II, Hz (the files do
 /// not store it).
 pub const BCI_COMPETITION_SFREQ: f64 = 240.0;
+
+/// Scalar variables that give a file's sampling rate (Hz), looked for in this order.
+pub const SFREQ_VARIABLES: [&str; 4] = ["sfreq", "fs", "srate", "SamplingRate"];
 
 /// The speller matrix of the BCI Competitions' P300 data sets, `_` for space.
 pub const BCI_COMPETITION_MATRIX: [&str; 6] =
@@ -100,8 +106,8 @@ pub struct MatInfo {
     pub states: BTreeMap<String, Vec<f64>>,
     /// Every char variable, its rows joined by newlines (`filename`, `evalstring` …).
     pub strings: BTreeMap<String, String>,
-    /// Whether the sampling rate came from [`MatOptions::sfreq`] (else it is
-    /// [`BCI_COMPETITION_SFREQ`]).
+    /// Whether the sampling rate came from [`MatOptions::sfreq`] or the file's own variable
+    /// (else it is [`BCI_COMPETITION_SFREQ`]).
     pub sfreq_given: bool,
     /// The units of the samples ([`RAW_UNITS`]).
     pub units: &'static str,
@@ -272,7 +278,8 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
         }
     }
 
-    let speller = if code.is_some() {
+    let codes_present: std::collections::BTreeSet<u32> = events.iter().map(|e| e.code).collect();
+    let speller = if code.is_some() && codes_present.iter().copied().eq(1..=12) {
         let mut sp = Speller::from_rows(&BCI_COMPETITION_MATRIX);
         if let Some(sp) = sp.as_mut() {
             sp.code_order = CodeOrder::ColumnsFirst;
@@ -286,7 +293,30 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
         None
     };
 
-    let sfreq = options.sfreq.unwrap_or(BCI_COMPETITION_SFREQ);
+    let file_sfreq = SFREQ_VARIABLES.iter().find_map(|name| {
+        let v = file.get(name)?;
+        match &v.array.value {
+            MatValue::Numeric {
+                real, imag: None, ..
+            } if real.len() == 1 => Some((v.name.clone(), v.offset, real.to_f64()[0])),
+            _ => None,
+        }
+    });
+    if let Some((name, offset, f)) = &file_sfreq {
+        if options.sfreq.is_none() && !(f.is_finite() && *f > 0.0) {
+            return Err(IoError::InvalidField {
+                path: path.to_path_buf(),
+                field: format!("variable {name:?}: value"),
+                offset: *offset,
+                expected: "a sampling rate in Hz (finite, > 0)".into(),
+                found: format!("{f}"),
+            });
+        }
+    }
+    let sfreq = options
+        .sfreq
+        .or(file_sfreq.as_ref().map(|(_, _, f)| *f))
+        .unwrap_or(BCI_COMPETITION_SFREQ);
     let raw = crate::error::new_raw(path, data, sfreq, ch_names, events)?;
     let variables = file
         .variables
@@ -309,7 +339,7 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
             variables,
             states,
             strings,
-            sfreq_given: options.sfreq.is_some(),
+            sfreq_given: options.sfreq.is_some() || file_sfreq.is_some(),
             units: RAW_UNITS,
         })),
     })
