@@ -16,7 +16,8 @@
 //! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
 //! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
 //! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
-//! [`metrics`] measures them. The modules keep their former paths too (`oddball_decode::svm`,
+//! [`metrics`] measures them; [`dataset`] turns recordings into labelled epochs, [`evaluate`]
+//! scores presets on them and [`benchmark`] runs presets over data sets and subjects. The modules keep their former paths too (`oddball_decode::svm`,
 //! `oddball_decode::tuning`, …).
 //!
 //! # Example
