@@ -380,6 +380,7 @@ fn load_subject(
                 mapping: m.events.as_ref(),
                 text: subj.text_of(run),
                 speller: m.speller.as_ref(),
+                read: m.read.as_ref(),
             };
             dataset::read_labelled(run, how).and_then(|rec| dataset::epoch(rec, pre))
         })

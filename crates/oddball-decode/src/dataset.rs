@@ -1,5 +1,5 @@
 //! Recordings into labelled epochs, the one place that does it for `train`, `evaluate` and
-//! `benchmark`: read ([`oddball_io::read`]), label (an [`EventMapping`], MNE's `event_id`; or the
+//! `benchmark`: read ([`oddball_io::read_with`] and its [`ReadOptions`]), label (an [`EventMapping`], MNE's `event_id`; or the
 //! text a speller run spelled), give a speller geometry to recordings that lack one (a
 //! manifest's `[speller]`), and cut epochs with the [`Preprocess`] of the model.
 //!
@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use oddball_io::events::{describe_events, LabelError};
 use oddball_io::manifest::SpellerSpec;
-use oddball_io::{CodeOrder, EventMapping, IoError, Recording, Speller};
+use oddball_io::{CodeOrder, EventMapping, IoError, ReadOptions, Recording, Speller};
 use oddball_signal::SignalError;
 use thiserror::Error;
 
@@ -74,6 +74,8 @@ pub struct Labelling<'a> {
     pub text: Option<&'a str>,
     /// The speller geometry, for recordings that do not carry one.
     pub speller: Option<&'a SpellerSpec>,
+    /// What the reader cannot find in the file (CSV columns, MAT variables, sampling rate).
+    pub read: Option<&'a ReadOptions>,
 }
 
 /// The [`Speller`] of a manifest's geometry: its codes must be the rows then the columns, or the
@@ -102,7 +104,11 @@ pub fn speller_of(spec: &SpellerSpec) -> Result<Speller, String> {
 
 /// Reads and labels a recording (see [`Labelling`]); not yet epoched.
 pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, DatasetError> {
-    let mut rec = oddball_io::read(path).map_err(|source| DatasetError::Read {
+    let read = |p: &Path| match how.read {
+        Some(o) => oddball_io::read_with(p, o),
+        None => oddball_io::read(p),
+    };
+    let mut rec = read(path).map_err(|source| DatasetError::Read {
         path: path.to_path_buf(),
         source,
     })?;
@@ -172,13 +178,13 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording, Datas
     })
 }
 
-/// Reads, labels and epochs each recording; `texts` is empty or one spelled text per file.
+/// Reads, labels and epochs each recording the same way (`how.text` is ignored: `texts` is
+/// empty or one spelled text per file).
 pub fn load_epochs(
     paths: &[PathBuf],
     pre: &Preprocess,
-    mapping: Option<&EventMapping>,
+    how: Labelling<'_>,
     texts: &[String],
-    speller: Option<&SpellerSpec>,
 ) -> Result<Vec<EpochedRecording>, DatasetError> {
     if !texts.is_empty() && texts.len() != paths.len() {
         return Err(DatasetError::TextCount {
@@ -191,9 +197,8 @@ pub fn load_epochs(
         .enumerate()
         .map(|(i, p)| {
             let how = Labelling {
-                mapping,
                 text: texts.get(i).map(String::as_str),
-                speller,
+                ..how
             };
             epoch(read_labelled(p, how)?, pre)
         })

@@ -149,14 +149,21 @@ pub fn read_csv(path: impl AsRef<Path>, options: &CsvOptions) -> Result<Recordin
 
 /// Reads a CSV recording with options from [`CsvOptions::detect`] on its header.
 pub fn read_csv_auto(path: impl AsRef<Path>) -> Result<Recording, IoError> {
-    let path = path.as_ref();
+    parse_csv_with_detected(path.as_ref(), |o| o)
+}
+
+/// Reads a CSV recording with the options `adjust` makes of [`CsvOptions::detect`]'s.
+pub(crate) fn parse_csv_with_detected(
+    path: &Path,
+    adjust: impl FnOnce(CsvOptions) -> CsvOptions,
+) -> Result<Recording, IoError> {
     let bytes = read_file(path)?;
     let header_end = bytes
         .iter()
         .position(|&b| b == b'\n')
         .unwrap_or(bytes.len());
     let header = split_header(&bytes[..header_end], b',', path)?;
-    parse_csv(&bytes, path, &CsvOptions::detect(&header))
+    parse_csv(&bytes, path, &adjust(CsvOptions::detect(&header)))
 }
 
 /// A text-file error (CSV, `.easy`, `.info`): file, line, column, field, expected, found.

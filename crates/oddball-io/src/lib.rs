@@ -47,6 +47,7 @@ pub mod events;
 pub mod manifest;
 pub mod mat;
 pub mod nic;
+pub mod read_options;
 pub mod speller;
 mod units;
 mod writing;
@@ -77,6 +78,7 @@ pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,
 };
+pub use read_options::{read_with, ReadOptions};
 pub use speller::{CodeOrder, Speller, TextLabelError};
 pub use xdf::{
     parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,

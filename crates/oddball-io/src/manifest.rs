@@ -8,6 +8,9 @@
 //! [events]                 # codes or annotation texts; not needed when the files flag targets
 //! target = [2]
 //! nontarget = [1]
+//! [read]                   # optional: what CSV/MAT files do not say themselves
+//! sfreq = 256.0            # Hz; also: channels, time_column, events (CSV column or MAT
+//!                          # variable of codes), data (MAT variable of samples)
 //! [speller]                # optional
 //! matrix = ["ABCDEF", "GHIJKL", "MNOPQR", "STUVWX", "YZ1234", "56789_"]
 //! columns = [1, 2, 3, 4, 5, 6]
@@ -141,7 +144,7 @@ impl Subject {
 }
 
 /// A data set: subjects and runs, how to read their events.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
     pub name: String,
@@ -150,6 +153,9 @@ pub struct Manifest {
     /// Which events are targets; `None` when the files flag targets themselves.
     pub events: Option<EventMapping>,
     pub speller: Option<SpellerSpec>,
+    /// How to read files that do not say everything themselves (CSV columns, MAT variables,
+    /// the sampling rate).
+    pub read: Option<crate::ReadOptions>,
     #[serde(rename = "subject")]
     pub subjects: Vec<Subject>,
     /// The manifest file (set by [`Manifest::load`]).
@@ -259,6 +265,10 @@ impl Manifest {
         }
         if let Some(sp) = &self.speller {
             sp.validate().map_err(|w| self.invalid(w))?;
+        }
+        if let Some(r) = &self.read {
+            r.check()
+                .map_err(|w| self.invalid(format!("[read]: {w}")))?;
         }
         if self.subjects.is_empty() {
             return Err(self.invalid("no [[subject]] entries"));

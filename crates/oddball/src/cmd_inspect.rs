@@ -37,9 +37,10 @@ pub struct InspectArgs {
 
 pub fn run(args: &InspectArgs) -> Result<()> {
     let mapping = args.events.mapping()?;
+    let read_options = args.events.read_options()?;
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let rec = crate::load::read_mapped(path, mapping.as_ref())?;
+        let rec = crate::load::read_mapped(path, mapping.as_ref(), &read_options)?;
         print!("{}", summary(&rec));
         recordings.push(rec);
     }

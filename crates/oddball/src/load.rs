@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use oddball_decode::dataset;
 use oddball_decode::evaluate::EpochedRecording;
 use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_io::{EventMapping, Recording};
+use oddball_io::{EventMapping, ReadOptions, Recording};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
 /// texts.
@@ -29,6 +29,24 @@ pub struct EventArgs {
     /// The non-target events, as --target-events (e.g. 1 or NonTarget).
     #[arg(long, value_name = "KEYS", requires = "target_events")]
     pub nontarget_events: Option<String>,
+    /// The sampling rate (Hz) of CSV files (instead of the time column's estimate) and MAT files
+    /// (instead of their rate variable or 240 Hz).
+    #[arg(long, value_name = "HZ")]
+    pub sfreq: Option<f64>,
+    /// CSV: the EEG columns to read, comma-separated (e.g. TP9,AF7,AF8,TP10); MAT: the names of
+    /// the signal's columns.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub channels: Option<Vec<String>>,
+    /// CSV: the time column (seconds).
+    #[arg(long, value_name = "COLUMN")]
+    pub time_column: Option<String>,
+    /// CSV: the marker column (0 = no event); MAT: the variable of per-sample stimulus codes
+    /// (e.g. --events-from trigger).
+    #[arg(long, value_name = "NAME")]
+    pub events_from: Option<String>,
+    /// MAT: the variable holding the samples, n_times × n_channels (e.g. --data-from eeg).
+    #[arg(long, value_name = "VARIABLE")]
+    pub data_from: Option<String>,
 }
 
 impl EventArgs {
@@ -43,14 +61,34 @@ impl EventArgs {
     }
 }
 
+impl EventArgs {
+    /// The reading options, checked.
+    pub fn read_options(&self) -> Result<ReadOptions> {
+        let o = ReadOptions {
+            sfreq: self.sfreq,
+            channels: self.channels.clone(),
+            time_column: self.time_column.clone(),
+            events: self.events_from.clone(),
+            data: self.data_from.clone(),
+        };
+        o.check().map_err(anyhow::Error::msg)?;
+        Ok(o)
+    }
+}
+
 /// Reads a recording.
 pub fn read(path: &Path) -> Result<Recording> {
     oddball_io::read(path).with_context(|| format!("reading {}", path.display()))
 }
 
-/// Reads a recording and applies the event mapping, if any.
-pub fn read_mapped(path: &Path, mapping: Option<&EventMapping>) -> Result<Recording> {
-    let mut rec = read(path)?;
+/// Reads a recording with the reading options and applies the event mapping, if any.
+pub fn read_mapped(
+    path: &Path,
+    mapping: Option<&EventMapping>,
+    options: &ReadOptions,
+) -> Result<Recording> {
+    let mut rec = oddball_io::read_with(path, options)
+        .with_context(|| format!("reading {}", path.display()))?;
     if let Some(m) = mapping {
         rec.map_events(m)
             .with_context(|| format!("labelling the events of {}", path.display()))?;
@@ -69,13 +107,13 @@ pub fn load_epochs(
     texts: &[String],
 ) -> Result<Vec<EpochedRecording>> {
     let mapping = events.mapping()?;
-    Ok(dataset::load_epochs(
-        paths,
-        pre,
-        mapping.as_ref(),
-        texts,
-        None,
-    )?)
+    let read = events.read_options()?;
+    let how = dataset::Labelling {
+        mapping: mapping.as_ref(),
+        read: Some(&read),
+        ..Default::default()
+    };
+    Ok(dataset::load_epochs(paths, pre, how, texts)?)
 }
 
 /// Reads a saved model.

@@ -179,3 +179,99 @@ fn edf_xdf_and_mat_with_plain_codes_train_and_evaluate_with_a_mapping() {
         assert!(r["auc"].as_f64().unwrap() > 0.8, "{r}");
     }
 }
+
+/// What a file does not say, said on the command line or in a manifest's `[read]`: a CSV
+/// whose columns have unusual names and no time column, a MAT file whose variables are not
+/// the BCI Competition's.
+#[test]
+fn read_options_name_the_columns_variables_and_rate() {
+    let dir = tmp_dir("cli-events-read");
+    let (data, markers, sfreq) = oddball_testkit::synthetic_oddball(16, 4242);
+    let csv = dir.join("odd.csv");
+    oddball_testkit::write_codes_csv(&csv, &data, &markers, sfreq);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let text = text
+        .replacen("time,", "t_s,", 1)
+        .replacen(",stim\n", ",trigger\n", 1);
+    std::fs::write(&csv, text).unwrap();
+    let mat = dir.join("odd.mat");
+    let signal: Vec<f64> = data.iter().copied().collect();
+    let codes: Vec<f64> = markers.iter().map(|&m| f64::from(m)).collect();
+    let n = data.ncols();
+    oddball_testkit::write_mat_v5(&mat, &[("eeg", n, 16, &signal), ("trig", n, 1, &codes)]);
+    let channels: Vec<String> = (0..16).map(|c| format!("ch{c}")).collect();
+    let channels = channels.join(",");
+    let map = ["--target-events", "2", "--nontarget-events", "1"];
+    for (file, extra) in [
+        (
+            &csv,
+            vec![
+                "--channels",
+                &channels,
+                "--events-from",
+                "trigger",
+                "--sfreq",
+                "256",
+            ],
+        ),
+        (
+            &mat,
+            vec![
+                "--data-from",
+                "eeg",
+                "--events-from",
+                "trig",
+                "--sfreq",
+                "256",
+            ],
+        ),
+    ] {
+        let f = file.to_str().unwrap();
+        let json = dir.join("cv.json");
+        let mut args = vec!["evaluate", "--train", f, "--folds", "3", "--out"];
+        args.push(json.to_str().unwrap());
+        args.extend(map);
+        args.extend(extra.iter().copied());
+        let (ok, out, err) = oddball(&args);
+        assert!(ok, "{f}: {err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert!(v[0]["auc"].as_f64().unwrap() > 0.8, "{f}: {out}");
+        let (ok, out, _) = oddball(&[&["inspect", f][..], &extra].concat());
+        assert!(
+            ok && out.contains("256 Hz") && out.contains("ch15") && out.contains("events     240"),
+            "{f}: {out}"
+        );
+    }
+    // Without them the MAT file's variables are not found, and the error lists what is there.
+    let (ok, _, err) = oddball(&["inspect", mat.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("signal") && err.contains("eeg"),
+        "{err}"
+    );
+    // Options for a format that records its own layout are refused, naming them.
+    let edf = dir.join("x.edf");
+    std::fs::write(&edf, b"0").unwrap();
+    let (ok, _, err) = oddball(&["inspect", edf.to_str().unwrap(), "--sfreq", "256"]);
+    assert!(!ok && err.contains("a sampling rate given"), "{err}");
+    let (ok, _, err) = oddball(&["inspect", csv.to_str().unwrap(), "--sfreq=-1"]);
+    assert!(!ok && err.contains("sfreq -1"), "{err}");
+    // The same options in a manifest.
+    let manifest = dir.join("read.toml");
+    std::fs::write(
+        &manifest,
+        "name = \"read\"\n[events]\ntarget = [2]\nnontarget = [1]\n\
+         [read]\nsfreq = 256.0\ndata = \"eeg\"\nevents = \"trig\"\n\
+         [[subject]]\nid = \"m\"\ntrain = [\"odd.mat\"]\n",
+    )
+    .unwrap();
+    let (ok, out, err) = oddball(&[
+        "benchmark",
+        manifest.to_str().unwrap(),
+        "--protocol",
+        "within-session",
+        "--folds",
+        "3",
+    ]);
+    assert!(ok && out.contains("240 epochs, 48 targets"), "{err}\n{out}");
+}

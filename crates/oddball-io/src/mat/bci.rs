@@ -64,6 +64,8 @@ pub struct MatOptions {
     pub sfreq: Option<f64>,
     /// The variable holding the samples, `n_times × n_channels`.
     pub signal: String,
+    /// The variable holding each sample's stimulus code (0 = none), `StimulusCode` by default.
+    pub code: String,
     /// Channel names (one per column of the signal); `None`: see the module documentation.
     pub ch_names: Option<Vec<String>>,
     /// The text the user spelled (for runs without `StimulusType`).
@@ -77,6 +79,7 @@ impl Default for MatOptions {
         Self {
             sfreq: None,
             signal: "signal".into(),
+            code: "StimulusCode".into(),
             ch_names: None,
             text_to_spell: None,
             flashes_per_character: None,
@@ -241,7 +244,7 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
             )),
         }
     };
-    let code = state_var("StimulusCode")?;
+    let code = state_var(&options.code)?;
     let flashing = state_var("Flashing")?;
     let stype = state_var("StimulusType")?;
 
@@ -252,7 +255,7 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
             return Err(IoError::Missing {
                 path: path.to_path_buf(),
                 what: "MAT variable (the code of each flash)",
-                name: "StimulusCode".into(),
+                name: options.code.clone(),
                 available: file.names(),
             });
         };
