@@ -10,13 +10,12 @@ import numpy as np
 from sklearn.utils import check_array
 from sklearn.utils.multiclass import check_classification_targets, type_of_target
 
-__all__ = ["as_array", "as_epochs", "as_matrices", "binary_labels", "check_n_features"]
+__all__ = ["as_array", "as_epochs", "as_matrices", "as_rows", "binary_labels", "predict_from_decision",
+           "proba_columns"]
 
 
 def _as_float_array(X, ndim: int, what: str) -> np.ndarray:
-    # scikit-learn's own checks first (sparse, complex, object dtype, NaN/inf, empty input: its
-    # messages), then the shape.
-    X = check_array(X, allow_nd=True, dtype=np.float64, order="C", ensure_all_finite=True)
+    X = as_array(X)  # scikit-learn's own checks and messages first, then the shape
     if X.ndim != ndim:
         raise ValueError(f"{what}: expected a {ndim}-D array, got shape {X.shape}")
     return X
@@ -41,6 +40,11 @@ def as_matrices(X) -> np.ndarray:
     return X
 
 
+def as_rows(X) -> np.ndarray:
+    """Rows ``(n_samples, n_features)`` as C-contiguous float64."""
+    return _as_float_array(X, 2, "rows (n_samples, n_features)")
+
+
 def binary_labels(y, n_samples: int):
     """``(classes_, is_target)``: the sorted two classes and a bool array, True for classes_[1]
     (scikit-learn's positive class). oddball's decoders are target vs non-target."""
@@ -62,14 +66,6 @@ def binary_labels(y, n_samples: int):
     if len(classes) != 2:
         raise ValueError(f"oddball's decoders need both classes; y has 1 class: {classes.tolist()}")
     return classes, np.ascontiguousarray(y == classes[1])
-
-
-def check_n_features(est, n: int, what: str = "features") -> None:
-    if n != est.n_features_in_:
-        raise ValueError(
-            f"X has {n} {what}, but {type(est).__name__} is expecting "
-            f"{est.n_features_in_} {what} as input"
-        )
 
 
 def predict_from_decision(est, X):

@@ -5,7 +5,7 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from sklearn.utils.validation import check_is_fitted
 
 from . import _oddball
-from ._base import as_matrices
+from ._base import as_matrices, as_rows
 
 __all__ = ["TangentSpace"]
 
@@ -50,7 +50,4 @@ class TangentSpace(TransformerMixin, BaseEstimator):
 
     def inverse_transform(self, X):
         check_is_fitted(self, "reference_")
-        import numpy as np
-
-        X = np.ascontiguousarray(X, dtype=np.float64)
-        return self._model.inverse_transform(X)
+        return self._model.inverse_transform(as_rows(X))
