@@ -243,3 +243,30 @@ def test_unsupported_options_are_refused_before_any_work():
             est.fit(Z, y)
     with pytest.raises(ValueError, match="unknown preset"):
         make("nope", sfreq=64.0)
+
+
+def test_the_gil_is_released_while_rust_computes():
+    """While a worker thread is inside a long Rust call (a Riemannian mean of 3000 matrices), the
+    main thread keeps running Python: it would be blocked for the whole call if the GIL were held
+    (at most a couple of loop turns around the call's entry and exit)."""
+    import threading
+
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(3000, 16, 40))
+    covs = np.einsum("nct,ndt->ncd", a, a) / 40 + 0.1 * np.eye(16)
+    entered, done = threading.Event(), threading.Event()
+
+    def work():
+        entered.set()
+        TangentSpace().fit(covs)
+        done.set()
+
+    worker = threading.Thread(target=work)
+    worker.start()
+    entered.wait()
+    turns = 0
+    while not done.is_set():
+        turns += 1
+        threading.Event().wait(0.001)  # sleeps without the GIL, then needs it back
+    worker.join()
+    assert turns >= 20, f"the main thread ran {turns} loop turns during the Rust call"
