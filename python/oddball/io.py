@@ -1,0 +1,103 @@
+"""Reading recordings with oddball's readers (``oddball_io::read``)."""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _oddball
+
+__all__ = ["Raw", "read_raw"]
+
+
+@dataclass
+class Raw:
+    """A recording: ``data`` ``(n_channels, n_times)`` in µV, ``sfreq`` Hz, ``ch_names``, and its
+    stimulus events (``events`` in MNE's layout ``(n_events, 3)``: onset sample, 0, code;
+    ``event_targets``: 1 target, 0 non-target, -1 unknown; ``event_labels``: text or None)."""
+
+    data: np.ndarray
+    sfreq: float
+    ch_names: list
+    events: np.ndarray
+    event_targets: np.ndarray
+    event_labels: list
+    format: str
+    path: str
+    extras: dict = field(default_factory=dict)
+
+    @property
+    def n_channels(self) -> int:
+        return self.data.shape[0]
+
+    @property
+    def n_times(self) -> int:
+        return self.data.shape[1]
+
+    def event_descriptions(self) -> list:
+        """Per event: ``"Target"``/``"NonTarget"`` when known, else its text label, else its code."""
+        out = []
+        for (_, _, code), t, label in zip(self.events, self.event_targets, self.event_labels):
+            if t == 1:
+                out.append("Target")
+            elif t == 0:
+                out.append("NonTarget")
+            elif label:
+                out.append(label.strip())
+            else:
+                out.append(str(int(code)))
+        return out
+
+    def to_mne(self, ch_types="eeg", verbose="error"):
+        """An ``mne.io.RawArray`` (volts, as MNE's unit) with one zero-length annotation per event
+        (:meth:`event_descriptions`). Needs MNE (``pip install mne``)."""
+        try:
+            import mne
+        except ImportError as e:  # pragma: no cover - depends on the environment
+            raise ImportError("Raw.to_mne() needs MNE: pip install mne") from e
+        info = mne.create_info(list(self.ch_names), self.sfreq, ch_types=ch_types)
+        raw = mne.io.RawArray(self.data * 1e-6, info, verbose=verbose)
+        onsets = self.events[:, 0] / self.sfreq
+        raw.set_annotations(
+            mne.Annotations(onset=onsets, duration=np.zeros(len(onsets)),
+                            description=self.event_descriptions())
+        )
+        return raw
+
+
+def _keys(keys) -> str:
+    if isinstance(keys, (str, int, np.integer)):
+        keys = [keys]
+    return ",".join(str(k) for k in keys)
+
+
+def read_raw(path, events=None, text=None) -> Raw:
+    """Reads a recording in any format oddball reads (BCI2000 ``.dat``, CSV, EDF/EDF+/BDF, NIC
+    ``.easy``, XDF, MATLAB ``.mat``; chosen by extension).
+
+    ``events`` labels plain markers as targets and non-targets: a dict
+    ``{"target": [2], "nontarget": [1]}`` or a pair ``(target_keys, nontarget_keys)``, keys being
+    codes or marker texts (``"Target"``); events matching neither are dropped. ``text``: for a
+    speller recording without labels, the text it spelled.
+    """
+    target = nontarget = None
+    if events is not None:
+        if isinstance(events, dict):
+            unknown = set(events) - {"target", "nontarget"}
+            if unknown:
+                raise ValueError(f"events: unknown keys {sorted(unknown)}; use 'target' and 'nontarget'")
+            target, nontarget = events.get("target"), events.get("nontarget")
+        else:
+            target, nontarget = events
+        if target is None or nontarget is None:
+            raise ValueError("events: give both target and non-target keys")
+        target, nontarget = _keys(target), _keys(nontarget)
+    d = _oddball.read_raw(os.fspath(path), target, nontarget, text)
+    onsets = np.asarray(d["onsets"], dtype=np.int64)
+    ev = np.column_stack([onsets, np.zeros_like(onsets), np.asarray(d["codes"], dtype=np.int64)])
+    return Raw(
+        data=d["data"], sfreq=d["sfreq"], ch_names=list(d["ch_names"]), events=ev.reshape(-1, 3),
+        event_targets=np.asarray(d["targets"], dtype=np.int8), event_labels=list(d["labels"]),
+        format=d["format"], path=os.fspath(path),
+    )
