@@ -48,12 +48,19 @@ pub fn draw_benchmark(
         .min(0.5)
         .max(0.0);
     let n_presets = presets.len().max(1);
-    let width = if curves.is_empty() { 800 } else { 1500 };
+    // The subjects' legend sits right of the left panel's plot, outside the dots.
+    const LEGEND_W: u32 = 250;
+    let left_w = 800 + LEGEND_W;
+    let width = if curves.is_empty() {
+        left_w
+    } else {
+        left_w + 700
+    };
     crate::with_backend!(path, (width, 620), |root| {
         let (left, right) = if curves.is_empty() {
             (root.clone(), None)
         } else {
-            let (l, r) = root.split_horizontally(800);
+            let (l, r) = root.split_horizontally(left_w);
             (l, Some(r))
         };
         let mut chart = ChartBuilder::on(&left)
@@ -66,6 +73,7 @@ pub fn draw_benchmark(
                 (crate::FONT_FAMILY, 20),
             )
             .margin(14)
+            .margin_right(LEGEND_W)
             .x_label_area_size(70)
             .y_label_area_size(56)
             .build_cartesian_2d(-0.5f64..n_presets as f64 - 0.5, lo..1.0f64)
@@ -117,15 +125,9 @@ pub fn draw_benchmark(
                     Some((i as f64 + dx, r.auc))
                 })
                 .collect();
-            let label = match &key.1 {
-                Some(session) => format!("{} ({session})", key.0),
-                None => key.0.clone(),
-            };
             chart
                 .draw_series(points.iter().map(|&p| Circle::new(p, 5, color.filled())))
-                .map_err(|e| PlotError::draw(path, e))?
-                .label(label)
-                .legend(move |(x, y)| Circle::new((x + 10, y), 5, color.filled()));
+                .map_err(|e| PlotError::draw(path, e))?;
         }
         // The mean per preset.
         for (i, preset) in presets.iter().enumerate() {
@@ -142,14 +144,36 @@ pub fn draw_benchmark(
                 )))
                 .map_err(|e| PlotError::draw(path, e))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font((crate::FONT_FAMILY, 13))
-            .draw()
+        // The legend, drawn on the panel beside the plot (plotters clips series labels to the
+        // plotting area).
+        let x0 = (left_w - LEGEND_W) as i32;
+        let entries = subjects
+            .iter()
+            .map(|(s, session)| match session {
+                Some(session) => format!("{s} ({session})"),
+                None => s.clone(),
+            })
+            .chain(std::iter::once("mean over subjects".to_string()));
+        for (i, label) in entries.enumerate() {
+            let y = 60 + 22 * i as i32;
+            if i < subjects.len() {
+                let color = Palette99::pick(i).to_rgba();
+                left.draw(&Circle::new((x0 + 8, y), 5, color.filled()))
+                    .map_err(|e| PlotError::draw(path, e))?;
+            } else {
+                left.draw(&PathElement::new(
+                    vec![(x0, y), (x0 + 16, y)],
+                    BLACK.stroke_width(3),
+                ))
+                .map_err(|e| PlotError::draw(path, e))?;
+            }
+            left.draw(&Text::new(
+                label,
+                (x0 + 22, y - 8),
+                (crate::FONT_FAMILY, 14),
+            ))
             .map_err(|e| PlotError::draw(path, e))?;
+        }
 
         if let Some(right) = right {
             let n_reps = curves
