@@ -104,6 +104,8 @@ pub struct PipelineResult {
     /// Fewest repetitions from which every character stays right with every further repetition
     /// (a curve that reaches 100 % and drops again counts from after its last drop), if any.
     pub reps_for_all_correct: Option<usize>,
+    /// The best Wolpaw ITR over repetitions, each character's time being its repetitions plus
+    /// the recording's pause between characters ([`SpellerScores::seconds_per_character`]).
     pub itr_at_best: Option<Itr>,
     pub fit_s: f64,
     pub score_epochs_per_s: f64,
@@ -358,6 +360,18 @@ pub struct SpellerScores {
     pub n_choices: usize,
     /// Seconds of one repetition (every row and column flashed once).
     pub seconds_per_repetition: f64,
+    /// Seconds between characters beyond the flashes (the pause in which the speller shows the
+    /// choice and the next target): the median of the gaps from a character's last flash to the
+    /// next character's first, less one flash onset asynchrony; 0 with one character.
+    pub seconds_between_characters: f64,
+}
+
+impl SpellerScores {
+    /// Seconds one character takes with `reps` repetitions, the pause between characters
+    /// included (the time per selection of the Wolpaw ITR).
+    pub fn seconds_per_character(&self, reps: usize) -> f64 {
+        reps as f64 * self.seconds_per_repetition + self.seconds_between_characters
+    }
 }
 
 /// Character accuracy by repetitions of a speller recording from its epochs' `scores`; every
@@ -422,13 +436,27 @@ pub fn score_speller(
     let onsets: Vec<usize> = ep.events().iter().map(|e| e.onset).collect();
     let mut gaps: Vec<usize> = onsets.windows(2).map(|w| w[1] - w[0]).collect();
     gaps.sort_unstable();
-    let soa = gaps.get(gaps.len() / 2).copied().unwrap_or(0) as f64 / ep.sfreq();
+    let soa_samples = gaps.get(gaps.len() / 2).copied().unwrap_or(0);
+    let soa = soa_samples as f64 / ep.sfreq();
+    // The pause: from each character's last flash to the next one's first, less one SOA.
+    let mut pauses: Vec<usize> = speller
+        .character_blocks(&events)
+        .windows(2)
+        .filter_map(|b| {
+            let last = b[0].last()?.onset;
+            let next = b[1].first()?.onset;
+            Some(next.saturating_sub(last).saturating_sub(soa_samples))
+        })
+        .collect();
+    pauses.sort_unstable();
+    let pause = pauses.get(pauses.len() / 2).copied().unwrap_or(0) as f64 / ep.sfreq();
     Ok(SpellerScores {
         accuracy,
         text,
         n_chars: blocks.len(),
         n_choices: rows.len() * cols.len(),
         seconds_per_repetition: (rows.len() + cols.len()) as f64 * soa,
+        seconds_between_characters: pause,
     })
 }
 
@@ -485,15 +513,18 @@ pub fn score_test(
                     / n_chars.max(1) as f64
             })
             .collect();
-        let per_rep = spellers
-            .iter()
-            .map(|s| s.seconds_per_repetition * s.n_chars as f64)
-            .sum::<f64>()
-            / n_chars.max(1) as f64;
+        // Seconds per character with r repetitions, averaged over the files' characters.
+        let per_char = |r: usize| {
+            spellers
+                .iter()
+                .map(|s| s.seconds_per_character(r) * s.n_chars as f64)
+                .sum::<f64>()
+                / n_chars.max(1) as f64
+        };
         result.itr_at_best = acc
             .iter()
             .enumerate()
-            .map(|(i, &a)| Itr::new(first.n_choices, a, (i + 1) as f64 * per_rep))
+            .map(|(i, &a)| Itr::new(first.n_choices, a, per_char(i + 1)))
             .max_by(|a, b| a.bits_per_minute.total_cmp(&b.bits_per_minute));
         result.reps_for_all_correct = reps_from_which_all_correct(&acc);
         result.speller_choices = Some(first.n_choices);
@@ -623,6 +654,46 @@ mod tests {
             events,
         )
         .unwrap()
+    }
+
+    #[test]
+    fn a_characters_time_counts_the_pause_between_characters() {
+        // 2 × 2 speller, 2 repetitions (8 flashes) per character, a flash every 10 samples,
+        // then 100 samples from a character's last flash to the next one's first.
+        let mut speller = Speller::from_rows(&["AB", "CD"]).unwrap();
+        speller.flashes_per_character = Some(8);
+        let mut onsets = Vec::new();
+        for c in 0..3 {
+            for k in 0..8 {
+                onsets.push(c * (70 + 100) + k * 10);
+            }
+        }
+        let events: Vec<Event> = onsets
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Event::new(t, (i % 4) as u32 + 1).with_target(i % 2 == 0))
+            .collect();
+        let n = events.len();
+        let ep = Epochs::new(
+            ndarray::Array3::zeros((n, 1, 4)),
+            100.0,
+            0.0,
+            vec!["Cz".into()],
+            events,
+        )
+        .unwrap();
+        let rec = EpochedRecording {
+            name: "x".into(),
+            epochs: ep,
+            speller: Some(speller.clone()),
+            n_events: n,
+        };
+        let s = score_speller(&rec, &speller, &Array1::zeros(n)).unwrap();
+        assert_eq!(s.n_chars, 3);
+        assert!((s.seconds_per_repetition - 0.4).abs() < 1e-12);
+        // 100 samples less one 10-sample SOA at 100 Hz.
+        assert!((s.seconds_between_characters - 0.9).abs() < 1e-12);
+        assert!((s.seconds_per_character(2) - 1.7).abs() < 1e-12);
     }
 
     #[test]

@@ -249,4 +249,9 @@ fn shipped_manifests_score_the_real_recordings() {
     let iib = row("bci-competition-ii-iib");
     assert_eq!(iib["n_epochs"].as_u64(), Some(1080));
     assert_eq!(iib["n_targets"].as_u64(), Some(180));
+    // A character's time counts the ~5 s pause between characters as well as its flashes
+    // (12 × 175 ms per repetition): with all 6 right from 3 repetitions, log2(36) bits per
+    // 3 × 2.1 s + 5 s is 27 bits/min, where the flashes alone would give 49.
+    let itr = iib["itr_bits_per_min"].as_f64().unwrap();
+    assert!((20.0..35.0).contains(&itr), "IIb ITR {itr}");
 }
