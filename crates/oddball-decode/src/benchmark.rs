@@ -249,6 +249,9 @@ pub struct BenchmarkRow {
     pub n_targets: usize,
     /// Speller characters scored (train → test and cross-subject on spellers).
     pub n_chars: Option<usize>,
+    /// Cells of the speller's matrix (chance is one over this).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub n_choices: Option<usize>,
     /// Characters right after 1..N repetitions (`null` when not a speller).
     pub chars_by_reps: Option<Vec<usize>>,
     /// The best Wolpaw ITR over repetitions, bits/min, from the recording's own flash timing.
@@ -539,6 +542,7 @@ fn row(
         n_epochs,
         n_targets,
         n_chars: r.speller_n_chars,
+        n_choices: r.speller_choices,
         chars_by_reps,
         itr_bits_per_min: r.itr_at_best.map(|i| i.bits_per_minute),
         fit_s: r.fit_s,
@@ -690,6 +694,7 @@ mod tests {
             n_epochs: 10,
             n_targets: 2,
             n_chars: chars.as_ref().map(|_| 4),
+            n_choices: chars.as_ref().map(|_| 36),
             chars_by_reps: chars,
             itr_bits_per_min: None,
             fit_s: 0.0,

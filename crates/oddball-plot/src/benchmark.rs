@@ -41,6 +41,8 @@ pub fn draw_benchmark(
         .filter(|s| s.protocol == protocol)
         .filter_map(|s| Some((s.preset.as_str(), s.char_accuracy_by_reps.as_deref()?)))
         .collect();
+    // Chance: of the largest speller matrix among the rows.
+    let n_choices = rows.iter().filter_map(|r| r.n_choices).max().unwrap_or(36);
     let lo = rows
         .iter()
         .map(|r| r.auc)
@@ -176,69 +178,22 @@ pub fn draw_benchmark(
         }
 
         if let Some(right) = right {
-            let n_reps = curves
-                .iter()
-                .map(|(_, a)| a.len())
-                .max()
-                .unwrap_or(1)
-                .max(1);
             let n_spellers = rows
                 .iter()
                 .filter(|r| r.chars_by_reps.is_some())
                 .map(|r| (&r.dataset, &r.subject))
                 .collect::<std::collections::BTreeSet<_>>()
                 .len();
-            let mut chart = ChartBuilder::on(&right)
-                .caption(
-                    format!(
-                        "mean character accuracy ({n_spellers} speller subject{})",
-                        if n_spellers == 1 { "" } else { "s" }
-                    ),
-                    (crate::FONT_FAMILY, 20),
-                )
-                .margin(14)
-                .x_label_area_size(70)
-                .y_label_area_size(56)
-                .build_cartesian_2d(0.5f64..n_reps as f64 + 0.5, 0f64..105.0)
-                .map_err(|e| PlotError::draw(path, e))?;
-            chart
-                .configure_mesh()
-                .x_labels(n_reps.min(20))
-                .x_label_formatter(&|x| format!("{x:.0}"))
-                .y_labels(11)
-                .y_label_formatter(&|y| format!("{y:.0}"))
-                .x_desc("repetitions")
-                .y_desc("characters right, %")
-                .label_style((crate::FONT_FAMILY, 14))
-                .draw()
-                .map_err(|e| PlotError::draw(path, e))?;
-            for (i, (name, acc)) in curves.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
-                let width = 2 + (curves.len() - 1 - i) as u32;
-                let points: Vec<(f64, f64)> = acc
-                    .iter()
-                    .enumerate()
-                    .map(|(r, a)| ((r + 1) as f64, 100.0 * a))
-                    .collect();
-                chart
-                    .draw_series(LineSeries::new(points.clone(), color.stroke_width(width)))
-                    .map_err(|e| PlotError::draw(path, e))?
-                    .label(*name)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(3))
-                    });
-                chart
-                    .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                    .map_err(|e| PlotError::draw(path, e))?;
-            }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::LowerRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font((crate::FONT_FAMILY, 14))
-                .draw()
-                .map_err(|e| PlotError::draw(path, e))?;
+            crate::accuracy::accuracy_chart(
+                &right,
+                path,
+                &format!(
+                    "mean character accuracy ({n_spellers} speller subject{})",
+                    if n_spellers == 1 { "" } else { "s" }
+                ),
+                &curves,
+                n_choices,
+            )?;
         }
         Ok(())
     })
