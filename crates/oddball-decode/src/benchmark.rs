@@ -109,7 +109,7 @@ pub enum BenchmarkError {
         dataset: String,
         subject: String,
         #[source]
-        source: DatasetError,
+        source: Box<DatasetError>,
     },
     #[error("data set {dataset:?}, subject {subject:?}, {protocol}{}", .session.as_ref().map(|s| format!(", session {s:?}")).unwrap_or_default())]
     Evaluate {
@@ -118,7 +118,7 @@ pub enum BenchmarkError {
         protocol: Protocol,
         session: Option<String>,
         #[source]
-        source: EvaluateError,
+        source: Box<EvaluateError>,
     },
     #[error(
         "data set {dataset:?}: subjects {subject:?} and {other:?} differ in {what}, so one cannot \
@@ -391,7 +391,7 @@ fn load_subject(
         .map_err(|source| BenchmarkError::Dataset {
             dataset: m.name.clone(),
             subject: subj.id.clone(),
-            source,
+            source: Box::new(source),
         })
 }
 
@@ -459,7 +459,7 @@ fn run_unit(
             subject: subj.id.clone(),
             protocol: u.protocol,
             session: session.clone(),
-            source,
+            source: Box::new(source),
         }
     })?;
     let scored = if test.is_empty() { &train } else { &test };

@@ -24,20 +24,20 @@ pub enum DatasetError {
     Read {
         path: PathBuf,
         #[source]
-        source: IoError,
+        source: Box<IoError>,
     },
     #[error("labelling the events of {}", path.display())]
     Label {
         path: PathBuf,
         #[source]
-        source: LabelError,
+        source: Box<LabelError>,
     },
     #[error("labelling {} from the text {text:?}", path.display())]
     Text {
         path: PathBuf,
         text: String,
         #[source]
-        source: LabelError,
+        source: Box<LabelError>,
     },
     #[error(
         "{} has {n_events} events but none is labelled target or non-target (its events: \
@@ -110,7 +110,7 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
     };
     let mut rec = read(path).map_err(|source| DatasetError::Read {
         path: path.to_path_buf(),
-        source,
+        source: Box::new(source),
     })?;
     if let Some(spec) = how.speller {
         let mut speller = speller_of(spec).map_err(|what| DatasetError::Speller {
@@ -139,7 +139,7 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
     if let Some(m) = how.mapping {
         rec.map_events(m).map_err(|source| DatasetError::Label {
             path: path.to_path_buf(),
-            source,
+            source: Box::new(source),
         })?;
     }
     if let Some(text) = how.text {
@@ -147,7 +147,7 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
             .map_err(|source| DatasetError::Text {
                 path: path.to_path_buf(),
                 text: text.to_string(),
-                source,
+                source: Box::new(source),
             })?;
     }
     let events = rec.raw.events();

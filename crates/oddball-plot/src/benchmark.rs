@@ -47,8 +47,7 @@ pub fn draw_benchmark(
         .iter()
         .map(|r| r.auc)
         .fold(1.0f64, f64::min)
-        .min(0.5)
-        .max(0.0);
+        .clamp(0.0, 0.5);
     let n_presets = presets.len().max(1);
     // The subjects' legend sits right of the left panel's plot, outside the dots.
     const LEGEND_W: u32 = 250;
