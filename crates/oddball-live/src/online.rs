@@ -56,6 +56,8 @@ pub struct OnlineSummary {
     pub flash_onset_error: Option<TimingRow>,
     pub stamp_delay: Option<TimingRow>,
     pub undrawn_flashes: usize,
+    /// Page stamps refused as implausible (`live::plausible_stamp`); their flashes are undrawn.
+    pub refused_stamps: usize,
     pub decision_latency: Option<TimingRow>,
     pub recording: String,
     /// `--source replay:…`: how many flashes fell on the file's flashes.
@@ -101,6 +103,7 @@ impl OnlineSummary {
             flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
             stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
             undrawn_flashes: timing.undrawn,
+            refused_stamps: timing.refused_stamps,
             decision_latency: Summary::of(latency_ms).map(Into::into),
             recording: recording.display().to_string(),
             replay,
