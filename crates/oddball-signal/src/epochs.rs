@@ -179,9 +179,14 @@ impl EpochsParams {
             tmin: self.tmin,
             tmax: self.tmax,
         };
-        if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax) {
+        let reach = crate::MAX_WINDOW_S;
+        if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax)
+            || self.tmin.abs() > reach
+            || self.tmax.abs() > reach
+        {
             return Err(invalid());
         }
+        crate::check_sfreq(sfreq)?;
         let first = (self.tmin * sfreq).round() as i64;
         let last = (self.tmax * sfreq).round() as i64 - i64::from(self.end_exclusive);
         if last < first {
@@ -239,14 +244,21 @@ impl EpochsParams {
         let data = raw.data();
         let n_channels = raw.n_channels();
         let total = raw.n_times() as i64;
-        let mut kept = Vec::with_capacity(events.len());
-        let mut out: Vec<f64> = Vec::with_capacity(events.len() * n_channels * n_times);
+        // Sized by the data present: no epoch longer than the recording is ever allocated.
+        let fits = n_times <= raw.n_times();
+        let in_bounds = |ev: &Event| {
+            let start = ev.onset as i64 + first;
+            fits && start >= 0 && ev.onset as i64 + last < total
+        };
+        let n_fit = events.iter().filter(|e| in_bounds(e)).count();
+        let mut kept = Vec::with_capacity(n_fit);
+        let mut out: Vec<f64> = Vec::with_capacity(n_fit * n_channels * n_times);
         let mut log = DropLog::default();
-        let mut epoch = Array2::<f64>::zeros((n_channels, n_times));
+        let mut epoch = Array2::<f64>::zeros(if fits { (n_channels, n_times) } else { (0, 0) });
         for (index, ev) in events.iter().enumerate() {
             let start = ev.onset as i64 + first;
             let end = ev.onset as i64 + last;
-            if start < 0 || end >= total {
+            if !fits || start < 0 || end >= total {
                 log.dropped.push(Dropped {
                     index,
                     event: ev.clone(),
