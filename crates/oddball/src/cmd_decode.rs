@@ -229,7 +229,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
         trained.pipeline,
     );
     model.tuning = trained.tuning;
-    std::fs::write(&args.out, model.to_json())
+    oddball_io::write_atomic(&args.out, model.to_json())
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!(
         "trained {}{} on {} epochs ({} targets) from {} file(s) in {:.3} s; wrote {}",
@@ -304,7 +304,7 @@ fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
 
 fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
     if let Some(path) = &args.out {
-        std::fs::write(path, serde_json::to_string_pretty(results)?)
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(results)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }
@@ -373,7 +373,7 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
         results.push(result);
     }
     if let Some(path) = &args.out {
-        std::fs::write(path, serde_json::to_string_pretty(&results)?)
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(&results)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }

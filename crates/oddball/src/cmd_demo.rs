@@ -152,7 +152,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
-    fs::write(args.out.join("model.json"), &prep.model_json)
+    oddball_io::write_atomic(args.out.join("model.json"), &prep.model_json)
         .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
     let erp_png = args.out.join("erp.png");
     oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
@@ -194,7 +194,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         note,
     };
     let json = serde_json::to_string_pretty(&summary)?;
-    fs::write(args.out.join("summary.json"), json + "\n")
+    oddball_io::write_atomic(args.out.join("summary.json"), json + "\n")
         .with_context(|| format!("writing {}", args.out.join("summary.json").display()))?;
 
     print!(

@@ -166,7 +166,7 @@ fn run_with(
                 c.n_trials, c.n_epochs, c.cv_auc
             );
             if let Some(m) = session.model() {
-                fs::write(args.out.join("model.json"), m.to_json())?;
+                oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
             }
         }
     }
@@ -230,7 +230,7 @@ fn run_with(
     }
     let _ = session.finish();
     let path = args.out.join("summary.json");
-    fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+    oddball_io::write_atomic(&path, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("writing {}", path.display()))?;
     println!(
         "recording: {} ({} samples)",

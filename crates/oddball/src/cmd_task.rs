@@ -248,7 +248,7 @@ fn write_common(
     expected: &[Vector2<f64>],
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
-    fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
+    oddball_io::write_atomic(out.join("model.json"), &prep.model_json).context("writing model.json")?;
     let erp_png = out.join("erp.png");
     oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
         .with_context(|| format!("drawing {}", erp_png.display()))?;
@@ -267,7 +267,7 @@ fn write_summary<T: Serialize>(
 ) -> Result<()> {
     let summary = prep.task_summary(task, &opts.pipeline, opts.seed, report);
     let json = serde_json::to_string_pretty(&summary)?;
-    fs::write(out.join("summary.json"), json + "\n").context("writing summary.json")
+    oddball_io::write_atomic(out.join("summary.json"), json + "\n").context("writing summary.json")
 }
 
 /// Saves a live session's raw EEG and prints the wall time.

@@ -141,7 +141,7 @@ const MAX_ABS_UV: f64 = i32::MAX as f64 / 1000.0;
 const MAX_INFO_CHANNELS: usize = 1024;
 
 /// The largest sampling rate a `.info` may state, in Hz.
-const MAX_INFO_SFREQ: f64 = 1e6;
+const MAX_INFO_SFREQ: f64 = oddball_signal::SFREQ_MAX;
 
 /// Which `.info` file [`read_easy_with`] reads.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
