@@ -98,6 +98,31 @@ impl ScoreModelParams {
 }
 
 impl ScoreModel {
+    /// Refuses a score model that cannot weigh evidence: non-finite means, or a spread that is
+    /// not finite and positive (zero spread makes every log-likelihood ratio infinite).
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("mean_target", self.mean_target),
+            ("mean_nontarget", self.mean_nontarget),
+        ] {
+            if !v.is_finite() {
+                return Err(DecodeError::InvalidParameter {
+                    name,
+                    value: v.to_string(),
+                    reason: "a finite score".into(),
+                });
+            }
+        }
+        if !(self.std.is_finite() && self.std > 0.0) {
+            return Err(DecodeError::InvalidParameter {
+                name: "std",
+                value: self.std.to_string(),
+                reason: "a finite spread > 0".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Log-likelihood ratio (target vs non-target) of one score.
     pub fn llr(&self, score: f64) -> f64 {
         let d = self.mean_target - self.mean_nontarget;
@@ -304,6 +329,13 @@ pub struct DecisionModel {
 }
 
 impl DecisionModel {
+    /// Refuses a score model or rule that cannot decide (see [`ScoreModel::validate`],
+    /// [`DecisionRule::validate`]).
+    pub fn validate(&self) -> Result<()> {
+        self.scores.validate()?;
+        self.rule.validate()
+    }
+
     /// Runs the rule over complete rounds: `rounds[r][k]` is the score of stimulus `k` in round
     /// `r` (`None` for a rejected epoch: no evidence). Returns the verdict and the rounds used;
     /// `Continue` only if the rounds run out first.
