@@ -370,6 +370,19 @@ pub enum DropReason {
     },
 }
 
+impl DropReason {
+    /// The kind of reason, as [`DropLog::counts`] names it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            DropReason::OutOfBounds { .. } => "out of bounds",
+            DropReason::NonFinite { .. } => "non-finite",
+            DropReason::Absolute { .. } => "absolute",
+            DropReason::PeakToPeak { .. } => "peak-to-peak",
+            DropReason::Flat { .. } => "flat",
+        }
+    }
+}
+
 impl fmt::Display for DropReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -434,16 +447,33 @@ impl DropLog {
     pub fn counts(&self) -> BTreeMap<&'static str, usize> {
         let mut m = BTreeMap::new();
         for d in &self.dropped {
-            let k = match d.reason {
-                DropReason::OutOfBounds { .. } => "out of bounds",
-                DropReason::NonFinite { .. } => "non-finite",
-                DropReason::Absolute { .. } => "absolute",
-                DropReason::PeakToPeak { .. } => "peak-to-peak",
-                DropReason::Flat { .. } => "flat",
-            };
-            *m.entry(k).or_insert(0) += 1;
+            *m.entry(d.reason.kind()).or_insert(0) += 1;
         }
         m
+    }
+
+    /// Why epochs were dropped, for people: each kind's count and its first case, e.g.
+    /// `240 non-finite (first: event 0 at sample 300: channel "Cz" is NaN or infinite …)`.
+    pub fn summary(&self) -> String {
+        let counts = self.counts();
+        counts
+            .iter()
+            .map(|(kind, n)| {
+                let first = self
+                    .dropped
+                    .iter()
+                    .find(|d| d.reason.kind() == *kind)
+                    .map(|d| {
+                        format!(
+                            " (first: event {} at sample {}: {})",
+                            d.index, d.event.onset, d.reason
+                        )
+                    })
+                    .unwrap_or_default();
+                format!("{n} {kind}{first}")
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

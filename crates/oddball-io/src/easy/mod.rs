@@ -276,6 +276,28 @@ impl EasyInfo {
             .find(|(k, _)| normalize_key(k) == key)
             .map(|(_, v)| v.as_str())
     }
+
+    /// Every `.info` value by key, for many look-ups ([`EasyInfo::info_value`] scans the
+    /// lines; a session's 50,000 trial lines looked up one by one took minutes).
+    pub fn info_index(&self) -> InfoIndex<'_> {
+        let mut map = std::collections::HashMap::with_capacity(self.info.len());
+        for (k, v) in &self.info {
+            map.entry(normalize_key(k)).or_insert(v.as_str());
+        }
+        InfoIndex { map }
+    }
+}
+
+/// `.info` values by key, matched as [`EasyInfo::info_value`] matches them (first value wins).
+#[derive(Debug, Clone)]
+pub struct InfoIndex<'a> {
+    map: std::collections::HashMap<String, &'a str>,
+}
+
+impl<'a> InfoIndex<'a> {
+    pub fn get(&self, key: &str) -> Option<&'a str> {
+        self.map.get(&normalize_key(key)).copied()
+    }
 }
 
 #[cfg(test)]
