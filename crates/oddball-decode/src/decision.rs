@@ -176,6 +176,10 @@ impl Posterior {
     }
 }
 
+/// The most rounds of flashes one decision may take (a hundred rounds of four bulbs is well over
+/// a minute and a half per decision; 10⁸ rounds kept a session busy for ever).
+pub const MAX_ROUNDS: usize = 100;
+
 /// When to stop flashing and what to decide.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -218,7 +222,11 @@ impl DecisionRule {
             })
         };
         match *self {
-            DecisionRule::Fixed { rounds: 0 } => bad("rounds", "0".into(), "at least one round"),
+            DecisionRule::Fixed { rounds } if !(1..=MAX_ROUNDS).contains(&rounds) => bad(
+                "rounds",
+                rounds.to_string(),
+                &format!("1 to {MAX_ROUNDS} rounds"),
+            ),
             DecisionRule::Fixed { .. } => Ok(()),
             DecisionRule::Dynamic {
                 threshold,
@@ -239,11 +247,15 @@ impl DecisionRule {
                         "a probability in [0, 1)",
                     );
                 }
-                if max_rounds == 0 || min_rounds == 0 || min_rounds > max_rounds {
+                if max_rounds == 0
+                    || min_rounds == 0
+                    || min_rounds > max_rounds
+                    || max_rounds > MAX_ROUNDS
+                {
                     return bad(
                         "min_rounds/max_rounds",
                         format!("{min_rounds}/{max_rounds}"),
-                        "need 1 <= min_rounds <= max_rounds",
+                        &format!("need 1 <= min_rounds <= max_rounds <= {MAX_ROUNDS}"),
                     );
                 }
                 Ok(())

@@ -40,6 +40,9 @@ use crate::SessionError;
 /// in the future would keep its trial waiting for ever.
 pub const MAX_ONSET_SHIFT_S: f64 = 1.0;
 
+/// The most calibration decisions per bulb (a thousand is hours of flashing).
+pub const MAX_CALIBRATION_PER_BULB: usize = 1000;
+
 /// Settings of a session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SessionParams {
@@ -93,6 +96,13 @@ impl SessionParams {
         }
         if self.cv_folds < 2 {
             return bad("cv_folds", self.cv_folds, "at least 2 folds");
+        }
+        if self.calibration_per_bulb > MAX_CALIBRATION_PER_BULB {
+            return bad(
+                "calibration_per_bulb",
+                self.calibration_per_bulb,
+                &format!("at most {MAX_CALIBRATION_PER_BULB} calibration decisions per bulb"),
+            );
         }
         if self.calibration_per_bulb < self.cv_folds.div_ceil(4).max(1) {
             return bad(

@@ -9,7 +9,7 @@ use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::tuning::TuningReport;
 
-use crate::load::{load_epochs, load_model, EventArgs};
+use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
 use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
 
 #[derive(Debug, clap::Args)]
@@ -257,7 +257,15 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
                 return evaluate_sessions(args, &model, path);
             }
         }
-        let test = load_epochs(&args.test, &model.preprocess, &args.events, &args.test_text)?;
+        // The data is matched to the model (channels by name, rate) before any filtering.
+        let layout = Layout::of_model(&model, path);
+        let (test, _) = load_epochs_in(
+            &args.test,
+            &model.preprocess,
+            &args.events,
+            &args.test_text,
+            Some(&layout),
+        )?;
         for rec in &test {
             model
                 .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
@@ -269,8 +277,14 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let train = load_epochs(&args.train, &pre, &args.events, &[])?;
-    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
+    let (train, layout) = load_epochs_in(&args.train, &pre, &args.events, &[], None)?;
+    let (test, _) = load_epochs_in(
+        &args.test,
+        &pre,
+        &args.events,
+        &args.test_text,
+        layout.as_ref(),
+    )?;
     let params = EvaluateParams {
         presets: args.pipeline.0.clone(),
         folds: args.folds,

@@ -178,9 +178,6 @@ fn run_track(args: &TrackArgs) -> Result<()> {
                 .collect::<Result<Vec<_>>>()?,
         )
     };
-    if !(args.tolerance_mm.is_finite() && args.tolerance_mm > 0.0) {
-        anyhow::bail!("--tolerance-mm must be a positive number");
-    }
     let params = TrackParams {
         n_targets: args.targets,
         seed: args.session.seed,
@@ -188,6 +185,10 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         tolerance_m: args.tolerance_mm * 1e-3,
         ..TrackParams::default()
     };
+    // Before calibrating: the targets, tolerance and count (TrackParams::check).
+    params
+        .check(&crate::args::recording_arm()?)
+        .context("checking --target/--targets/--tolerance-mm")?;
     let mut prep = prepare_task(&args.session, &args.source, "track", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: task_targets(arm, &params)

@@ -79,10 +79,19 @@ fn check_labelled(rec: &Recording) -> Result<()> {
 /// The epochs of one recording cut by `pre` (the one preprocessing path,
 /// [`Preprocess::params`]).
 pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
-    let (epochs, _dropped) = pre
+    let (epochs, dropped) = pre
         .params()
         .epochs(&rec.raw)
         .with_context(|| format!("epoching {}", rec.path.display()))?;
+    if epochs.is_empty() && !dropped.is_empty() {
+        // Name the real cause here, not later as "0 targets and 0 non-targets".
+        anyhow::bail!(
+            "{}: every one of its {} epochs was dropped: {}",
+            rec.path.display(),
+            dropped.len(),
+            dropped.summary()
+        );
+    }
     Ok(EpochedRecording {
         name: rec.path.display().to_string(),
         n_events: rec.raw.events().len(),
@@ -91,15 +100,85 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
     })
 }
 
+/// The channels (by name, in order) and the rate every recording of a run must have: a model's,
+/// or the first training file's. Recordings are matched to it by channel name (any order, extra
+/// channels left out) before anything is filtered; a missing channel or another rate is an
+/// error naming it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    pub ch_names: Vec<String>,
+    pub sfreq: f64,
+    /// What it is, for messages ("model.json", "the training file a.dat").
+    pub of: String,
+}
+
+impl Layout {
+    pub fn of_model(model: &Model, path: &Path) -> Self {
+        Self {
+            ch_names: model.ch_names.clone(),
+            sfreq: model.sfreq,
+            of: format!("the model {}", path.display()),
+        }
+    }
+
+    fn of_recording(rec: &Recording) -> Self {
+        Self {
+            ch_names: rec.raw.ch_names().to_vec(),
+            sfreq: rec.raw.sfreq(),
+            of: format!("the training file {}", rec.path.display()),
+        }
+    }
+
+    /// `rec` with this layout's channels in its order.
+    fn fit(&self, mut rec: Recording) -> Result<Recording> {
+        let raw = &rec.raw;
+        let what = || {
+            format!(
+                "matching the channels of {} to those of {}",
+                rec.path.display(),
+                self.of
+            )
+        };
+        if (raw.sfreq() - self.sfreq).abs() > 1e-9 * self.sfreq {
+            anyhow::bail!(
+                "{} is sampled at {} Hz, {} at {} Hz",
+                rec.path.display(),
+                raw.sfreq(),
+                self.of,
+                self.sfreq
+            );
+        }
+        if raw.ch_names() == self.ch_names.as_slice() {
+            return Ok(rec);
+        }
+        oddball_decode::model::match_channels(&self.ch_names, raw.ch_names())
+            .with_context(what)?;
+        rec.raw = raw.pick_channels(&self.ch_names).with_context(what)?;
+        Ok(rec)
+    }
+}
+
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
 /// recorded without labels) and epochs each recording; a recording whose events carry no
-/// labels is an error saying how to label them.
+/// labels is an error saying how to label them. Every file's channels are matched by name to
+/// the first's ([`Layout`]).
 pub fn load_epochs(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
     texts: &[String],
 ) -> Result<Vec<EpochedRecording>> {
+    load_epochs_in(paths, pre, events, texts, None).map(|(e, _)| e)
+}
+
+/// [`load_epochs`] with every file matched to `layout` (else to the first file's), returned.
+pub fn load_epochs_in(
+    paths: &[PathBuf],
+    pre: &Preprocess,
+    events: &EventArgs,
+    texts: &[String],
+    layout: Option<&Layout>,
+) -> Result<(Vec<EpochedRecording>, Option<Layout>)> {
     if !texts.is_empty() && texts.len() != paths.len() {
         anyhow::bail!(
             "--test-text gives {} texts for {} test files (one per file)",
@@ -108,11 +187,19 @@ pub fn load_epochs(
         );
     }
     let mapping = events.mapping()?;
-    paths
+    let mut layout = layout.cloned();
+    let epochs = paths
         .iter()
         .enumerate()
         .map(|(i, p)| {
             let mut rec = read_mapped(p, mapping.as_ref())?;
+            rec = match &layout {
+                Some(l) => l.fit(rec)?,
+                None => {
+                    layout = Some(Layout::of_recording(&rec));
+                    rec
+                }
+            };
             if let Some(text) = texts.get(i) {
                 rec.label_from_text(text)
                     .with_context(|| format!("labelling {} from the text {text:?}", p.display()))?;
@@ -120,7 +207,8 @@ pub fn load_epochs(
             check_labelled(&rec)?;
             epoch(rec, pre)
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    Ok((epochs, layout))
 }
 
 /// Reads a saved model.
