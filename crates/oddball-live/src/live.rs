@@ -457,6 +457,9 @@ impl<S: EegSource> EegStream for LiveSubject<S> {
         self.position
     }
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        if crate::stop::requested() {
+            return Err(LiveError::Stopped.into());
+        }
         self.source.wait(n)?;
         self.collect_stamps()?;
         let data = self.source.take(n)?;

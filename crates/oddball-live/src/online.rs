@@ -185,11 +185,20 @@ pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String>
     Some(line)
 }
 
-/// The replayed file's end: what stops a session cleanly.
+/// What stops a session cleanly, keeping what it has (the recording closed, the decisions so
+/// far summarised): the replayed file's end, a stop request (SIGINT/SIGTERM), an amplifier
+/// that dropped out and did not come back within its reconnection attempts, a stream lost or
+/// stalled.
 pub fn is_recording_end(e: &SessionError) -> bool {
     matches!(
         LiveError::from_session(e),
-        Some(LiveError::RecordingEnded { .. })
+        Some(
+            LiveError::RecordingEnded { .. }
+                | LiveError::Stopped
+                | LiveError::Reconnect { .. }
+                | LiveError::StreamLost { .. }
+                | LiveError::StreamStalled { .. }
+        )
     )
 }
 

@@ -479,6 +479,11 @@ impl<S: Subject> Session<S> {
         Ok(())
     }
 
+    /// Ends the session and hands back its subject (a live one closes its recording).
+    pub fn into_subject(self) -> S {
+        self.subject
+    }
+
     /// Ends the session, returning its log, the model and the arm.
     pub fn finish(self) -> (SessionLog, Option<Model>, Option<ArmSim>) {
         let n_ch = self.raw.len();

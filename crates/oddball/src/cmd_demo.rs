@@ -59,7 +59,7 @@ struct Summary<'a> {
     decisions: &'a [DecisionRow],
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    note: Option<&'a str>,
+    note: Option<String>,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
@@ -81,7 +81,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 opts.pipeline,
                 rule_name(&rule)
             );
-            note = Some(REPLAY_NOTE);
+            note = Some(REPLAY_NOTE.to_string());
         }
         (None, preset) => {
             println!(
@@ -139,6 +139,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         },
     )?
     .steps;
+    if let Some(end) = oddball_live::stop::reason() {
+        // Stopped early: what was decided and recorded is kept and written below.
+        println!("stopped after {} decision(s): {end}", steps.len());
+        note = Some(match note {
+            Some(n) => format!("{n}; stopped early: {end}"),
+            None => format!("stopped early: {end}"),
+        });
+    }
     let rows: Vec<DecisionRow> = steps
         .iter()
         .enumerate()

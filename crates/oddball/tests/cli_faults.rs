@@ -305,3 +305,49 @@ fn test_data_is_matched_to_the_training_data_by_channel_name() {
     assert!(!ok);
     assert!(err.contains("without [\"ch0\"]"), "{err}");
 }
+
+/// Defect 8: `online` never closed its recording: no XDF stream footers, no fsync, and SIGINT
+/// or SIGTERM killed it (exit 130/143) without `summary.json`. Now the signal stops the session:
+/// exit 0, the XDF has every stream's footer, and the summary says why it ended.
+#[cfg(unix)]
+#[test]
+fn sigterm_stops_online_with_the_recording_closed_and_summarised() {
+    let dir = tmp_dir("cli-sigterm");
+    let out = dir.join("online");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["online", "--calibrate", "--commands", "up,left", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Let it record a few seconds of (paced) calibration.
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let t0 = std::time::Instant::now();
+    let output = child.wait_with_output().unwrap();
+    assert!(t0.elapsed().as_secs() < 30, "it took long to stop");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr),
+    );
+    assert!(output.status.success(), "{:?}: {stdout}\n{stderr}", output.status);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+            .unwrap();
+    assert!(
+        summary["ended"].as_str().unwrap().contains("SIGTERM"),
+        "{summary}"
+    );
+    let rec = oddball_io::read(out.join("session.xdf")).unwrap();
+    let xdf = rec.xdf().unwrap();
+    assert!(!xdf.truncated, "{xdf:?}");
+    assert!(rec.raw.n_times() > 500, "{} samples", rec.raw.n_times());
+    for s in &xdf.streams {
+        assert!(s.footer.is_some(), "stream {:?} has no footer", s.name);
+    }
+}
