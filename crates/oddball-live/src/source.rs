@@ -160,15 +160,21 @@ impl SourceSpec {
                         .collect()
                 };
                 let panel = SocketAddr::new(data.ip(), data.port().wrapping_add(1));
+                // An amplifier that drops out has ten seconds to come back.
+                let reconnect = Reconnect {
+                    attempts: 20,
+                    delay: std::time::Duration::from_millis(500),
+                    ..Reconnect::default()
+                };
                 let source = NicSource::connect(
                     data,
                     opts.nic,
                     opts.nic_sfreq,
                     ch_names,
-                    Reconnect::default(),
+                    reconnect,
                     clock,
                 )?
-                .with_panel_port(panel)?;
+                .with_panel_port_if_any(panel);
                 Ok((AnySource::Nic(source), None))
             }
             Self::Replay(path) => {
