@@ -251,6 +251,18 @@ impl EpochsParams {
             fits && start >= 0 && ev.onset as i64 + last < total
         };
         let n_fit = events.iter().filter(|e| in_bounds(e)).count();
+        // Epochs overlap when events come faster than the window; past MAX_EPOCH_OVERLAP
+        // times the recording (an event on every sample, say) they are refused instead of
+        // allocated: memory stays linear in the data.
+        let budget = (crate::MAX_EPOCH_OVERLAP * raw.n_times()).max(1 << 20);
+        if n_fit.saturating_mul(n_times) > budget {
+            return Err(SignalError::TooManyEpochs {
+                n_events: n_fit,
+                n_times,
+                recording: raw.n_times(),
+                max_overlap: crate::MAX_EPOCH_OVERLAP,
+            });
+        }
         let mut kept = Vec::with_capacity(n_fit);
         let mut out: Vec<f64> = Vec::with_capacity(n_fit * n_channels * n_times);
         let mut log = DropLog::default();

@@ -12,6 +12,13 @@ pub enum SignalError {
         first: usize,
         second: usize,
     },
+    #[error("{n_events} epochs of {n_times} samples would hold more than {max_overlap} times the recording's {recording} samples: events this dense (one on every sample?) are not stimulus onsets")]
+    TooManyEpochs {
+        n_events: usize,
+        n_times: usize,
+        recording: usize,
+        max_overlap: usize,
+    },
     #[error("{names} channel names for {n_channels} channels of data")]
     ChannelCountMismatch { names: usize, n_channels: usize },
     #[error("{events} events for {n_epochs} epochs")]

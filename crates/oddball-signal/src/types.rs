@@ -161,6 +161,9 @@ pub const SFREQ_MIN: f64 = 0.1;
 /// The highest sampling rate accepted anywhere, Hz (EEG amplifiers sample at most tens of kHz;
 /// at 10⁹ Hz a window of a second is a gigabyte, at 10³⁰⁰ Hz the filter design breaks down).
 pub const SFREQ_MAX: f64 = 1e6;
+/// How many times over the epochs of one recording may hold its samples (overlapping windows:
+/// a P300 speller's flashes every 175 ms with 0.8 s epochs overlap about 5 times).
+pub const MAX_EPOCH_OVERLAP: usize = 20;
 /// The furthest an epoch window (`tmin`, `tmax`) may reach from its onset, seconds.
 pub const MAX_WINDOW_S: f64 = 100.0;
 

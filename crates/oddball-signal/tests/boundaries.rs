@@ -70,3 +70,23 @@ fn duplicate_channel_names_are_refused() {
         "{err}"
     );
 }
+
+/// Issue #19, defect 7: a CSV with an event on every sample made 205-sample epochs of all of
+/// them (7.9 GB from 15 MB). Epochs holding more than MAX_EPOCH_OVERLAP times the recording
+/// are refused before they are allocated.
+#[test]
+fn an_event_on_every_sample_is_refused_before_allocation() {
+    use oddball_signal::MAX_EPOCH_OVERLAP;
+    let n = 200_000;
+    let events = Events::new((0..n).map(|t| Event::new(t, 1)).collect());
+    let raw = Raw::new(Array2::zeros((2, n)), 256.0, names(2), events).unwrap();
+    let err = EpochsParams::new(0.0, 0.8).cut(&raw).unwrap_err();
+    assert!(
+        matches!(err, SignalError::TooManyEpochs { max_overlap: MAX_EPOCH_OVERLAP, .. }),
+        "{err}"
+    );
+    // A speller's density (an event every 42 samples) is fine.
+    let events = Events::new((0..n / 42).map(|k| Event::new(k * 42, 1)).collect());
+    let raw = Raw::new(Array2::zeros((2, n)), 240.0, names(2), events).unwrap();
+    assert!(EpochsParams::new(0.0, 0.8).cut(&raw).is_ok());
+}

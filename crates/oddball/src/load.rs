@@ -79,22 +79,23 @@ fn check_labelled(rec: &Recording) -> Result<()> {
 /// The epochs of one recording cut by `pre` (the one preprocessing path,
 /// [`Preprocess::params`]).
 pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording> {
+    let name = rec.path.display().to_string();
+    let n_events = rec.raw.events().len();
     let (epochs, dropped) = pre
         .params()
-        .epochs(&rec.raw)
-        .with_context(|| format!("epoching {}", rec.path.display()))?;
+        .epochs_owned(rec.raw)
+        .with_context(|| format!("epoching {name}"))?;
     if epochs.is_empty() && !dropped.is_empty() {
         // Name the real cause here, not later as "0 targets and 0 non-targets".
         anyhow::bail!(
-            "{}: every one of its {} epochs was dropped: {}",
-            rec.path.display(),
+            "{name}: every one of its {} epochs was dropped: {}",
             dropped.len(),
             dropped.summary()
         );
     }
     Ok(EpochedRecording {
-        name: rec.path.display().to_string(),
-        n_events: rec.raw.events().len(),
+        name,
+        n_events,
         speller: rec.speller,
         epochs,
     })
