@@ -275,7 +275,10 @@ fn incomplete_or_unusable_models_are_refused_at_load() {
         let mut v = v0.clone();
         v[key] = bad.clone();
         let e = load(&v).unwrap_err();
-        assert!(matches!(e, DecodeError::ModelFormat { .. }), "{key} = {bad}: {e}");
+        assert!(
+            matches!(e, DecodeError::ModelFormat { .. }),
+            "{key} = {bad}: {e}"
+        );
     }
     for (key, bad) in [("tmax", 1e9), ("tmin", -1e9)] {
         let mut v = v0.clone();
@@ -305,5 +308,7 @@ fn a_recordings_channels_are_matched_to_the_model_by_name() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("without [\"Fz\"]"), "{e}");
-    assert!(m.channel_order(&names(&["Fz", "Cz", "Pz", "Oz"]), 128.0).is_err());
+    assert!(m
+        .channel_order(&names(&["Fz", "Cz", "Pz", "Oz"]), 128.0)
+        .is_err());
 }

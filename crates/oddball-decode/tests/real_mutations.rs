@@ -159,7 +159,9 @@ fn run(path: &Path) -> Outcome {
 
 #[test]
 fn mutated_real_files_never_panic_hang_or_fail_without_a_cause() {
-    let Some(data) = oddball_testkit::data_dir("mutated_real_files_never_panic_hang_or_fail_without_a_cause") else {
+    let Some(data) =
+        oddball_testkit::data_dir("mutated_real_files_never_panic_hang_or_fail_without_a_cause")
+    else {
         return;
     };
     let per_file: usize = std::env::var("ODDBALL_MUTATIONS")
@@ -195,8 +197,15 @@ fn mutated_real_files_never_panic_hang_or_fail_without_a_cause() {
                     refused += 1;
                     // A named cause: the reader's errors name the file; later steps name the
                     // value, channel or step at fault (never an empty or unbounded message).
-                    assert!(!message.is_empty(), "{what}: refused at {step} without a cause");
-                    assert!(message.len() < 4000, "{what}: a {}-byte message", message.len());
+                    assert!(
+                        !message.is_empty(),
+                        "{what}: refused at {step} without a cause"
+                    );
+                    assert!(
+                        message.len() < 4000,
+                        "{what}: a {}-byte message",
+                        message.len()
+                    );
                     if step == "read" {
                         assert!(
                             message.contains(path.file_name().unwrap().to_str().unwrap()),

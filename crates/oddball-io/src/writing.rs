@@ -147,11 +147,13 @@ impl Write for AtomicFile {
 pub fn write_atomic(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<(), IoError> {
     let path = path.as_ref();
     let mut f = AtomicFile::create(path)?;
-    f.file().write_all(bytes.as_ref()).map_err(|source| IoError::Io {
-        path: f.temp_path().to_path_buf(),
-        action: "write",
-        source,
-    })?;
+    f.file()
+        .write_all(bytes.as_ref())
+        .map_err(|source| IoError::Io {
+            path: f.temp_path().to_path_buf(),
+            action: "write",
+            source,
+        })?;
     f.commit()
 }
 

@@ -459,7 +459,13 @@ fn refuses_bad_parameters_and_recordings() {
         "{what}"
     );
     // A rate no reader takes cannot even make a recording (`oddball_signal::check_sfreq`).
-    assert!(Raw::new(Array2::zeros((1, 3)), 2e6, vec!["Fz".into()], Events::default()).is_err());
+    assert!(Raw::new(
+        Array2::zeros((1, 3)),
+        2e6,
+        vec!["Fz".into()],
+        Events::default()
+    )
+    .is_err());
 }
 
 #[test]

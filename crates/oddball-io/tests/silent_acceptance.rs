@@ -35,7 +35,13 @@ fn patch(path: &Path, from: &[u8], to: &[u8]) {
     let at = b
         .windows(from.len())
         .position(|w| w == from)
-        .unwrap_or_else(|| panic!("{:?} not in {}", String::from_utf8_lossy(from), path.display()));
+        .unwrap_or_else(|| {
+            panic!(
+                "{:?} not in {}",
+                String::from_utf8_lossy(from),
+                path.display()
+            )
+        });
     b[at..at + from.len()].copy_from_slice(to);
     std::fs::write(path, b).unwrap();
 }

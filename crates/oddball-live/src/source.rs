@@ -166,15 +166,9 @@ impl SourceSpec {
                     delay: std::time::Duration::from_millis(500),
                     ..Reconnect::default()
                 };
-                let source = NicSource::connect(
-                    data,
-                    opts.nic,
-                    opts.nic_sfreq,
-                    ch_names,
-                    reconnect,
-                    clock,
-                )?
-                .with_panel_port_if_any(panel);
+                let source =
+                    NicSource::connect(data, opts.nic, opts.nic_sfreq, ch_names, reconnect, clock)?
+                        .with_panel_port_if_any(panel);
                 Ok((AnySource::Nic(source), None))
             }
             Self::Replay(path) => {

@@ -294,7 +294,9 @@ fn a_real_amplifier_without_a_panel_port_is_read() {
         std::thread::sleep(std::time::Duration::from_millis(200));
     });
     let opts = OpenOptions {
-        subject: SubjectParams::preset(SubjectPreset::Typical).build().unwrap(),
+        subject: SubjectParams::preset(SubjectPreset::Typical)
+            .build()
+            .unwrap(),
         paced: false,
         sim_latency_ms: 0.0,
         nic: format,

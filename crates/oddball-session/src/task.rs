@@ -267,11 +267,7 @@ impl TrackParams {
             );
         }
         if self.max_factor == 0 || self.max_factor > 100 {
-            return bad(
-                "max_factor",
-                self.max_factor.to_string(),
-                "1 to 100".into(),
-            );
+            return bad("max_factor", self.max_factor.to_string(), "1 to 100".into());
         }
         let n = self.targets.as_ref().map_or(self.n_targets, Vec::len);
         if n > MAX_TARGETS {

@@ -224,7 +224,11 @@ fn stale_and_far_future_stamps_are_refused_and_counted_never_ending_the_session(
             Stamp::Honest => assert_eq!(s.refused_onsets(), 0),
             _ => {
                 // Every hostile stamp that arrived before its epoch completed is refused.
-                assert!(s.refused_onsets() >= shown / 7 - 2, "{stamp:?}: {} of {shown}", s.refused_onsets());
+                assert!(
+                    s.refused_onsets() >= shown / 7 - 2,
+                    "{stamp:?}: {} of {shown}",
+                    s.refused_onsets()
+                );
                 assert!(s.refused_onsets() <= shown / 7, "{stamp:?}");
             }
         }

@@ -68,11 +68,22 @@ fn corrupt_trial_lines_and_four_bulbs_of_one_meaning_are_refused() {
             .to_string()
     };
     for (what, make) in [
-        ("start after end", (|f: &[&str]| format!("{} {} {} 1 1", f[0], f[2], f[1])) as fn(&[&str]) -> String),
-        ("past the end", |f| format!("{} {} 999999999 1 1", f[0], f[1])),
-        ("intended code 9", |f| format!("{} {} {} 9 1", f[0], f[1], f[2])),
-        ("decided code 2^32 + 1", |f| format!("{} {} {} 1 4294967297", f[0], f[1], f[2])),
-        ("overlapping the trial before", |f| format!("{} 0 {} 1 1", f[0], f[2])),
+        (
+            "start after end",
+            (|f: &[&str]| format!("{} {} {} 1 1", f[0], f[2], f[1])) as fn(&[&str]) -> String,
+        ),
+        ("past the end", |f| {
+            format!("{} {} 999999999 1 1", f[0], f[1])
+        }),
+        ("intended code 9", |f| {
+            format!("{} {} {} 9 1", f[0], f[1], f[2])
+        }),
+        ("decided code 2^32 + 1", |f| {
+            format!("{} {} {} 1 4294967297", f[0], f[1], f[2])
+        }),
+        ("overlapping the trial before", |f| {
+            format!("{} 0 {} 1 1", f[0], f[2])
+        }),
     ] {
         let e = read_edited(&easy, |t| {
             let old = line(&t);
@@ -80,10 +91,7 @@ fn corrupt_trial_lines_and_four_bulbs_of_one_meaning_are_refused() {
             t.replace(&old, &format!("Oddball trial 13: {}", make(&fields)))
         })
         .expect_err(what);
-        assert!(
-            matches!(e, SessionError::NotASession { .. }),
-            "{what}: {e}"
-        );
+        assert!(matches!(e, SessionError::NotASession { .. }), "{what}: {e}");
     }
     let e = read_edited(&easy, |t| {
         let bulbs = t
@@ -109,7 +117,12 @@ fn fifty_thousand_trial_lines_are_read_in_linear_time() {
         let first_free = n_times - 50_001;
         for k in 0..50_000 {
             let s = first_free + k;
-            t.push_str(&format!("Oddball trial {}: online {} {} 1 0\n", last + 1 + k, s, s + 1));
+            t.push_str(&format!(
+                "Oddball trial {}: online {} {} 1 0\n",
+                last + 1 + k,
+                s,
+                s + 1
+            ));
         }
         t
     });

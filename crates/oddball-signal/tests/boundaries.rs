@@ -13,12 +13,27 @@ fn names(n: usize) -> Vec<String> {
 /// 1e300 Hz made the Butterworth design panic; 1e9 Hz made epoching allocate gigabytes.
 #[test]
 fn implausible_sampling_rates_are_refused_before_design_or_allocation() {
-    for sfreq in [1e300, 1e9, SFREQ_MAX * 1.01, 0.0, -256.0, 0.01, f64::NAN, f64::INFINITY] {
+    for sfreq in [
+        1e300,
+        1e9,
+        SFREQ_MAX * 1.01,
+        0.0,
+        -256.0,
+        0.01,
+        f64::NAN,
+        f64::INFINITY,
+    ] {
         let err = Raw::new(Array2::zeros((2, 10)), sfreq, names(2), Events::default()).unwrap_err();
-        assert!(matches!(err, SignalError::InvalidSfreq { .. }), "{sfreq}: {err}");
+        assert!(
+            matches!(err, SignalError::InvalidSfreq { .. }),
+            "{sfreq}: {err}"
+        );
         assert!(err.to_string().contains("plausible"), "{err}");
         let err = ButterworthParams::paper().design(sfreq).unwrap_err();
-        assert!(matches!(err, SignalError::InvalidSfreq { .. }), "{sfreq}: {err}");
+        assert!(
+            matches!(err, SignalError::InvalidSfreq { .. }),
+            "{sfreq}: {err}"
+        );
     }
     for sfreq in [1.0, 128.0, 256.0, 16_384.0, SFREQ_MAX] {
         Raw::new(Array2::zeros((1, 4)), sfreq, names(1), Events::default()).unwrap();
@@ -35,7 +50,10 @@ fn a_band_beyond_nyquist_is_refused() {
             h_freq: 40.0,
         },
     };
-    assert!(matches!(p.design(64.0), Err(SignalError::InvalidBand { .. })));
+    assert!(matches!(
+        p.design(64.0),
+        Err(SignalError::InvalidBand { .. })
+    ));
     assert!(p.design(128.0).is_ok());
 }
 
@@ -82,7 +100,13 @@ fn an_event_on_every_sample_is_refused_before_allocation() {
     let raw = Raw::new(Array2::zeros((2, n)), 256.0, names(2), events).unwrap();
     let err = EpochsParams::new(0.0, 0.8).cut(&raw).unwrap_err();
     assert!(
-        matches!(err, SignalError::TooManyEpochs { max_overlap: MAX_EPOCH_OVERLAP, .. }),
+        matches!(
+            err,
+            SignalError::TooManyEpochs {
+                max_overlap: MAX_EPOCH_OVERLAP,
+                ..
+            }
+        ),
         "{err}"
     );
     // A speller's density (an event every 42 samples) is fine.

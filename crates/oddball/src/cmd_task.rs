@@ -249,7 +249,8 @@ fn write_common(
     expected: &[Vector2<f64>],
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
-    oddball_io::write_atomic(out.join("model.json"), &prep.model_json).context("writing model.json")?;
+    oddball_io::write_atomic(out.join("model.json"), &prep.model_json)
+        .context("writing model.json")?;
     let erp_png = out.join("erp.png");
     oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
         .with_context(|| format!("drawing {}", erp_png.display()))?;

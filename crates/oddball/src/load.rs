@@ -152,8 +152,7 @@ impl Layout {
         if raw.ch_names() == self.ch_names.as_slice() {
             return Ok(rec);
         }
-        oddball_decode::model::match_channels(&self.ch_names, raw.ch_names())
-            .with_context(what)?;
+        oddball_decode::model::match_channels(&self.ch_names, raw.ch_names()).with_context(what)?;
         rec.raw = raw.pick_channels(&self.ch_names).with_context(what)?;
         Ok(rec)
     }

@@ -111,5 +111,6 @@ pub fn save_session(prep: Prepared, out: &Path, end: &str) -> Result<Option<Path
 
 /// decisions.csv: one row per step.
 pub fn write_decisions_csv(path: &Path, steps: &[Step]) -> Result<()> {
-    oddball_io::write_atomic(path, decisions_csv(steps)).with_context(|| format!("writing {}", path.display()))
+    oddball_io::write_atomic(path, decisions_csv(steps))
+        .with_context(|| format!("writing {}", path.display()))
 }

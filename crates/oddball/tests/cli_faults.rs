@@ -50,7 +50,11 @@ fn argument_combinations_that_hung_are_refused_at_once() {
         ),
     ] {
         let (code, _, err) = oddball_within(&args(&cmd, &["--out", out]), 60);
-        assert_eq!(code, Some(1), "{cmd:?} (None: still running after 60 s): {err}");
+        assert_eq!(
+            code,
+            Some(1),
+            "{cmd:?} (None: still running after 60 s): {err}"
+        );
         assert!(err.contains(needle), "{cmd:?}: {err}");
     }
 }
@@ -73,7 +77,7 @@ fn train_over_an_existing_model_keeps_it_when_the_write_fails() {
     ];
     cmd.extend(EVENTS.iter().map(|s| s.to_string()));
     // A 64 KiB limit on files written (`ulimit -f` counts 512- or 1024-byte blocks).
-    let script = format!("trap '' XFSZ; ulimit -f 64; exec \"$@\"");
+    let script = "trap '' XFSZ; ulimit -f 64; exec \"$@\"";
     let out = std::process::Command::new("sh")
         .arg("-c")
         .arg(script)
@@ -82,7 +86,10 @@ fn train_over_an_existing_model_keeps_it_when_the_write_fails() {
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "the model (> 64 KiB) was written: {err}");
+    assert!(
+        !out.status.success(),
+        "the model (> 64 KiB) was written: {err}"
+    );
     assert!(err.contains("model.json"), "{err}");
     assert_eq!(
         std::fs::read(&model).unwrap(),
@@ -97,7 +104,10 @@ fn train_over_an_existing_model_keeps_it_when_the_write_fails() {
     // Without the limit the same command replaces it.
     let (ok, _, err) = oddball(&cmd[1..].iter().map(String::as_str).collect::<Vec<_>>());
     assert!(ok, "{err}");
-    assert!(oddball_decode::pipeline::Model::from_json(&std::fs::read_to_string(&model).unwrap()).is_ok());
+    assert!(
+        oddball_decode::pipeline::Model::from_json(&std::fs::read_to_string(&model).unwrap())
+            .is_ok()
+    );
 }
 
 /// Defect 4: CSV rates from timestamps of 10³⁰⁰ Hz panicked the filter design (exit 101), of
@@ -132,7 +142,15 @@ fn absurd_rates_and_windows_are_refused_before_any_work() {
     let png = png.to_str().unwrap();
     let (code, _, err) = oddball_within(
         &args(
-            &["inspect", csv, "--plot", png, "--tmin=-1e9", "--tmax", "1e9"],
+            &[
+                "inspect",
+                csv,
+                "--plot",
+                png,
+                "--tmin=-1e9",
+                "--tmax",
+                "1e9",
+            ],
             &EVENTS,
         ),
         120,
@@ -335,10 +353,13 @@ fn sigterm_stops_online_with_the_recording_closed_and_summarised() {
         String::from_utf8_lossy(&output.stdout),
         String::from_utf8_lossy(&output.stderr),
     );
-    assert!(output.status.success(), "{:?}: {stdout}\n{stderr}", output.status);
+    assert!(
+        output.status.success(),
+        "{:?}: {stdout}\n{stderr}",
+        output.status
+    );
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert!(
         summary["ended"].as_str().unwrap().contains("SIGTERM"),
         "{summary}"
