@@ -57,6 +57,13 @@ pub enum DatasetError {
     Speller { path: PathBuf, what: String },
     #[error("{given} spelled texts for {files} files (one per file)")]
     TextCount { given: usize, files: usize },
+    #[error("{}: every one of its {n_epochs} epochs was dropped: {why}", path.display())]
+    AllDropped {
+        path: PathBuf,
+        n_epochs: usize,
+        /// The drop log's summary: which rule dropped how many, on which channels.
+        why: String,
+    },
     #[error("epoching {}", path.display())]
     Epoch {
         path: PathBuf,

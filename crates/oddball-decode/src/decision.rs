@@ -98,6 +98,31 @@ impl ScoreModelParams {
 }
 
 impl ScoreModel {
+    /// Refuses a score model that cannot weigh evidence: non-finite means, or a spread that is
+    /// not finite and positive (zero spread makes every log-likelihood ratio infinite).
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("mean_target", self.mean_target),
+            ("mean_nontarget", self.mean_nontarget),
+        ] {
+            if !v.is_finite() {
+                return Err(DecodeError::InvalidParameter {
+                    name,
+                    value: v.to_string(),
+                    reason: "a finite score".into(),
+                });
+            }
+        }
+        if !(self.std.is_finite() && self.std > 0.0) {
+            return Err(DecodeError::InvalidParameter {
+                name: "std",
+                value: self.std.to_string(),
+                reason: "a finite spread > 0".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// Log-likelihood ratio (target vs non-target) of one score.
     pub fn llr(&self, score: f64) -> f64 {
         let d = self.mean_target - self.mean_nontarget;
@@ -151,6 +176,10 @@ impl Posterior {
     }
 }
 
+/// The most rounds of flashes one decision may take (a hundred rounds of four bulbs is well over
+/// a minute and a half per decision; 10⁸ rounds kept a session busy for ever).
+pub const MAX_ROUNDS: usize = 100;
+
 /// When to stop flashing and what to decide.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -193,7 +222,11 @@ impl DecisionRule {
             })
         };
         match *self {
-            DecisionRule::Fixed { rounds: 0 } => bad("rounds", "0".into(), "at least one round"),
+            DecisionRule::Fixed { rounds } if !(1..=MAX_ROUNDS).contains(&rounds) => bad(
+                "rounds",
+                rounds.to_string(),
+                &format!("1 to {MAX_ROUNDS} rounds"),
+            ),
             DecisionRule::Fixed { .. } => Ok(()),
             DecisionRule::Dynamic {
                 threshold,
@@ -214,11 +247,15 @@ impl DecisionRule {
                         "a probability in [0, 1)",
                     );
                 }
-                if max_rounds == 0 || min_rounds == 0 || min_rounds > max_rounds {
+                if max_rounds == 0
+                    || min_rounds == 0
+                    || min_rounds > max_rounds
+                    || max_rounds > MAX_ROUNDS
+                {
                     return bad(
                         "min_rounds/max_rounds",
                         format!("{min_rounds}/{max_rounds}"),
-                        "need 1 <= min_rounds <= max_rounds",
+                        &format!("need 1 <= min_rounds <= max_rounds <= {MAX_ROUNDS}"),
                     );
                 }
                 Ok(())
@@ -304,6 +341,13 @@ pub struct DecisionModel {
 }
 
 impl DecisionModel {
+    /// Refuses a score model or rule that cannot decide (see [`ScoreModel::validate`],
+    /// [`DecisionRule::validate`]).
+    pub fn validate(&self) -> Result<()> {
+        self.scores.validate()?;
+        self.rule.validate()
+    }
+
     /// Runs the rule over complete rounds: `rounds[r][k]` is the score of stimulus `k` in round
     /// `r` (`None` for a rejected epoch: no evidence). Returns the verdict and the rounds used;
     /// `Continue` only if the rounds run out first.

@@ -91,11 +91,44 @@ impl Model {
         let model: Self = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
             reason: e.to_string(),
         })?;
-        model.pipeline.check_fusion()?;
+        model.check()?;
         Ok(model)
     }
 
-    /// Checks that a recording's channels and rate are the ones the model was trained on.
+    /// The checks a model passes before it scores anything (linfa's `ParamGuard` idea: a value
+    /// from outside becomes a checked one once, where it enters): a plausible sampling rate,
+    /// unique channel names as many as the pipeline's channels, a bounded epoch window and a
+    /// band below Nyquist at that rate, fusion terms that can be used, and a decision model that
+    /// can decide. [`Model::from_json`] runs it.
+    pub fn check(&self) -> Result<()> {
+        let bad = |reason: String| DecodeError::ModelFormat { reason };
+        oddball_signal::check_sfreq(self.sfreq).map_err(|e| bad(e.to_string()))?;
+        oddball_signal::check_unique_names(&self.ch_names).map_err(|e| bad(e.to_string()))?;
+        let (n_channels, _) = self.pipeline.epoch_shape();
+        if self.ch_names.len() != n_channels {
+            return Err(bad(format!(
+                "{} channel names for a pipeline of {n_channels} channels",
+                self.ch_names.len()
+            )));
+        }
+        let params = self.preprocess.params();
+        params
+            .epochs
+            .validate(self.sfreq)
+            .map_err(|e| bad(format!("epoch window: {e}")))?;
+        params
+            .band
+            .design(self.sfreq)
+            .map_err(|e| bad(format!("band-pass: {e}")))?;
+        self.pipeline.check_fusion()?;
+        if let Some(d) = &self.decision {
+            d.validate()?;
+        }
+        Ok(())
+    }
+
+    /// Checks that a recording's channels and rate are the ones the model was trained on, in
+    /// its order. See [`Model::channel_order`] for matching a recording's channels by name.
     pub fn check_layout(&self, ch_names: &[String], sfreq: f64) -> Result<()> {
         if ch_names != self.ch_names.as_slice() || (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
             return Err(DecodeError::LayoutMismatch {
@@ -105,6 +138,40 @@ impl Model {
         }
         Ok(())
     }
+
+    /// Where each of the model's channels is in a recording with `ch_names` at `sfreq` Hz,
+    /// matched by name: `order[k]` is the recording's row of the model's channel `k` (the
+    /// recording may hold more channels, in any order). A missing channel or another rate is
+    /// [`DecodeError::LayoutMismatch`] naming it.
+    pub fn channel_order(&self, ch_names: &[String], sfreq: f64) -> Result<Vec<usize>> {
+        if (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
+            return Err(DecodeError::LayoutMismatch {
+                expected: format!("{} Hz", self.sfreq),
+                got: format!("{sfreq} Hz"),
+            });
+        }
+        match_channels(&self.ch_names, ch_names)
+    }
+}
+
+/// Where each of `wanted` is among `present`, by name: `order[k]` is the index in `present` of
+/// `wanted[k]`. Every missing name is listed in the [`DecodeError::LayoutMismatch`].
+pub fn match_channels(wanted: &[String], present: &[String]) -> Result<Vec<usize>> {
+    let mut order = Vec::with_capacity(wanted.len());
+    let mut missing = Vec::new();
+    for w in wanted {
+        match present.iter().position(|p| p == w) {
+            Some(i) => order.push(i),
+            None => missing.push(w.as_str()),
+        }
+    }
+    if !missing.is_empty() {
+        return Err(DecodeError::LayoutMismatch {
+            expected: format!("channels {wanted:?}"),
+            got: format!("channels {present:?}, without {missing:?}"),
+        });
+    }
+    Ok(order)
 }
 
 /// The saved form of a [`Pipeline`], as every format so far wrote it: the main pipeline's
@@ -294,10 +361,48 @@ impl From<Pipeline> for PipelineRepr {
     }
 }
 
+/// A fitted single pipeline holds every step its settings name (a file with a step cut out
+/// would load and score worse without a word).
+fn check_complete(single: &Single, params: &SingleParams) -> Result<()> {
+    for (step, wanted, present) in [
+        (
+            "channel selection",
+            params.channel_selection.is_some(),
+            single.channels.is_some(),
+        ),
+        ("scaler", params.scaler.is_some(), single.scaler.is_some()),
+        ("PCA", params.pca.is_some(), single.pca.is_some()),
+    ] {
+        if wanted != present {
+            return Err(DecodeError::ModelFormat {
+                reason: format!(
+                    "pipeline {}: its settings {} a {step}, the fitted steps {}",
+                    single.name,
+                    if wanted { "have" } else { "have no" },
+                    if present { "have one" } else { "have none" },
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl TryFrom<PipelineRepr> for Pipeline {
     type Error = DecodeError;
     fn try_from(r: PipelineRepr) -> Result<Self> {
         let (main, term, params, fused, fusion_intercept) = r.split();
+        if let Some(p) = &params {
+            if p.fused.len() != fused.len() {
+                return Err(DecodeError::ModelFormat {
+                    reason: format!(
+                        "pipeline {}: its settings fuse {} pipelines, the file holds {}",
+                        main.name,
+                        p.fused.len(),
+                        fused.len()
+                    ),
+                });
+            }
+        }
         let fused = fused
             .into_iter()
             .map(|m| {
@@ -306,16 +411,24 @@ impl TryFrom<PipelineRepr> for Pipeline {
                 if !further.is_empty() {
                     return Err(nested(&single.name));
                 }
+                let params = params.map(SingleParams::try_from).transpose()?;
+                if let Some(p) = &params {
+                    check_complete(&single, p)?;
+                }
                 Ok(FusedMember {
                     single,
-                    params: params.map(SingleParams::try_from).transpose()?,
+                    params,
                     term,
                 })
             })
             .collect::<Result<_>>()?;
+        let params = params.map(PipelineParams::try_from).transpose()?;
+        if let Some(p) = &params {
+            check_complete(&main, &p.main)?;
+        }
         Ok(Self {
             main,
-            params: params.map(PipelineParams::try_from).transpose()?,
+            params,
             term,
             fused,
             fusion_intercept,

@@ -210,3 +210,105 @@ fn saved_models_of_earlier_versions_score_the_same() {
         );
     }
 }
+
+/// The JSON of `name`'s preset model, as a value to cut into.
+fn model_value(name: &str) -> serde_json::Value {
+    let (_, json) = preset_models()
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap();
+    serde_json::from_str(&json).unwrap()
+}
+
+fn load(v: &serde_json::Value) -> Result<Model, DecodeError> {
+    Model::from_json(&v.to_string())
+}
+
+/// Issue #19, defect 9: models missing their fused part or their scaler loaded and scored
+/// worse; a decision model with zero spread or zero rounds loaded; nonsense rates, windows and
+/// duplicate channel names loaded.
+#[test]
+fn incomplete_or_unusable_models_are_refused_at_load() {
+    // A fusion with its fused pipeline cut out.
+    let mut v = model_value("lda+riemann");
+    assert!(load(&v).is_ok());
+    v["pipeline"]["fused"] = serde_json::json!([]);
+    let e = load(&v).unwrap_err().to_string();
+    assert!(e.contains("fuse 1 pipelines, the file holds 0"), "{e}");
+
+    // A pipeline with its fitted scaler cut out.
+    let with_scaler = preset_models()
+        .into_iter()
+        .map(|(n, j)| (n, serde_json::from_str::<serde_json::Value>(&j).unwrap()))
+        .find(|(_, v)| !v["pipeline"]["scaler"].is_null())
+        .expect("a preset with a scaler");
+    let mut v = with_scaler.1;
+    v["pipeline"]["scaler"] = serde_json::Value::Null;
+    let e = load(&v).unwrap_err().to_string();
+    assert!(e.contains("scaler"), "{}: {e}", with_scaler.0);
+
+    // Decision models that cannot decide.
+    let v0 = model_value("toeplitz-lda");
+    assert!(!v0["decision"].is_null());
+    for (path, bad) in [
+        (["decision", "scores", "std"], serde_json::json!(0.0)),
+        (["decision", "scores", "std"], serde_json::json!(-1.0)),
+        (["decision", "rule", "rounds"], serde_json::json!(0)),
+    ] {
+        let mut v = v0.clone();
+        v[path[0]][path[1]][path[2]] = bad.clone();
+        let e = load(&v).unwrap_err();
+        assert!(
+            matches!(e, DecodeError::InvalidParameter { .. }),
+            "{path:?} = {bad}: {e}"
+        );
+    }
+
+    // Rates, windows and names from outside.
+    let v0 = model_value("lda");
+    for (key, bad) in [
+        ("sfreq", serde_json::json!(1e300)),
+        ("sfreq", serde_json::json!(0.0)),
+        ("ch_names", serde_json::json!(["Fz", "Cz", "Fz", "Oz"])),
+        ("ch_names", serde_json::json!(["Fz", "Cz"])),
+    ] {
+        let mut v = v0.clone();
+        v[key] = bad.clone();
+        let e = load(&v).unwrap_err();
+        assert!(
+            matches!(e, DecodeError::ModelFormat { .. }),
+            "{key} = {bad}: {e}"
+        );
+    }
+    for (key, bad) in [("tmax", 1e9), ("tmin", -1e9)] {
+        let mut v = v0.clone();
+        v["preprocess"][key] = serde_json::json!(bad);
+        let e = load(&v).unwrap_err().to_string();
+        assert!(e.contains("epoch window"), "{key} = {bad}: {e}");
+    }
+    let mut v = v0.clone();
+    v["preprocess"]["band"]["band"]["Bandpass"]["h_freq"] = serde_json::json!(40.0);
+    let e = load(&v).unwrap_err().to_string();
+    assert!(e.contains("band-pass"), "{e}\n{}", v["preprocess"]);
+}
+
+/// A model's channels are found in a recording by name, whatever the order; a missing one is
+/// named.
+#[test]
+fn a_recordings_channels_are_matched_to_the_model_by_name() {
+    let m = Model::from_json(&model_value("lda").to_string()).unwrap();
+    let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert_eq!(
+        m.channel_order(&names(&["Oz", "Pz", "Cz", "Fz", "EOG"]), 64.0)
+            .unwrap(),
+        [3, 2, 1, 0]
+    );
+    let e = m
+        .channel_order(&names(&["Oz", "Pz", "Cz", "F3"]), 64.0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("without [\"Fz\"]"), "{e}");
+    assert!(m
+        .channel_order(&names(&["Fz", "Cz", "Pz", "Oz"]), 128.0)
+        .is_err());
+}

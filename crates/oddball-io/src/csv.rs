@@ -181,7 +181,7 @@ pub(crate) fn csv_err(
         column,
         field: field.into(),
         expected: expected.into(),
-        found: found.into(),
+        found: crate::error::bounded(&found.into()),
     }
 }
 

@@ -121,6 +121,18 @@ pub enum IoError {
 
 /// The [`Raw`] of a reader's parts; a part the signal crate refuses (shape, rate, names, events
 /// out of range) is an error naming the file.
+/// The most characters of a file's content an error message echoes.
+pub const MAX_ECHO_CHARS: usize = 80;
+
+/// `text` as an error message may echo it: at most [`MAX_ECHO_CHARS`] characters, the rest
+/// replaced by `… (N more bytes)` (a 20 MB cell must not become a 20 MB message).
+pub fn bounded(text: &str) -> String {
+    match text.char_indices().nth(MAX_ECHO_CHARS) {
+        None => text.to_string(),
+        Some((cut, _)) => format!("{}… ({} more bytes)", &text[..cut], text.len() - cut),
+    }
+}
+
 pub(crate) fn new_raw(
     path: &Path,
     data: ndarray::Array2<f64>,
@@ -148,7 +160,7 @@ impl IoError {
             field: field.into(),
             offset,
             expected: expected.into(),
-            found: found.into(),
+            found: bounded(&found.into()),
         }
     }
 

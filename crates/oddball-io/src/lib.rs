@@ -66,13 +66,13 @@ pub use bci2000::{
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
 pub use easy::{
     read_easy, read_easy_with, write_easy, EasyInfo, EasyInfoFile, EasyLayout, EasyOptions,
-    EasySfreqSource, EasyWriteOptions, EasyWriteSummary,
+    EasySfreqSource, EasyWriteOptions, EasyWriteSummary, InfoIndex,
 };
 pub use edf::{
     read_edf, read_edf_with, write_edf_plus, write_edf_plus_with, Annotation, EdfHeader, EdfInfo,
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
 };
-pub use error::{IoError, StateProblem};
+pub use error::{bounded, IoError, StateProblem, MAX_ECHO_CHARS};
 pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
@@ -80,6 +80,7 @@ pub use mat::{
 };
 pub use read_options::{read_with, ReadOptions};
 pub use speller::{CodeOrder, Speller, TextLabelError};
+pub use writing::{write_atomic, AtomicFile};
 pub use xdf::{
     parse_xdf, parse_xdf_file, parse_xdf_with, read_xdf, read_xdf_file, read_xdf_with, write_xdf,
     XdfFile, XdfFormat, XdfInfo, XdfMarker, XdfOptions, XdfStream, XdfStreamData, XdfStreamInfo,

@@ -1,8 +1,14 @@
 //! What the writers share: a temporary file renamed into place (a failure never leaves a
-//! half-written file under the final name; the `tempfile` crate's), and the check that every
+//! half-written file under the final name, and an old file under that name stays whole until
+//! the new one is complete and synced; the `tempfile` crate's), and the check that every
 //! sample can be stored.
+//!
+//! [`write_atomic`] and [`AtomicFile`] are the one way every output of oddball is written
+//! (models, JSON, CSV, pictures, recordings' final files): the recording writers here, the
+//! binary's reports and `oddball-plot`'s pictures all go through them.
 
 use std::fs::File;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use oddball_signal::Raw;
@@ -39,7 +45,13 @@ impl TempFile {
         };
         let mut builder = tempfile::Builder::new();
         let prefix = format!(".{}.", name.to_string_lossy());
-        builder.prefix(&prefix).suffix(".tmp");
+        // The target's extension last, so writers that pick a format by extension (plotters'
+        // PNG and SVG backends) write the temporary file in the target's format.
+        let suffix = match target.extension() {
+            Some(ext) => format!(".tmp.{}", ext.to_string_lossy()),
+            None => ".tmp".to_string(),
+        };
+        builder.prefix(&prefix).suffix(&suffix);
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
@@ -64,8 +76,102 @@ impl TempFile {
             path: target.to_path_buf(),
             action: "rename",
             source: e.error,
+        })?;
+        sync_dir(target);
+        Ok(())
+    }
+}
+
+/// A file being written under a temporary name beside `target` (same directory, same
+/// extension); [`AtomicFile::commit`] syncs it to disk and renames it to `target`. Dropped
+/// without a commit (an error on the way), the temporary file is removed and whatever was at
+/// `target` before is untouched.
+#[derive(Debug)]
+pub struct AtomicFile {
+    temp: TempFile,
+    file: File,
+    target: PathBuf,
+}
+
+impl AtomicFile {
+    /// Creates the temporary file beside `target`.
+    pub fn create(target: impl AsRef<Path>) -> Result<Self, IoError> {
+        let target = target.as_ref();
+        let (temp, file) = TempFile::create(target)?;
+        Ok(Self {
+            temp,
+            file,
+            target: target.to_path_buf(),
         })
     }
+
+    /// The temporary file's path (for writers that open the file themselves by name; what they
+    /// write there is what [`AtomicFile::commit`] syncs and renames).
+    pub fn temp_path(&self) -> &Path {
+        &self.temp.path
+    }
+
+    /// The path the file will have once committed.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// The open temporary file.
+    pub fn file(&mut self) -> &mut File {
+        &mut self.file
+    }
+
+    /// Syncs the temporary file and renames it to the target.
+    pub fn commit(self) -> Result<(), IoError> {
+        self.file.sync_all().map_err(|source| IoError::Io {
+            path: self.temp.path.clone(),
+            action: "write",
+            source,
+        })?;
+        drop(self.file);
+        self.temp.persist(&self.target)
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.file.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+/// Writes `bytes` to `path` through an [`AtomicFile`]: either the whole new content is at
+/// `path` (synced) or, on any error, the old file is.
+pub fn write_atomic(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<(), IoError> {
+    let path = path.as_ref();
+    let mut f = AtomicFile::create(path)?;
+    f.file()
+        .write_all(bytes.as_ref())
+        .map_err(|source| IoError::Io {
+            path: f.temp_path().to_path_buf(),
+            action: "write",
+            source,
+        })?;
+    f.commit()
+}
+
+/// Makes a rename inside `target`'s directory durable (best effort: not every file system lets
+/// a directory be opened and synced).
+fn sync_dir(target: &Path) {
+    #[cfg(unix)]
+    {
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = target;
 }
 
 /// Checks that every sample of `raw` survives a writer whose stored-and-read-back value is

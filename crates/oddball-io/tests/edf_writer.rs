@@ -238,7 +238,7 @@ fn refusals() {
         matches!(
             e,
             IoError::Io {
-                action: "write",
+                action: "create",
                 ..
             }
         ),

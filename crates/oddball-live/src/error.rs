@@ -35,6 +35,9 @@ pub enum LiveError {
     Session(#[from] oddball_session::SessionError),
     #[error(transparent)]
     Io(#[from] oddball_io::IoError),
+    /// SIGINT or SIGTERM asked the session to stop ([`crate::stop`]).
+    #[error("stopped on request (SIGINT or SIGTERM)")]
+    Stopped,
 }
 
 /// A live source's error reaches the session engine as its typed cause

@@ -46,5 +46,6 @@ pub mod pilot;
 pub mod playback;
 pub mod record;
 pub mod source;
+pub mod stop;
 
 pub use error::LiveError;

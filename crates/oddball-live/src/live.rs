@@ -163,6 +163,17 @@ pub struct FlashTiming {
     pub undrawn: usize,
     /// Stamps that came after their flash had been declared undrawn.
     pub late_stamps: usize,
+    /// Stamps refused as implausible ([`plausible_stamp`]): their flash counts as undrawn.
+    pub refused_stamps: usize,
+}
+
+/// Whether a page's stamp `on_ms` for a flash scheduled at `at_ms` (both session-clock ms) is
+/// plausible: within [`UNDRAWN_AFTER_MS`] either side of the schedule. A page draws a flash at
+/// the frame nearest its time; a stamp far off it (a clock gone wrong, a hostile client: `0`,
+/// `1e15`) would move the flash's epoch before the buffered EEG or into a future that never
+/// comes. One home for the rule: every stamp passes here before it reaches the engine.
+pub fn plausible_stamp(at_ms: f64, on_ms: f64) -> bool {
+    (on_ms - at_ms).abs() <= UNDRAWN_AFTER_MS
 }
 
 /// Summary statistics of a list of numbers.
@@ -207,12 +218,13 @@ impl FlashTiming {
     pub fn report(&self) -> String {
         let s = |x: &[f64]| Summary::of(x).map_or("–".to_string(), |s| s.to_string());
         format!(
-            "flash on-time {}\nonset − schedule {}\nstamp delay {}\nundrawn {}, late stamps {}",
+            "flash on-time {}\nonset − schedule {}\nstamp delay {}\nundrawn {}, late stamps {}, refused stamps {}",
             s(&self.on_ms),
             s(&self.onset_error_ms),
             s(&self.report_delay_ms),
             self.undrawn,
-            self.late_stamps
+            self.late_stamps,
+            self.refused_stamps
         )
     }
 }
@@ -376,6 +388,16 @@ impl<S: EegSource> LiveSubject<S> {
                         continue;
                     };
                     let a = self.announced.remove(k);
+                    if !plausible_stamp(a.at_ms, on_ms) {
+                        self.timing.refused_stamps += 1;
+                        self.timing.undrawn += 1;
+                        self.drawn.push(Drawn {
+                            planned: a.planned,
+                            code: a.code,
+                            onset: None,
+                        });
+                        continue;
+                    }
                     self.lit.push((id, on_ms));
                     self.timing.onset_error_ms.push(on_ms - a.at_ms);
                     self.timing.report_delay_ms.push(received_ms - on_ms);
@@ -435,6 +457,9 @@ impl<S: EegSource> EegStream for LiveSubject<S> {
         self.position
     }
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        if crate::stop::requested() {
+            return Err(LiveError::Stopped.into());
+        }
         self.source.wait(n)?;
         self.collect_stamps()?;
         let data = self.source.take(n)?;
@@ -585,4 +610,22 @@ impl<S: EegSource> Observer for LiveSubject<S> {
 /// Waits for a page for at most `timeout`, printing nothing: `true` when one is connected.
 pub fn wait_for_page(panel: &PanelServer, timeout: Duration) -> bool {
     panel.wait_for_page(timeout)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue #19, defects 1 and 2: the stamps `on_ms: 0` and `1e15` are refused; a frame
+    /// or two off the schedule is not.
+    #[test]
+    fn implausible_stamps_are_refused() {
+        let at = 12_345.0;
+        for on in [at, at - 16.7, at + 33.4, at + UNDRAWN_AFTER_MS] {
+            assert!(plausible_stamp(at, on), "{on}");
+        }
+        for on in [0.0, 1e15, -1e15, at + UNDRAWN_AFTER_MS + 1.0, f64::NAN] {
+            assert!(!plausible_stamp(at, on), "{on}");
+        }
+    }
 }

@@ -7,7 +7,10 @@
 //! the panel, so the simulator listens on a second, "panel" port for lines
 //! `F <onset> <code> <attended>` (a flash at that sample) and `T <sample>` (the panel's clock:
 //! the simulator renders no further than that); [`NicSource::with_panel_port`] speaks to it.
-//! With a real amplifier that port does not exist.
+//! With a real amplifier that port does not exist: [`NicSource::with_panel_port_if_any`] reads
+//! the stream without it. A panel port that goes away (the simulator stopped) is dropped and
+//! sought again after the data stream reconnects: the data stream's own fate (reconnected, or
+//! [`LiveError::Reconnect`] after its attempts) is what ends a session, never the panel port.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -60,6 +63,8 @@ pub struct NicSource {
     last_timestamp_ms: Option<i64>,
     /// The simulated amplifier's panel port: flashes and the panel's clock go there.
     panel: Option<TcpStream>,
+    /// Where the panel port was found (sought again after a reconnection).
+    panel_addr: Option<SocketAddr>,
     /// Samples taken so far.
     position: u64,
     pacer: Pacer,
@@ -93,7 +98,6 @@ impl NicSource {
             });
         }
         let stream = connect_with_retries(addr, &reconnect)?;
-        stream.set_read_timeout(reconnect.stall_timeout).ok();
         Ok(Self {
             addr,
             stream,
@@ -105,6 +109,7 @@ impl NicSource {
             ready: Default::default(),
             last_timestamp_ms: None,
             panel: None,
+            panel_addr: None,
             position: 0,
             pacer: Pacer::new(clock, sfreq, false),
             lost_samples: 0,
@@ -122,20 +127,37 @@ impl NicSource {
         })?;
         s.set_nodelay(true).ok();
         self.panel = Some(s);
+        self.panel_addr = Some(addr);
         Ok(self)
+    }
+
+    /// [`NicSource::with_panel_port`] when something listens at `addr` (the simulator), else
+    /// the stream alone (a real amplifier has no panel port).
+    pub fn with_panel_port_if_any(mut self, addr: SocketAddr) -> Self {
+        if let Ok(s) = TcpStream::connect_timeout(&addr, Duration::from_millis(500)) {
+            s.set_nodelay(true).ok();
+            self.panel = Some(s);
+            self.panel_addr = Some(addr);
+        }
+        self
+    }
+
+    /// Whether flashes are told to a simulator's panel port.
+    pub fn has_panel_port(&self) -> bool {
+        self.panel.is_some()
     }
 
     pub fn format(&self) -> NicFormat {
         self.format
     }
 
+    /// Tells the simulator's panel port `line`; a port that went away is dropped (the data
+    /// stream says whether the amplifier is gone).
     fn tell_panel(&mut self, line: String) -> Result<(), LiveError> {
         if let Some(p) = &mut self.panel {
-            p.write_all(line.as_bytes())
-                .map_err(|e| LiveError::Connect {
-                    addr: "panel port".into(),
-                    reason: e.to_string(),
-                })?;
+            if p.write_all(line.as_bytes()).is_err() {
+                self.panel = None;
+            }
         }
         Ok(())
     }
@@ -197,6 +219,10 @@ impl NicSource {
                             }
                         })?;
                     self.reconnects += 1;
+                    // A restarted simulator listens on its panel port again.
+                    if let Some(addr) = self.panel_addr {
+                        self.panel = connect_with_retries(addr, &self.reconnect).ok();
+                    }
                 }
             }
         }
@@ -257,6 +283,9 @@ fn connect_with_retries(addr: SocketAddr, r: &Reconnect) -> Result<TcpStream, Li
         match TcpStream::connect_timeout(&addr, Duration::from_secs(2)) {
             Ok(s) => {
                 s.set_nodelay(true).ok();
+                // Every connection, the first and each after a drop, stops waiting after the
+                // stall timeout (a reconnected stream that went silent waited for ever).
+                s.set_read_timeout(r.stall_timeout).ok();
                 return Ok(s);
             }
             Err(e) => last = Some(e),

@@ -56,6 +56,8 @@ pub struct OnlineSummary {
     pub flash_onset_error: Option<TimingRow>,
     pub stamp_delay: Option<TimingRow>,
     pub undrawn_flashes: usize,
+    /// Page stamps refused as implausible (`live::plausible_stamp`); their flashes are undrawn.
+    pub refused_stamps: usize,
     pub decision_latency: Option<TimingRow>,
     pub recording: String,
     /// `--source replay:…`: how many flashes fell on the file's flashes.
@@ -101,6 +103,7 @@ impl OnlineSummary {
             flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
             stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
             undrawn_flashes: timing.undrawn,
+            refused_stamps: timing.refused_stamps,
             decision_latency: Summary::of(latency_ms).map(Into::into),
             recording: recording.display().to_string(),
             replay,
@@ -182,11 +185,20 @@ pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String>
     Some(line)
 }
 
-/// The replayed file's end: what stops a session cleanly.
+/// What stops a session cleanly, keeping what it has (the recording closed, the decisions so
+/// far summarised): the replayed file's end, a stop request (SIGINT/SIGTERM), an amplifier
+/// that dropped out and did not come back within its reconnection attempts, a stream lost or
+/// stalled.
 pub fn is_recording_end(e: &SessionError) -> bool {
     matches!(
         LiveError::from_session(e),
-        Some(LiveError::RecordingEnded { .. })
+        Some(
+            LiveError::RecordingEnded { .. }
+                | LiveError::Stopped
+                | LiveError::Reconnect { .. }
+                | LiveError::StreamLost { .. }
+                | LiveError::StreamStalled { .. }
+        )
     )
 }
 

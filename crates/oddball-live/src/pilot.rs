@@ -29,7 +29,15 @@ pub enum AnyPilot {
 impl Pilot for AnyPilot {
     fn decide(&mut self, intended: Command) -> Result<Option<Step>, SessionError> {
         match self {
-            AnyPilot::Live(s) => Pilot::decide(s, intended),
+            // A stop request or a source that ended: no more decisions (the run keeps what it
+            // has; the reason is kept in `crate::stop::reason`).
+            AnyPilot::Live(s) => match Pilot::decide(s, intended) {
+                Err(e) if crate::online::is_recording_end(&e) => {
+                    crate::stop::note(crate::online::stop_reason(&e));
+                    Ok(None)
+                }
+                r => r,
+            },
             AnyPilot::Replay(r) => r.decide(intended),
         }
     }
@@ -41,7 +49,13 @@ impl Pilot for AnyPilot {
     }
     fn wait(&mut self, seconds: f64) -> Result<(), SessionError> {
         match self {
-            AnyPilot::Live(s) => s.wait(seconds),
+            AnyPilot::Live(s) => match s.wait(seconds) {
+                Err(e) if crate::online::is_recording_end(&e) => {
+                    crate::stop::note(crate::online::stop_reason(&e));
+                    Ok(())
+                }
+                r => r,
+            },
             AnyPilot::Replay(r) => r.wait(seconds),
         }
     }

@@ -100,6 +100,28 @@ pub struct OpenOptions {
     pub markers: String,
 }
 
+/// The most a simulated amplifier's samples may lag, ms (a latency beyond it, say 10¹² ms, kept
+/// a paced session waiting for ever).
+pub const MAX_SIM_LATENCY_MS: f64 = 10_000.0;
+
+impl OpenOptions {
+    /// The options' own rules, checked before anything is opened.
+    pub fn check(&self) -> Result<(), LiveError> {
+        if !(0.0..=MAX_SIM_LATENCY_MS).contains(&self.sim_latency_ms) {
+            return Err(LiveError::InvalidParameter {
+                name: "sim_latency_ms",
+                value: self.sim_latency_ms.to_string(),
+                reason: format!("a latency from 0 to {MAX_SIM_LATENCY_MS} ms"),
+            });
+        }
+        oddball_signal::check_sfreq(self.nic_sfreq).map_err(|e| LiveError::InvalidParameter {
+            name: "nic_sfreq",
+            value: self.nic_sfreq.to_string(),
+            reason: e.to_string(),
+        })
+    }
+}
+
 /// An open live source.
 #[derive(Debug)]
 pub enum AnySource {
@@ -118,6 +140,7 @@ impl SourceSpec {
         opts: OpenOptions,
         clock: Clock,
     ) -> Result<(AnySource, Option<Box<dyn MarkerSink>>), LiveError> {
+        opts.check()?;
         match self {
             Self::Sim => {
                 let source = if opts.paced {
@@ -137,15 +160,15 @@ impl SourceSpec {
                         .collect()
                 };
                 let panel = SocketAddr::new(data.ip(), data.port().wrapping_add(1));
-                let source = NicSource::connect(
-                    data,
-                    opts.nic,
-                    opts.nic_sfreq,
-                    ch_names,
-                    Reconnect::default(),
-                    clock,
-                )?
-                .with_panel_port(panel)?;
+                // An amplifier that drops out has ten seconds to come back.
+                let reconnect = Reconnect {
+                    attempts: 20,
+                    delay: std::time::Duration::from_millis(500),
+                    ..Reconnect::default()
+                };
+                let source =
+                    NicSource::connect(data, opts.nic, opts.nic_sfreq, ch_names, reconnect, clock)?
+                        .with_panel_port_if_any(panel);
                 Ok((AnySource::Nic(source), None))
             }
             Self::Replay(path) => {

@@ -255,3 +255,109 @@ fn a_two_second_pause_waits_or_stops_cleanly() {
         server.join().unwrap();
     }
 }
+
+fn samples(format: &NicFormat, from: i32, n: i32) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for k in from..from + n {
+        encode(
+            format,
+            &NicSample {
+                nv: vec![k * 10; 8],
+                trigger: Some(0),
+                timestamp_ms: Some(2 * i64::from(k)),
+            },
+            &mut bytes,
+        );
+    }
+    bytes
+}
+
+/// Issue #19, defect 6: `--source nic:` always needed the simulator's extra panel port, so a
+/// real NIC (which has none) could not be read at all. Now the port is used when it is there.
+#[test]
+fn a_real_amplifier_without_a_panel_port_is_read() {
+    use oddball_live::source::{OpenOptions, SourceSpec};
+    use std::io::Write;
+    // A data port whose port + 1 nobody listens on (bound and released to find one).
+    let (data, addr) = loop {
+        let d = TcpListener::bind("127.0.0.1:0").unwrap();
+        let a = d.local_addr().unwrap();
+        let next = std::net::SocketAddr::new(a.ip(), a.port().wrapping_add(1));
+        if TcpListener::bind(next).is_ok() {
+            break (d, a);
+        }
+    };
+    let format = NicFormat::starstim(NicMode::Binary);
+    let server = thread::spawn(move || {
+        let (mut c, _) = data.accept().unwrap();
+        c.write_all(&samples(&format, 0, 600)).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    });
+    let opts = OpenOptions {
+        subject: SubjectParams::preset(SubjectPreset::Typical)
+            .build()
+            .unwrap(),
+        paced: false,
+        sim_latency_ms: 0.0,
+        nic: format,
+        nic_sfreq: 500.0,
+        markers: String::new(),
+    };
+    let spec: SourceSpec = format!("nic:{addr}").parse().unwrap();
+    let (source, _) = spec
+        .open(opts, Clock::new())
+        .unwrap_or_else(|e| panic!("a NIC without a panel port: {e}"));
+    let oddball_live::source::AnySource::Nic(mut nic) = source else {
+        panic!("not a NIC source")
+    };
+    assert!(!nic.has_panel_port());
+    use oddball_live::live::EegSource;
+    nic.wait(500).unwrap();
+    let d = nic.take(500).unwrap();
+    assert_eq!(d[[0, 499]], 4.99 * 1000.0 / 1000.0 * 1.0);
+    server.join().unwrap();
+}
+
+/// Issue #19, defect 6: an amplifier that dropped out ended the session with "cannot connect
+/// to panel port: Broken pipe", and restarting it did not help. Now the stream reconnects (and
+/// finds the restarted simulator's panel port again); the panel port's loss is not an error.
+#[test]
+fn an_amplifier_that_restarts_is_reconnected_with_its_panel_port() {
+    use oddball_live::live::EegSource;
+    use std::io::Write;
+    let (data, panel) = listeners();
+    let (data_addr, panel_addr) = (data.local_addr().unwrap(), panel.local_addr().unwrap());
+    let format = NicFormat::starstim(NicMode::Binary);
+    let server = thread::spawn(move || {
+        // First run: 300 samples, then the amplifier (and its panel port) goes away.
+        let (p1, _) = panel.accept().unwrap();
+        let (mut c, _) = data.accept().unwrap();
+        c.write_all(&samples(&format, 0, 300)).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        drop((c, p1));
+        // Restarted 300 ms later.
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let (mut c, _) = data.accept().unwrap();
+        let (_p2, _) = panel.accept().unwrap();
+        c.write_all(&samples(&format, 300, 300)).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+    });
+    let patient = Reconnect {
+        attempts: 20,
+        delay: std::time::Duration::from_millis(50),
+        ..Reconnect::default()
+    };
+    let mut src = NicSource::connect(data_addr, format, 500.0, names(), patient, Clock::new())
+        .unwrap()
+        .with_panel_port(panel_addr)
+        .unwrap();
+    for _ in 0..6 {
+        src.wait(100)
+            .unwrap_or_else(|e| panic!("the restart was not survived: {e}"));
+        src.take(100).unwrap();
+        src.saw(0, 1, false).unwrap();
+    }
+    assert_eq!(src.reconnects, 1);
+    assert!(src.has_panel_port(), "the restarted panel port was found");
+    server.join().unwrap();
+}

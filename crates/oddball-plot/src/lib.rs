@@ -109,9 +109,13 @@ macro_rules! with_backend {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        match $crate::PlotFormat::from_path(path)? {
+        let format = $crate::PlotFormat::from_path(path)?;
+        // Drawn into a temporary file beside `path`, renamed into place when whole.
+        let file = oddball_io::AtomicFile::create(path).map_err(|e| write(&e))?;
+        let temp = file.temp_path().to_path_buf();
+        match format {
             $crate::PlotFormat::Png => {
-                let $root = BitMapBackend::new(path, $size).into_drawing_area();
+                let $root = BitMapBackend::new(&temp, $size).into_drawing_area();
                 $root
                     .fill(&WHITE)
                     .map_err(|e| $crate::PlotError::draw(path, e))?;
@@ -120,7 +124,7 @@ macro_rules! with_backend {
                 $root.present().map_err(|e| write(&e))?;
             }
             $crate::PlotFormat::Svg => {
-                let $root = SVGBackend::new(path, $size).into_drawing_area();
+                let $root = SVGBackend::new(&temp, $size).into_drawing_area();
                 $root
                     .fill(&WHITE)
                     .map_err(|e| $crate::PlotError::draw(path, e))?;
@@ -129,6 +133,7 @@ macro_rules! with_backend {
                 $root.present().map_err(|e| write(&e))?;
             }
         }
+        file.commit().map_err(|e| write(&e))?;
         Ok::<(), $crate::PlotError>(())
     }};
 }

@@ -35,6 +35,14 @@ use crate::paradigm::FourBulbParams;
 pub use crate::roles::{Drawn, EegStream, Observer, Presenter, Subject};
 use crate::SessionError;
 
+/// A flash's measured onset (a page's stamp) further than this from its planned onset, seconds,
+/// is refused: no display draws a frame a second off its schedule, and the epoch of an onset far
+/// in the future would keep its trial waiting for ever.
+pub const MAX_ONSET_SHIFT_S: f64 = 1.0;
+
+/// The most calibration decisions per bulb (a thousand is hours of flashing).
+pub const MAX_CALIBRATION_PER_BULB: usize = 1000;
+
 /// Settings of a session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SessionParams {
@@ -88,6 +96,13 @@ impl SessionParams {
         }
         if self.cv_folds < 2 {
             return bad("cv_folds", self.cv_folds, "at least 2 folds");
+        }
+        if self.calibration_per_bulb > MAX_CALIBRATION_PER_BULB {
+            return bad(
+                "calibration_per_bulb",
+                self.calibration_per_bulb,
+                &format!("at most {MAX_CALIBRATION_PER_BULB} calibration decisions per bulb"),
+            );
         }
         if self.calibration_per_bulb < self.cv_folds.div_ceil(4).max(1) {
             return bad(
@@ -236,6 +251,8 @@ pub struct Session<S: Subject> {
     arm: Option<ArmSim>,
     /// The arm runs from the first online decision on (it holds still during calibration).
     arm_running: bool,
+    /// Drawn onsets refused (see [`Session::refused_onsets`]).
+    refused_onsets: u64,
 }
 
 impl<S: Subject> Session<S> {
@@ -263,7 +280,16 @@ impl<S: Subject> Session<S> {
             model: None,
             arm,
             arm_running: false,
+            refused_onsets: 0,
         })
+    }
+
+    /// Measured onsets refused: a flash reported drawn before the oldest buffered sample (its
+    /// epoch could no longer be cut) or more than [`MAX_ONSET_SHIFT_S`] from its planned onset
+    /// (its epoch would never complete). The flash loses its epoch like an undrawn one; the
+    /// session goes on.
+    pub fn refused_onsets(&self) -> u64 {
+        self.refused_onsets
     }
 
     pub fn params(&self) -> &SessionParams {
@@ -453,6 +479,11 @@ impl<S: Subject> Session<S> {
         Ok(())
     }
 
+    /// Ends the session and hands back its subject (a live one closes its recording).
+    pub fn into_subject(self) -> S {
+        self.subject
+    }
+
     /// Ends the session, returning its log, the model and the arm.
     pub fn finish(self) -> (SessionLog, Option<Model>, Option<ArmSim>) {
         let n_ch = self.raw.len();
@@ -514,7 +545,8 @@ impl<S: Subject> Session<S> {
         Ok(())
     }
 
-    /// Moves a flash's marker to its measured onset, or voids its epoch when it was never drawn.
+    /// Moves a flash's marker to its measured onset, or voids its epoch when it was never drawn
+    /// or its measured onset is refused (see [`Session::refused_onsets`]).
     fn retime(&mut self, d: Drawn) -> Result<(), SessionError> {
         let Some(k) = self
             .flashes
@@ -523,12 +555,25 @@ impl<S: Subject> Session<S> {
         else {
             return Ok(());
         };
+        let max_shift = (MAX_ONSET_SHIFT_S * self.subject.sfreq()).ceil() as u64;
         match d.onset {
-            Some(onset) if onset != d.planned => {
-                if self.epocher.retime(k, onset)? {
-                    self.flashes[k].onset = onset;
+            Some(onset) if onset.abs_diff(d.planned) > max_shift => {
+                self.refused_onsets += 1;
+                if self.epocher.cancel(k) {
+                    self.flashes[k].accepted = Some(false);
                 }
             }
+            Some(onset) if onset != d.planned => match self.epocher.retime(k, onset) {
+                Ok(true) => self.flashes[k].onset = onset,
+                Ok(false) => {}
+                Err(SessionError::MarkerTooLate { .. }) => {
+                    self.refused_onsets += 1;
+                    if self.epocher.cancel(k) {
+                        self.flashes[k].accepted = Some(false);
+                    }
+                }
+                Err(e) => return Err(e),
+            },
             Some(_) => {}
             None => {
                 if self.epocher.cancel(k) {

@@ -65,6 +65,21 @@ impl Default for FourBulbParams {
     }
 }
 
+/// Every command has exactly one bulb (four bulbs all meaning "up" steer nowhere): the one
+/// rule, for settings and for session files read back.
+pub fn check_bulbs(bulbs: &[Command; 4]) -> Result<(), SessionError> {
+    for c in Command::ALL {
+        if bulbs.iter().filter(|&&b| b == c).count() != 1 {
+            return Err(SessionError::InvalidParameter {
+                name: "bulbs",
+                value: format!("{bulbs:?}"),
+                reason: format!("every command needs exactly one bulb; {c} has not"),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl FourBulbParams {
     /// The paper's timing: bulbs up, right, down, left; 100 ms on, 150 ms gap, rounds of 1 s, 5
     /// rounds, 5 s countdown.
@@ -107,16 +122,7 @@ impl FourBulbParams {
         if self.n_rounds == 0 {
             return Err(bad("n_rounds", 0.0, "at least one round"));
         }
-        for c in Command::ALL {
-            if self.bulbs.iter().filter(|&&b| b == c).count() != 1 {
-                return Err(SessionError::InvalidParameter {
-                    name: "bulbs",
-                    value: format!("{:?}", self.bulbs),
-                    reason: format!("every command needs exactly one bulb; {c} has not"),
-                });
-            }
-        }
-        Ok(())
+        check_bulbs(&self.bulbs)
     }
 
     /// The stimulus code (1..=4) of a command's bulb.

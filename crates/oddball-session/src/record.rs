@@ -164,6 +164,7 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
     let bulbs: [Command; 4] = parsed
         .try_into()
         .map_err(|_| missing("four commands in BulbCommands"))?;
+    crate::paradigm::check_bulbs(&bulbs)?;
     let state = |name: &str| {
         info.states
             .get(name)
@@ -186,9 +187,8 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
         while t < trial_no.len() && trial_no[t] == no {
             t += 1;
         }
-        let flashes = events
+        let flashes = events_in(events, start as u64, t as u64)
             .iter()
-            .filter(|e| (start..t).contains(&e.onset))
             .map(|e| SavedFlash {
                 onset: e.onset as u64,
                 code: e.code,
@@ -209,7 +209,47 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
             flashes,
         });
     }
+    check_trials(&path, &trials, rec.raw.n_times())?;
     Ok(SavedSession { bulbs, trials })
+}
+
+/// The events with onsets in `start..end` (events are sorted by onset: a binary search, so
+/// reading a session is linear in its trials and events).
+fn events_in(events: &[Event], start: u64, end: u64) -> &[Event] {
+    let a = events.partition_point(|e| (e.onset as u64) < start);
+    let b = events.partition_point(|e| (e.onset as u64) < end);
+    &events[a..b.max(a)]
+}
+
+/// Trials read back must make sense: inside the recording, in order without overlap, with
+/// intended and decided codes of the four bulbs (0: none).
+fn check_trials(path: &str, trials: &[SavedTrial], n_times: usize) -> Result<(), SessionError> {
+    let mut previous_end = 0;
+    for t in trials {
+        let bad = |why: String| SessionError::NotASession {
+            path: path.to_string(),
+            missing: format!("a valid trial {} ({why})", t.number),
+        };
+        if t.start >= t.end || t.end > n_times as u64 {
+            return Err(bad(format!(
+                "samples {}..{} of a recording of {n_times}",
+                t.start, t.end
+            )));
+        }
+        if t.start < previous_end {
+            return Err(bad(format!(
+                "starts at sample {}, before the trial before it ends ({previous_end})",
+                t.start
+            )));
+        }
+        for (what, code) in [("intended", t.intended), ("decided", t.recorded)] {
+            if let Some(c) = code.filter(|c| !(1..=4).contains(c)) {
+                return Err(bad(format!("{what} code {c}: the bulbs are 1 to 4")));
+            }
+        }
+        previous_end = t.end;
+    }
+    Ok(())
 }
 
 /// A decision recomputed from the file.
@@ -396,31 +436,34 @@ fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
     let bulbs: [Command; 4] = parsed
         .try_into()
         .map_err(|_| missing("four commands in `Oddball bulb commands`"))?;
+    crate::paradigm::check_bulbs(&bulbs)?;
     let events = rec.raw.events().as_slice();
+    let index = info.info_index();
     let mut trials = Vec::new();
     for number in 1.. {
-        let Some(v) = info.info_value(&format!("Oddball trial {number}")) else {
+        let Some(v) = index.get(&format!("Oddball trial {number}")) else {
             break;
         };
         let f: Vec<&str> = v.split_whitespace().collect();
         let bad = || {
             missing(&format!(
-                "a valid `Oddball trial {number}` line (got {v:?})"
+                "a valid `Oddball trial {number}` line (got {:?})",
+                oddball_io::bounded(v)
             ))
         };
         if f.len() != 5 {
             return Err(bad());
         }
         let num = |k: usize| f[k].parse::<u64>().map_err(|_| bad());
-        let (start, end, intended, decided) = (num(1)?, num(2)?, num(3)?, num(4)?);
+        let code = |k: usize| f[k].parse::<u32>().map_err(|_| bad());
+        let (start, end, intended, decided) = (num(1)?, num(2)?, code(3)?, code(4)?);
         let phase = match f[0] {
             "calibration" => Phase::Calibration,
             "online" => Phase::Online,
             _ => return Err(bad()),
         };
-        let flashes = events
+        let flashes = events_in(events, start, end)
             .iter()
-            .filter(|e| (start..end).contains(&(e.onset as u64)))
             .map(|e| SavedFlash {
                 onset: e.onset as u64,
                 code: if e.code > EASY_ATTENDED_OFFSET {
@@ -436,13 +479,14 @@ fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
             phase,
             start,
             end,
-            intended: (intended != 0).then_some(intended as u32),
-            recorded: (decided != 0).then_some(decided as u32),
+            intended: (intended != 0).then_some(intended),
+            recorded: (decided != 0).then_some(decided),
             flashes,
         });
     }
     if trials.is_empty() {
         return Err(missing("`Oddball trial 1` in the .info"));
     }
+    check_trials(&path, &trials, rec.raw.n_times())?;
     Ok(SavedSession { bulbs, trials })
 }

@@ -244,6 +244,57 @@ pub struct TrackParams {
     pub settle_s: f64,
 }
 
+/// The most targets one tracking task places.
+pub const MAX_TARGETS: usize = 1000;
+
+impl TrackParams {
+    /// The settings' rules, checked before the task starts: a positive tolerance, at most
+    /// [`MAX_TARGETS`] targets, and every given target (snapped to the grid) on the board and in
+    /// the arm's reach (a target 100 m away kept the task steering for ever).
+    pub fn check(&self, arm: &ArmSim) -> Result<(), SessionError> {
+        let bad = |name: &'static str, value: String, reason: String| {
+            Err(SessionError::InvalidParameter {
+                name,
+                value,
+                reason,
+            })
+        };
+        if !(self.tolerance_m.is_finite() && self.tolerance_m > 0.0) {
+            return bad(
+                "tolerance_m",
+                self.tolerance_m.to_string(),
+                "a positive distance".into(),
+            );
+        }
+        if self.max_factor == 0 || self.max_factor > 100 {
+            return bad("max_factor", self.max_factor.to_string(), "1 to 100".into());
+        }
+        let n = self.targets.as_ref().map_or(self.n_targets, Vec::len);
+        if n > MAX_TARGETS {
+            return bad(
+                "targets",
+                n.to_string(),
+                format!("at most {MAX_TARGETS} targets"),
+            );
+        }
+        if let Some(given) = &self.targets {
+            for (p, snapped) in given.iter().zip(task_targets(arm, self)) {
+                if let Err(why) = arm
+                    .workspace()
+                    .check_point(arm.plant(), &snapped, arm.elbow())
+                {
+                    return bad(
+                        "target",
+                        format!("{},{}", p[0], p[1]),
+                        format!("the pen cannot get there: {why}"),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for TrackParams {
     fn default() -> Self {
         Self {
@@ -471,6 +522,7 @@ pub fn run_tracking<P: Pilot>(
     pilot: &mut P,
     params: &TrackParams,
 ) -> Result<TrackReport, SessionError> {
+    params.check(pilot.arm())?;
     let step = pilot.arm().settings().step_m;
     let targets = task_targets(pilot.arm(), params);
     let mut results = Vec::new();

@@ -124,3 +124,113 @@ fn a_broken_channel_is_flagged_its_epochs_rejected_and_the_arm_holds() {
         );
     }
 }
+
+/// Where a hostile page says flashes were drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stamp {
+    /// On schedule.
+    Honest,
+    /// At the session's first sample (`{"t":"on","on_ms":0}`): long before the buffer.
+    Stale,
+    /// Ages ahead (`on_ms: 1e15`).
+    FarFuture,
+}
+
+/// The simulated subject seen through a page that stamps every `every`-th flash `stamp`.
+struct Stamped {
+    sim: SimulatedSubject,
+    stamp: Stamp,
+    every: usize,
+    shown: usize,
+    drawn: Vec<oddball_session::roles::Drawn>,
+}
+
+impl Presenter for Stamped {
+    fn lead(&self) -> u64 {
+        // Announced ahead like a live panel, so measured onsets arrive before their epochs end.
+        (0.5 * self.sim.sfreq()) as u64
+    }
+    fn show(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), SessionError> {
+        self.shown += 1;
+        let measured = match self.stamp {
+            _ if self.shown % self.every != 0 => onset,
+            Stamp::Honest => onset,
+            Stamp::Stale => 0,
+            Stamp::FarFuture => onset + (1e15 / 1e3 * self.sim.sfreq()) as u64,
+        };
+        self.drawn.push(oddball_session::roles::Drawn {
+            planned: onset,
+            code,
+            onset: Some(measured),
+        });
+        self.sim.flash(onset, attended)
+    }
+    fn drawn(&mut self) -> Vec<oddball_session::roles::Drawn> {
+        // Reported once the stream has passed the flash's onset, as a page would.
+        let pos = self.sim.position();
+        let (now, later): (Vec<_>, Vec<_>) = self.drawn.drain(..).partition(|d| d.planned < pos);
+        self.drawn = later;
+        now
+    }
+}
+
+impl Observer for Stamped {}
+
+impl EegStream for Stamped {
+    fn sfreq(&self) -> f64 {
+        self.sim.sfreq()
+    }
+    fn ch_names(&self) -> &[String] {
+        self.sim.ch_names()
+    }
+    fn position(&self) -> u64 {
+        self.sim.position()
+    }
+    fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
+        Ok(self.sim.render(n))
+    }
+}
+
+/// Issue #19, defects 1 and 2: one stale stamp (`on_ms: 0`) ended the session with "marker at
+/// sample 0 arrived too late"; one far-future stamp (`on_ms: 1e15`) left its trial waiting for
+/// an epoch that never completes. Both are refused and counted; the session calibrates and
+/// decides on.
+#[test]
+fn stale_and_far_future_stamps_are_refused_and_counted_never_ending_the_session() {
+    for stamp in [Stamp::Honest, Stamp::Stale, Stamp::FarFuture] {
+        let sim = SubjectParams::preset(SubjectPreset::Easy)
+            .with_seed(5)
+            .build()
+            .unwrap();
+        let mut p = SessionParams::paper("lda");
+        p.calibration_per_bulb = 3;
+        p.seed = 5;
+        let subject = Stamped {
+            sim,
+            stamp,
+            every: 7,
+            shown: 0,
+            drawn: Vec::new(),
+        };
+        let mut s = Session::new(p, subject, None).unwrap();
+        s.calibrate()
+            .unwrap_or_else(|e| panic!("{stamp:?}: calibration ended: {e}"));
+        let t = s
+            .decide(Some(Command::Up))
+            .unwrap_or_else(|e| panic!("{stamp:?}: decision ended the session: {e}"));
+        assert!(t.posterior.iter().all(|p| p.is_finite()), "{stamp:?}");
+        let shown = s.subject().shown as u64;
+        match stamp {
+            Stamp::Honest => assert_eq!(s.refused_onsets(), 0),
+            _ => {
+                // Every hostile stamp that arrived before its epoch completed is refused.
+                assert!(
+                    s.refused_onsets() >= shown / 7 - 2,
+                    "{stamp:?}: {} of {shown}",
+                    s.refused_onsets()
+                );
+                assert!(s.refused_onsets() <= shown / 7, "{stamp:?}");
+            }
+        }
+    }
+}

@@ -179,9 +179,14 @@ impl EpochsParams {
             tmin: self.tmin,
             tmax: self.tmax,
         };
-        if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax) {
+        let reach = crate::MAX_WINDOW_S;
+        if !(self.tmin.is_finite() && self.tmax.is_finite() && self.tmin <= self.tmax)
+            || self.tmin.abs() > reach
+            || self.tmax.abs() > reach
+        {
             return Err(invalid());
         }
+        crate::check_sfreq(sfreq)?;
         let first = (self.tmin * sfreq).round() as i64;
         let last = (self.tmax * sfreq).round() as i64 - i64::from(self.end_exclusive);
         if last < first {
@@ -239,14 +244,33 @@ impl EpochsParams {
         let data = raw.data();
         let n_channels = raw.n_channels();
         let total = raw.n_times() as i64;
-        let mut kept = Vec::with_capacity(events.len());
-        let mut out: Vec<f64> = Vec::with_capacity(events.len() * n_channels * n_times);
+        // Sized by the data present: no epoch longer than the recording is ever allocated.
+        let fits = n_times <= raw.n_times();
+        let in_bounds = |ev: &Event| {
+            let start = ev.onset as i64 + first;
+            fits && start >= 0 && ev.onset as i64 + last < total
+        };
+        let n_fit = events.iter().filter(|e| in_bounds(e)).count();
+        // Epochs overlap when events come faster than the window; past MAX_EPOCH_OVERLAP
+        // times the recording (an event on every sample, say) they are refused instead of
+        // allocated: memory stays linear in the data.
+        let budget = (crate::MAX_EPOCH_OVERLAP * raw.n_times()).max(1 << 20);
+        if n_fit.saturating_mul(n_times) > budget {
+            return Err(SignalError::TooManyEpochs {
+                n_events: n_fit,
+                n_times,
+                recording: raw.n_times(),
+                max_overlap: crate::MAX_EPOCH_OVERLAP,
+            });
+        }
+        let mut kept = Vec::with_capacity(n_fit);
+        let mut out: Vec<f64> = Vec::with_capacity(n_fit * n_channels * n_times);
         let mut log = DropLog::default();
-        let mut epoch = Array2::<f64>::zeros((n_channels, n_times));
+        let mut epoch = Array2::<f64>::zeros(if fits { (n_channels, n_times) } else { (0, 0) });
         for (index, ev) in events.iter().enumerate() {
             let start = ev.onset as i64 + first;
             let end = ev.onset as i64 + last;
-            if start < 0 || end >= total {
+            if !fits || start < 0 || end >= total {
                 log.dropped.push(Dropped {
                     index,
                     event: ev.clone(),
@@ -358,6 +382,19 @@ pub enum DropReason {
     },
 }
 
+impl DropReason {
+    /// The kind of reason, as [`DropLog::counts`] names it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            DropReason::OutOfBounds { .. } => "out of bounds",
+            DropReason::NonFinite { .. } => "non-finite",
+            DropReason::Absolute { .. } => "absolute",
+            DropReason::PeakToPeak { .. } => "peak-to-peak",
+            DropReason::Flat { .. } => "flat",
+        }
+    }
+}
+
 impl fmt::Display for DropReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -422,16 +459,33 @@ impl DropLog {
     pub fn counts(&self) -> BTreeMap<&'static str, usize> {
         let mut m = BTreeMap::new();
         for d in &self.dropped {
-            let k = match d.reason {
-                DropReason::OutOfBounds { .. } => "out of bounds",
-                DropReason::NonFinite { .. } => "non-finite",
-                DropReason::Absolute { .. } => "absolute",
-                DropReason::PeakToPeak { .. } => "peak-to-peak",
-                DropReason::Flat { .. } => "flat",
-            };
-            *m.entry(k).or_insert(0) += 1;
+            *m.entry(d.reason.kind()).or_insert(0) += 1;
         }
         m
+    }
+
+    /// Why epochs were dropped, for people: each kind's count and its first case, e.g.
+    /// `240 non-finite (first: event 0 at sample 300: channel "Cz" is NaN or infinite …)`.
+    pub fn summary(&self) -> String {
+        let counts = self.counts();
+        counts
+            .iter()
+            .map(|(kind, n)| {
+                let first = self
+                    .dropped
+                    .iter()
+                    .find(|d| d.reason.kind() == *kind)
+                    .map(|d| {
+                        format!(
+                            " (first: event {} at sample {}: {})",
+                            d.index, d.event.onset, d.reason
+                        )
+                    })
+                    .unwrap_or_default();
+                format!("{n} {kind}{first}")
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

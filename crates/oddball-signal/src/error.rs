@@ -4,8 +4,21 @@
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SignalError {
-    #[error("sampling rate {sfreq} Hz is not a positive finite number")]
+    #[error("sampling rate {sfreq} Hz is outside the plausible {min}–{max} Hz", min = crate::SFREQ_MIN, max = crate::SFREQ_MAX)]
     InvalidSfreq { sfreq: f64 },
+    #[error("channels {first} and {second} are both named {name:?}: channel names must be unique")]
+    DuplicateChannel {
+        name: String,
+        first: usize,
+        second: usize,
+    },
+    #[error("{n_events} epochs of {n_times} samples would hold more than {max_overlap} times the recording's {recording} samples: events this dense (one on every sample?) are not stimulus onsets")]
+    TooManyEpochs {
+        n_events: usize,
+        n_times: usize,
+        recording: usize,
+        max_overlap: usize,
+    },
     #[error("{names} channel names for {n_channels} channels of data")]
     ChannelCountMismatch { names: usize, n_channels: usize },
     #[error("{events} events for {n_epochs} epochs")]
@@ -17,7 +30,7 @@ pub enum SignalError {
         name: String,
         available: Vec<String>,
     },
-    #[error("time window [{tmin}, {tmax}] s is empty, reversed or not finite")]
+    #[error("time window [{tmin}, {tmax}] s is empty, reversed, not finite or reaches further than {max} s from the onset", max = crate::MAX_WINDOW_S)]
     InvalidWindow { tmin: f64, tmax: f64 },
     #[error("band {l_freq:?}–{h_freq:?} Hz does not fit between 0 and the Nyquist frequency {nyquist} Hz")]
     InvalidBand {

@@ -158,9 +158,7 @@ impl SosFilter {
     /// Butterworth design, scipy's `butter(order, Wn, btype, fs=sfreq, output='sos')`.
     pub fn butter(order: usize, band: Band, sfreq: f64) -> Result<Self, SignalError> {
         check_order(order)?;
-        if !(sfreq.is_finite() && sfreq > 0.0) {
-            return Err(SignalError::InvalidSfreq { sfreq });
-        }
+        crate::check_sfreq(sfreq)?;
         let nyquist = sfreq / 2.0;
         let (l_freq, h_freq) = band.l_h();
         let bad = || SignalError::InvalidBand {

@@ -43,4 +43,7 @@ pub mod preprocess;
 mod types;
 
 pub use error::SignalError;
-pub use types::{Epochs, Event, Events, Raw};
+pub use types::{
+    check_sfreq, check_unique_names, Epochs, Event, Events, Raw, MAX_EPOCH_OVERLAP, MAX_WINDOW_S,
+    SFREQ_MAX, SFREQ_MIN,
+};

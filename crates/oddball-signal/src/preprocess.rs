@@ -57,8 +57,12 @@ pub struct Filtered {
 impl PreprocessParams {
     /// Band-passes `raw` (see [`Filtering`]), its non-finite samples held first.
     pub fn filter(&self, raw: &Raw) -> Result<Filtered, SignalError> {
+        self.filter_owned(raw.clone())
+    }
+
+    /// [`Self::filter`] in the recording's own memory (no copy of the samples).
+    pub fn filter_owned(&self, mut raw: Raw) -> Result<Filtered, SignalError> {
         let filter = self.band.design(raw.sfreq())?;
-        let mut raw = raw.clone();
         let mut hold = vec![0.0; raw.n_channels()];
         let non_finite = hold_non_finite(raw.data_mut(), &mut hold);
         match self.filtering {
@@ -79,6 +83,14 @@ impl PreprocessParams {
     /// The epochs of every event of `raw`, and those dropped with the reason.
     pub fn epochs(&self, raw: &Raw) -> Result<(Epochs, DropLog), SignalError> {
         self.epochs_at(raw, raw.events().as_slice())
+    }
+
+    /// [`Self::epochs`] of a recording no longer needed: filtered in place, so the peak memory
+    /// is the recording once plus its epochs.
+    pub fn epochs_owned(&self, raw: Raw) -> Result<(Epochs, DropLog), SignalError> {
+        self.epochs.validate(raw.sfreq())?;
+        let events = raw.events().as_slice().to_vec();
+        self.filter_owned(raw)?.cut(&self.epochs, &events)
     }
 
     /// The epochs of `events` (onsets on `raw`'s sample clock; they may reach past its end),

@@ -138,8 +138,41 @@ fn check_events(events: &Events, n_times: usize) -> Result<(), SignalError> {
     }
 }
 
-fn check_sfreq(sfreq: f64) -> Result<(), SignalError> {
-    if sfreq.is_finite() && sfreq > 0.0 {
+/// Channel names must be unique: channels are matched by name between recordings and between a
+/// model and its input, and two channels of one name cannot both be matched.
+pub fn check_unique_names(ch_names: &[String]) -> Result<(), SignalError> {
+    let mut seen: std::collections::HashMap<&str, usize> =
+        std::collections::HashMap::with_capacity(ch_names.len());
+    for (i, n) in ch_names.iter().enumerate() {
+        if let Some(&first) = seen.get(n.as_str()) {
+            return Err(SignalError::DuplicateChannel {
+                name: n.clone(),
+                first,
+                second: i,
+            });
+        }
+        seen.insert(n, i);
+    }
+    Ok(())
+}
+
+/// The lowest sampling rate accepted anywhere, Hz.
+pub const SFREQ_MIN: f64 = 0.1;
+/// The highest sampling rate accepted anywhere, Hz (EEG amplifiers sample at most tens of kHz;
+/// at 10⁹ Hz a window of a second is a gigabyte, at 10³⁰⁰ Hz the filter design breaks down).
+pub const SFREQ_MAX: f64 = 1e6;
+/// How many times over the epochs of one recording may hold its samples (overlapping windows:
+/// a P300 speller's flashes every 175 ms with 0.8 s epochs overlap about 5 times).
+pub const MAX_EPOCH_OVERLAP: usize = 20;
+/// The furthest an epoch window (`tmin`, `tmax`) may reach from its onset, seconds.
+pub const MAX_WINDOW_S: f64 = 100.0;
+
+/// The one rule for a sampling rate, wherever it enters (file headers, rates estimated from
+/// timestamps, saved models, command-line options): finite and within
+/// [`SFREQ_MIN`]..=[`SFREQ_MAX`] Hz. Checked before any filter is designed or any buffer sized by
+/// it is allocated.
+pub fn check_sfreq(sfreq: f64) -> Result<(), SignalError> {
+    if sfreq.is_finite() && (SFREQ_MIN..=SFREQ_MAX).contains(&sfreq) {
         Ok(())
     } else {
         Err(SignalError::InvalidSfreq { sfreq })
@@ -171,6 +204,7 @@ impl Raw {
                 n_channels: data.nrows(),
             });
         }
+        check_unique_names(&ch_names)?;
         check_events(&events, data.ncols())?;
         Ok(Self {
             data,

@@ -74,14 +74,16 @@ impl SourceArgs {
         subject: oddball_session::SimulatedSubject,
         paced: bool,
     ) -> Result<OpenOptions> {
-        Ok(OpenOptions {
+        let opts = OpenOptions {
             subject,
             paced,
             sim_latency_ms: self.sim_latency_ms,
             nic: self.nic.format()?,
             nic_sfreq: STARSTIM_SFREQ,
             markers: self.markers.clone(),
-        })
+        };
+        opts.check().context("checking --sim-latency-ms")?;
+        Ok(opts)
     }
 }
 
@@ -288,6 +290,9 @@ fn sibling_calibration(file: &Path) -> Result<PathBuf> {
     )
 }
 
+/// The longest --wait-page, seconds (a day).
+const MAX_WAIT_PAGE_S: f64 = 86_400.0;
+
 /// The stimulus panel in a browser: shared by `online` and `task`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PanelOptions {
@@ -309,6 +314,12 @@ impl PanelOptions {
         let Some(addr) = &self.serve else {
             return Ok(None);
         };
+        if !(self.wait_page.is_finite() && (0.0..=MAX_WAIT_PAGE_S).contains(&self.wait_page)) {
+            bail!(
+                "--wait-page {}: expected 0 to {MAX_WAIT_PAGE_S} seconds",
+                self.wait_page
+            );
+        }
         let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
             .context("starting the panel")?;
         println!("panel: http://{}/", panel.local_addr());

@@ -95,7 +95,7 @@ fn expected_path(start: Vector2<f64>, report: &ProgramReport) -> Vec<Vector2<f64
 }
 
 fn write_csv(sim: &ArmSim, path: &Path) -> Result<()> {
-    let file = fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let file = oddball_io::AtomicFile::create(path)?;
     let mut w = std::io::BufWriter::new(file);
     writeln!(
         w,
@@ -119,8 +119,11 @@ fn write_csv(sim: &ArmSim, path: &Path) -> Result<()> {
             u8::from(s.saturated[0] || s.saturated[1]),
         )?;
     }
-    w.flush()
+    let file = w
+        .into_inner()
+        .map_err(|e| e.into_error())
         .with_context(|| format!("writing {}", path.display()))?;
+    file.commit()?;
     Ok(())
 }
 

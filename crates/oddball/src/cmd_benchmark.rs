@@ -131,12 +131,12 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let report = report?;
     print_report(&report);
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }
     if let Some(path) = &args.csv {
-        std::fs::write(path, benchmark::to_csv(&report.results))
+        oddball_io::write_atomic(path, benchmark::to_csv(&report.results))
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }

@@ -9,7 +9,7 @@ use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::tuning::TuningReport;
 
-use crate::load::{load_epochs, load_model, EventArgs};
+use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
 use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
 
 #[derive(Debug, clap::Args)]
@@ -229,7 +229,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
         trained.pipeline,
     );
     model.tuning = trained.tuning;
-    std::fs::write(&args.out, model.to_json())
+    oddball_io::write_atomic(&args.out, model.to_json())
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!(
         "trained {}{} on {} epochs ({} targets) from {} file(s) in {:.3} s; wrote {}",
@@ -257,7 +257,15 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
                 return evaluate_sessions(args, &model, path);
             }
         }
-        let test = load_epochs(&args.test, &model.preprocess, &args.events, &args.test_text)?;
+        // The data is matched to the model (channels by name, rate) before any filtering.
+        let layout = Layout::of_model(&model, path);
+        let (test, _) = load_epochs_in(
+            &args.test,
+            &model.preprocess,
+            &args.events,
+            &args.test_text,
+            Some(&layout),
+        )?;
         for rec in &test {
             model
                 .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
@@ -269,8 +277,14 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let train = load_epochs(&args.train, &pre, &args.events, &[])?;
-    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
+    let (train, layout) = load_epochs_in(&args.train, &pre, &args.events, &[], None)?;
+    let (test, _) = load_epochs_in(
+        &args.test,
+        &pre,
+        &args.events,
+        &args.test_text,
+        layout.as_ref(),
+    )?;
     let params = EvaluateParams {
         presets: args.pipeline.0.clone(),
         folds: args.folds,
@@ -304,7 +318,7 @@ fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
 
 fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
     if let Some(path) = &args.out {
-        std::fs::write(path, serde_json::to_string_pretty(results)?)
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(results)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }
@@ -373,7 +387,7 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
         results.push(result);
     }
     if let Some(path) = &args.out {
-        std::fs::write(path, serde_json::to_string_pretty(&results)?)
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(&results)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }

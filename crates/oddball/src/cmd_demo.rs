@@ -59,7 +59,7 @@ struct Summary<'a> {
     decisions: &'a [DecisionRow],
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    note: Option<&'a str>,
+    note: Option<String>,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
@@ -81,7 +81,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 opts.pipeline,
                 rule_name(&rule)
             );
-            note = Some(REPLAY_NOTE);
+            note = Some(REPLAY_NOTE.to_string());
         }
         (None, preset) => {
             println!(
@@ -139,6 +139,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         },
     )?
     .steps;
+    if let Some(end) = oddball_live::stop::reason() {
+        // Stopped early: what was decided and recorded is kept and written below.
+        println!("stopped after {} decision(s): {end}", steps.len());
+        note = Some(match note {
+            Some(n) => format!("{n}; stopped early: {end}"),
+            None => format!("stopped early: {end}"),
+        });
+    }
     let rows: Vec<DecisionRow> = steps
         .iter()
         .enumerate()
@@ -152,7 +160,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
-    fs::write(args.out.join("model.json"), &prep.model_json)
+    oddball_io::write_atomic(args.out.join("model.json"), &prep.model_json)
         .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
     let erp_png = args.out.join("erp.png");
     oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
@@ -194,7 +202,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         note,
     };
     let json = serde_json::to_string_pretty(&summary)?;
-    fs::write(args.out.join("summary.json"), json + "\n")
+    oddball_io::write_atomic(args.out.join("summary.json"), json + "\n")
         .with_context(|| format!("writing {}", args.out.join("summary.json").display()))?;
 
     print!(

@@ -157,40 +157,54 @@ fn run_with(
     subject.source_mut().start_now();
     let mut session = Session::new(args.session.params(rule), subject, Some(arm))
         .context("setting up the session")?;
+    // A stop request or a source that ends during calibration still closes the recording and
+    // writes the summary (with no decisions).
+    let mut ended = None;
     match model {
         Some(m) => session.set_model(m).context("using the model")?,
-        None => {
-            let c = session.calibrate().context("calibrating")?;
-            println!(
-                "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
-                c.n_trials, c.n_epochs, c.cv_auc
-            );
-            if let Some(m) = session.model() {
-                fs::write(args.out.join("model.json"), m.to_json())?;
+        None => match session.calibrate() {
+            Ok(c) => {
+                println!(
+                    "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
+                    c.n_trials, c.n_epochs, c.cv_auc
+                );
+                if let Some(m) = session.model() {
+                    oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
+                }
             }
-        }
-    }
-    let run = run_copy(
-        &mut session,
-        commands,
-        false,
-        1.5,
-        is_recording_end,
-        |i, s| {
-            println!("{}", decision_line(i, s));
-            if let Some(r) = &s.arm_refusal {
-                println!("  the arm refused: {r}");
+            Err(e) if is_recording_end(&e) => {
+                let end = stop_reason(&e);
+                println!("calibration: {end}");
+                ended = Some(end);
             }
+            Err(e) => return Err(e).context("calibrating"),
         },
-    )
-    .context("running the commands")?;
-    let ended = run.stopped.map(|(e, deciding)| {
-        let end = stop_reason(&e);
-        if deciding {
-            println!("decision {}: {end}", run.steps.len() + 1);
-        }
-        end
-    });
+    }
+    let mut steps = Vec::new();
+    if ended.is_none() {
+        let run = run_copy(
+            &mut session,
+            commands,
+            false,
+            1.5,
+            is_recording_end,
+            |i, s| {
+                println!("{}", decision_line(i, s));
+                if let Some(r) = &s.arm_refusal {
+                    println!("  the arm refused: {r}");
+                }
+            },
+        )
+        .context("running the commands")?;
+        ended = run.stopped.map(|(e, deciding)| {
+            let end = stop_reason(&e);
+            if deciding {
+                println!("decision {}: {end}", run.steps.len() + 1);
+            }
+            end
+        });
+        steps = run.steps;
+    }
     if let Some(r) = session.channel_report() {
         println!("{r}");
     }
@@ -201,7 +215,7 @@ fn run_with(
     let subject = session.subject_mut();
     let summary = OnlineSummary::new(
         args.source.source.to_string(),
-        &run.steps,
+        &steps,
         &subject.timing,
         &subject.decision_latency_ms,
         &record_path,
@@ -228,9 +242,13 @@ fn run_with(
     if let Some(h) = health {
         println!("stream: {h}");
     }
-    let _ = session.finish();
+    // The recording's stream footers written and the file synced.
+    session
+        .into_subject()
+        .finish()
+        .with_context(|| format!("closing {}", record_path.display()))?;
     let path = args.out.join("summary.json");
-    fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n")
+    oddball_io::write_atomic(&path, serde_json::to_string_pretty(&summary)? + "\n")
         .with_context(|| format!("writing {}", path.display()))?;
     println!(
         "recording: {} ({} samples)",

@@ -178,9 +178,6 @@ fn run_track(args: &TrackArgs) -> Result<()> {
                 .collect::<Result<Vec<_>>>()?,
         )
     };
-    if !(args.tolerance_mm.is_finite() && args.tolerance_mm > 0.0) {
-        anyhow::bail!("--tolerance-mm must be a positive number");
-    }
     let params = TrackParams {
         n_targets: args.targets,
         seed: args.session.seed,
@@ -188,6 +185,10 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         tolerance_m: args.tolerance_mm * 1e-3,
         ..TrackParams::default()
     };
+    // Before calibrating: the targets, tolerance and count (TrackParams::check).
+    params
+        .check(&crate::args::recording_arm()?)
+        .context("checking --target/--targets/--tolerance-mm")?;
     let mut prep = prepare_task(&args.session, &args.source, "track", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: task_targets(arm, &params)
@@ -248,7 +249,8 @@ fn write_common(
     expected: &[Vector2<f64>],
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
-    fs::write(out.join("model.json"), &prep.model_json).context("writing model.json")?;
+    oddball_io::write_atomic(out.join("model.json"), &prep.model_json)
+        .context("writing model.json")?;
     let erp_png = out.join("erp.png");
     oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
         .with_context(|| format!("drawing {}", erp_png.display()))?;
@@ -267,7 +269,7 @@ fn write_summary<T: Serialize>(
 ) -> Result<()> {
     let summary = prep.task_summary(task, &opts.pipeline, opts.seed, report);
     let json = serde_json::to_string_pretty(&summary)?;
-    fs::write(out.join("summary.json"), json + "\n").context("writing summary.json")
+    oddball_io::write_atomic(out.join("summary.json"), json + "\n").context("writing summary.json")
 }
 
 /// Saves a live session's raw EEG and prints the wall time.

@@ -96,24 +96,116 @@ pub fn read_mapped(
     Ok(rec)
 }
 
+/// The channels (by name, in order) and the rate every recording of a run must have: a model's,
+/// or the first training file's. Recordings are matched to it by channel name (any order, extra
+/// channels left out) before anything is filtered; a missing channel or another rate is an
+/// error naming it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    pub ch_names: Vec<String>,
+    pub sfreq: f64,
+    /// What it is, for messages ("model.json", "the training file a.dat").
+    pub of: String,
+}
+
+impl Layout {
+    pub fn of_model(model: &Model, path: &Path) -> Self {
+        Self {
+            ch_names: model.ch_names.clone(),
+            sfreq: model.sfreq,
+            of: format!("the model {}", path.display()),
+        }
+    }
+
+    fn of_recording(rec: &Recording) -> Self {
+        Self {
+            ch_names: rec.raw.ch_names().to_vec(),
+            sfreq: rec.raw.sfreq(),
+            of: format!("the training file {}", rec.path.display()),
+        }
+    }
+
+    /// `rec` with this layout's channels in its order.
+    fn fit(&self, mut rec: Recording) -> Result<Recording> {
+        let raw = &rec.raw;
+        let what = || {
+            format!(
+                "matching the channels of {} to those of {}",
+                rec.path.display(),
+                self.of
+            )
+        };
+        if (raw.sfreq() - self.sfreq).abs() > 1e-9 * self.sfreq {
+            anyhow::bail!(
+                "{} is sampled at {} Hz, {} at {} Hz",
+                rec.path.display(),
+                raw.sfreq(),
+                self.of,
+                self.sfreq
+            );
+        }
+        if raw.ch_names() == self.ch_names.as_slice() {
+            return Ok(rec);
+        }
+        oddball_decode::model::match_channels(&self.ch_names, raw.ch_names()).with_context(what)?;
+        rec.raw = raw.pick_channels(&self.ch_names).with_context(what)?;
+        Ok(rec)
+    }
+}
+
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
-/// recorded without labels) and epochs each recording
-/// ([`oddball_decode::dataset::load_epochs`]); a recording whose events carry no labels is an
-/// error saying how to label them.
+/// recorded without labels) and epochs each recording ([`oddball_decode::dataset`]); a
+/// recording whose events carry no labels is an error saying how to label them. Every file's
+/// channels are matched by name to the first's ([`Layout`]).
 pub fn load_epochs(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
     texts: &[String],
 ) -> Result<Vec<EpochedRecording>> {
+    load_epochs_in(paths, pre, events, texts, None).map(|(e, _)| e)
+}
+
+/// [`load_epochs`] with every file matched to `layout` (else to the first file's), returned.
+pub fn load_epochs_in(
+    paths: &[PathBuf],
+    pre: &Preprocess,
+    events: &EventArgs,
+    texts: &[String],
+    layout: Option<&Layout>,
+) -> Result<(Vec<EpochedRecording>, Option<Layout>)> {
+    if !texts.is_empty() && texts.len() != paths.len() {
+        anyhow::bail!(
+            "--test-text gives {} texts for {} test files (one per file)",
+            texts.len(),
+            paths.len()
+        );
+    }
     let mapping = events.mapping()?;
     let read = events.read_options()?;
-    let how = dataset::Labelling {
-        mapping: mapping.as_ref(),
-        read: Some(&read),
-        ..Default::default()
-    };
-    Ok(dataset::load_epochs(paths, pre, how, texts)?)
+    let mut layout = layout.cloned();
+    let epochs = paths
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let how = dataset::Labelling {
+                mapping: mapping.as_ref(),
+                text: texts.get(i).map(String::as_str),
+                speller: None,
+                read: Some(&read),
+            };
+            let mut rec = dataset::read_labelled(p, how)?;
+            rec = match &layout {
+                Some(l) => l.fit(rec)?,
+                None => {
+                    layout = Some(Layout::of_recording(&rec));
+                    rec
+                }
+            };
+            Ok(dataset::epoch(rec, pre)?)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((epochs, layout))
 }
 
 /// Reads a saved model.

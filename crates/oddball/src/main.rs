@@ -87,9 +87,26 @@ fn exit_quietly_on_broken_pipe() {
     }));
 }
 
+/// SIGINT and SIGTERM ask a live session to stop (`oddball_live::stop`): it closes its
+/// recording and writes what it has. A second signal ends the process at once (exit 130).
+fn stop_on_signals() {
+    let flag = oddball_live::stop::flag();
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // The first signal sets the flag; the conditional exit fires once it is set.
+        let _ = signal_hook::flag::register_conditional_shutdown(signal, 130, flag.clone());
+        let _ = signal_hook::flag::register(signal, flag.clone());
+    }
+}
+
 fn main() -> ExitCode {
     exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
+    if matches!(
+        cli.command,
+        Command::Demo(_) | Command::Task(_) | Command::Online(_)
+    ) {
+        stop_on_signals();
+    }
     let result = match cli.command {
         Command::Demo(args) => cmd_demo::run(&args),
         Command::Task(args) => cmd_task::run(&args),

@@ -1,7 +1,6 @@
 //! Building the calibrated pilot of `demo` and `task` from the command line's options (the pilot
 //! itself and what a run leaves behind are `oddball_live::pilot`'s).
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -112,5 +111,6 @@ pub fn save_session(prep: Prepared, out: &Path, end: &str) -> Result<Option<Path
 
 /// decisions.csv: one row per step.
 pub fn write_decisions_csv(path: &Path, steps: &[Step]) -> Result<()> {
-    fs::write(path, decisions_csv(steps)).with_context(|| format!("writing {}", path.display()))
+    oddball_io::write_atomic(path, decisions_csv(steps))
+        .with_context(|| format!("writing {}", path.display()))
 }

@@ -3,17 +3,7 @@
 
 mod common;
 
-use std::path::Path;
-
-use common::{oddball, tmp_dir};
-
-/// A 16-channel CSV at 256 Hz (`time` column, `stim` markers): 240 flashes every 0.4 s, every
-/// fifth marked 2 (target, with a 2 µV P300-like bump 300–500 ms later on every channel), the
-/// others 1 (`oddball_testkit::synthetic_oddball`).
-fn write_csv(path: &Path) {
-    let (data, markers, sfreq) = oddball_testkit::synthetic_oddball(16, 12345);
-    oddball_testkit::write_codes_csv(path, &data, &markers, sfreq);
-}
+use common::{oddball, tmp_dir, write_csv};
 
 #[test]
 fn plain_codes_train_and_evaluate_once_the_mapping_says_which_are_targets() {

@@ -729,12 +729,12 @@ pub fn parse_bci2000(
         let v = p.as_str().unwrap_or("");
         split_number_unit(v)
             .and_then(|(x, unit)| hz_factor(unit).map(|f| x * f))
-            .filter(|f| f.is_finite() && *f > 0.0 && *f <= 1e6)
+            .filter(|f| oddball_signal::check_sfreq(*f).is_ok())
             .ok_or_else(|| {
                 ctx.invalid(
                     "parameter SamplingRate",
                     p.offset,
-                    "a rate in Hz between 0 (exclusive) and 1 MHz",
+                    "a rate in Hz within oddball_signal::check_sfreq's 0.1 Hz to 1 MHz",
                     v,
                 )
             })?

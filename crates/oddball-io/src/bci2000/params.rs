@@ -241,7 +241,7 @@ impl<'a> Cursor<'a> {
         ParamLineError {
             name: Some(self.name.clone()),
             expected: expected.into(),
-            found: found.into(),
+            found: crate::error::bounded(&found.into()),
         }
     }
 

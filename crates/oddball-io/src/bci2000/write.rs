@@ -159,7 +159,7 @@ struct Placed<'a> {
 ///
 /// The events of `raw` are not written by themselves: pass them as states, usually
 /// [`stimulus_states`] plus the caller's own. Refused with an [`IoError`] before anything is
-/// written: an empty recording; a sampling rate above 1 MHz; an empty channel name (channel
+/// written: an empty recording; an empty channel name (channel
 /// names are otherwise URL-encoded, spaces included); a sample that is not finite or beyond
 /// float32 ([`IoError::UnwritableSample`]); a state whose length is not `n_times`, whose value
 /// does not fit its bits, whose bits are outside 1..=32, whose name is not printable ASCII
@@ -179,11 +179,6 @@ pub fn write_bci2000(
     crate::writing::check_not_empty(path, raw, "BCI2000")?;
     let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
     let sfreq = raw.sfreq();
-    if sfreq > 1e6 {
-        return Err(unsupported(format!(
-            "sampling rate {sfreq} Hz (BCI2000 files are read up to 1 MHz)"
-        )));
-    }
     if let Some(c) = raw.ch_names().iter().position(String::is_empty) {
         return Err(unsupported(format!(
             "channel {c} has an empty name (a BCI2000 reader would then rename every channel)"

@@ -141,7 +141,7 @@ const MAX_ABS_UV: f64 = i32::MAX as f64 / 1000.0;
 const MAX_INFO_CHANNELS: usize = 1024;
 
 /// The largest sampling rate a `.info` may state, in Hz.
-const MAX_INFO_SFREQ: f64 = 1e6;
+const MAX_INFO_SFREQ: f64 = oddball_signal::SFREQ_MAX;
 
 /// Which `.info` file [`read_easy_with`] reads.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -275,6 +275,28 @@ impl EasyInfo {
             .iter()
             .find(|(k, _)| normalize_key(k) == key)
             .map(|(_, v)| v.as_str())
+    }
+
+    /// Every `.info` value by key, for many look-ups ([`EasyInfo::info_value`] scans the
+    /// lines; a session's 50,000 trial lines looked up one by one took minutes).
+    pub fn info_index(&self) -> InfoIndex<'_> {
+        let mut map = std::collections::HashMap::with_capacity(self.info.len());
+        for (k, v) in &self.info {
+            map.entry(normalize_key(k)).or_insert(v.as_str());
+        }
+        InfoIndex { map }
+    }
+}
+
+/// `.info` values by key, matched as [`EasyInfo::info_value`] matches them (first value wins).
+#[derive(Debug, Clone)]
+pub struct InfoIndex<'a> {
+    map: std::collections::HashMap<String, &'a str>,
+}
+
+impl<'a> InfoIndex<'a> {
+    pub fn get(&self, key: &str) -> Option<&'a str> {
+        self.map.get(&normalize_key(key)).copied()
     }
 }
 

@@ -79,11 +79,11 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         });
     };
     let sfreq = spr as f64 / header.record_duration;
-    if !(sfreq.is_finite() && sfreq > 0.0 && sfreq <= 1e6) {
+    if oddball_signal::check_sfreq(sfreq).is_err() {
         return Err(ctx.invalid(
             "duration of a data record",
             244,
-            format!("a duration giving 0 to 1 MHz with {spr} samples per record"),
+            format!("a duration giving 0.1 Hz to 1 MHz with {spr} samples per record"),
             header.record_duration.to_string(),
         ));
     }
@@ -119,6 +119,8 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         .collect();
     let mut tals_all: Vec<(usize, Tal)> = Vec::new(); // (record, tal)
     let mut record_starts: Vec<f64> = Vec::new();
+    // Byte offset of each record's time-keeping annotation.
+    let mut stamp_offsets: Vec<usize> = Vec::new();
 
     for r in 0..header.n_records {
         let base = header.header_bytes + r * record_bytes;
@@ -158,6 +160,7 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
                 }
                 let mut stamp = tals.remove(0);
                 record_starts.push(stamp.0);
+                stamp_offsets.push(start);
                 stamp.2.remove(0);
                 if !stamp.2.is_empty() {
                     tals.insert(0, stamp);
@@ -168,6 +171,26 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
     }
 
     let start_offset = record_starts.first().copied().unwrap_or(0.0);
+    if !discontinuous {
+        // EDF+C: every record starts where the one before ended. A stamp that says otherwise
+        // is corrupt, and the events timed from it would silently fall outside the recording.
+        let half = 0.5 / sfreq;
+        for (r, (&t, &at)) in record_starts.iter().zip(&stamp_offsets).enumerate() {
+            let expected = start_offset + r as f64 * header.record_duration;
+            if !t.is_finite() || t.abs() > 1e9 || (t - expected).abs() > half {
+                return Err(ctx.invalid(
+                    format!("time stamp of data record {r}"),
+                    at,
+                    if r == 0 {
+                        "a start time in seconds (EDF+C: contiguous records)".to_string()
+                    } else {
+                        format!("+{expected} (EDF+C: contiguous records)")
+                    },
+                    format!("{t}"),
+                ));
+            }
+        }
+    }
     if discontinuous {
         let half = 0.5 / sfreq;
         for (r, &t) in record_starts.iter().enumerate() {

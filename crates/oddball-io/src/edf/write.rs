@@ -297,11 +297,7 @@ pub fn write_edf_plus_with(
         buf.extend_from_slice(tb);
         buf.resize(start + ann_bytes, 0);
     }
-    std::fs::write(path, &buf).map_err(|source| IoError::Io {
-        path: path.to_path_buf(),
-        action: "write",
-        source,
-    })?;
+    crate::write_atomic(path, &buf)?;
     Ok(EdfWriteSummary {
         n_records,
         record_duration: duration as f64,

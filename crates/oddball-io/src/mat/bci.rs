@@ -148,6 +148,7 @@ fn kind(a: &MatArray) -> String {
 }
 
 fn invalid(path: &Path, v: &MatVariable, field: &str, expected: &str, found: String) -> IoError {
+    let found = crate::error::bounded(&found);
     IoError::InvalidField {
         path: path.to_path_buf(),
         field: format!("variable {:?}: {field}", v.name),

@@ -128,7 +128,7 @@ impl<'a> Buf<'a> {
             field,
             offset,
             expected: expected.to_string(),
-            found,
+            found: crate::error::bounded(&found),
         }
     }
 
@@ -362,7 +362,7 @@ fn parse_header(b: &[u8], path: &Path) -> Result<MatHeader, IoError> {
         field: field.into(),
         offset,
         expected: expected.into(),
-        found,
+        found: crate::error::bounded(&found),
     };
     // HDF5-based v7.3 files carry a 512-byte user block starting with the same text header.
     if b.len() >= 128 && &b[126..128] == b"IM" && b[124..126] == [0x00, 0x02]

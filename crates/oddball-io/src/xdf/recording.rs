@@ -319,6 +319,16 @@ pub fn parse_xdf_with(
         scale_to_uv.push(f);
     }
     let eeg_times = &synced[eeg];
+    // Markers are placed by the EEG's timestamps: a non-finite one would drop every event.
+    if let Some(i) = eeg_times.iter().position(|t| !t.is_finite()) {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            what: format!(
+                "stream {:?} (EEG), sample {i}: timestamp {} is not a finite number, so no marker can be placed on it",
+                file.streams[eeg].info.name, eeg_times[i]
+            ),
+        });
+    }
     let monotonic = eeg_times.windows(2).all(|w| w[0] <= w[1]);
 
     // Markers.
@@ -385,6 +395,17 @@ pub fn parse_xdf_with(
                 (code, None, Some(m.text.clone()))
             }
         };
+        if !m.synced.is_finite() {
+            return Err(IoError::Unsupported {
+                path: path.to_path_buf(),
+                what: format!(
+                    "marker {:?} of stream {}: timestamp {} is not a finite number",
+                    crate::error::bounded(&m.text),
+                    m.stream_id,
+                    m.synced
+                ),
+            });
+        }
         let sample = nearest_sample(eeg_times, monotonic, sfreq, m.synced);
         if let Some(onset) = sample {
             events.push(Event {

@@ -36,3 +36,127 @@ pub fn demo_model(dir: &std::path::Path) -> PathBuf {
     assert!(ok, "{err}");
     out.join("model.json")
 }
+
+/// How [`write_csv_with`] shapes the synthetic recording.
+#[derive(Debug, Clone)]
+pub struct CsvSpec {
+    /// The channels' names, in column order (16 for the default).
+    pub names: Vec<String>,
+    /// Seconds between rows (1/256 by default).
+    pub step_s: f64,
+    /// Samples made NaN (CSV refuses them: written by [`write_xdf_with`] only): (column
+    /// index among the channels, rows).
+    pub nan: Option<(usize, std::ops::Range<usize>)>,
+}
+
+impl Default for CsvSpec {
+    fn default() -> Self {
+        Self {
+            names: (0..16).map(|c| format!("ch{c}")).collect(),
+            step_s: 1.0 / 256.0,
+            nan: None,
+        }
+    }
+}
+
+/// A 16-channel CSV at 256 Hz (`time` column, `stim` markers): 240 flashes every 0.4 s, every
+/// fifth marked 2 (target, with a 2 µV P300-like bump 300–500 ms later on every channel), the
+/// others 1; noise from a fixed linear congruential generator.
+pub fn write_csv(path: &std::path::Path) {
+    write_csv_with(path, &CsvSpec::default());
+}
+
+/// [`write_csv`] with the channels named (and so ordered) by `spec.names`: channel `chK`
+/// carries the same samples whatever column it is in, so a permuted montage is the same data
+/// (the samples are `oddball_testkit::synthetic_oddball(16, 12345)`'s).
+pub fn write_csv_with(path: &std::path::Path, spec: &CsvSpec) {
+    use std::fmt::Write as _;
+    let (data, markers, _) = oddball_testkit::synthetic_oddball(16, 12345);
+    let cols: Vec<usize> = spec
+        .names
+        .iter()
+        .map(|n| {
+            n.strip_prefix("ch")
+                .and_then(|k| k.parse().ok())
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut text = String::from("time");
+    for n in &spec.names {
+        let _ = write!(text, ",{n}");
+    }
+    text.push_str(",stim\n");
+    for (i, m) in markers.iter().enumerate() {
+        let _ = write!(text, "{}", i as f64 * spec.step_s);
+        for &k in &cols {
+            let _ = write!(text, ",{:.4}", data[[k, i]]);
+        }
+        let _ = writeln!(text, ",{m}");
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// Runs `oddball ARGS…` with a watchdog: `None` for the exit code when it was still running
+/// after `seconds` (a hang; it is killed). (exit code, stdout, stderr).
+pub fn oddball_within(args: &[&str], seconds: u64) -> (Option<i32>, String, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(args)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("oddball runs");
+    let t0 = std::time::Instant::now();
+    let code = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status.code();
+        }
+        if t0.elapsed().as_secs() >= seconds {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let out = child.wait_with_output().expect("output");
+    (
+        code,
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The recording of [`write_csv_with`] as an XDF (float32 EEG, markers "1"/"2"), with
+/// `spec.nan`'s samples NaN, as the live recorder writes samples an LSL stream lost.
+pub fn write_xdf_with(path: &std::path::Path, spec: &CsvSpec) {
+    use oddball_io::xdf::{XdfStream, XdfWriter};
+    let csv = path.with_extension("csv");
+    write_csv_with(
+        &csv,
+        &CsvSpec {
+            nan: None,
+            ..spec.clone()
+        },
+    );
+    let rec = oddball_io::read(&csv).unwrap();
+    std::fs::remove_file(&csv).unwrap();
+    let raw = &rec.raw;
+    let mut data = raw.data().clone();
+    if let Some((c, rows)) = &spec.nan {
+        for t in rows.start..rows.end.min(raw.n_times()) {
+            data[[*c, t]] = f64::NAN;
+        }
+    }
+    let ts: Vec<f64> = (0..raw.n_times()).map(|i| i as f64 / raw.sfreq()).collect();
+    let mut w = XdfWriter::create(path).unwrap();
+    let eeg = w
+        .add_stream(&XdfStream::eeg("EEG", raw.ch_names().to_vec(), raw.sfreq()))
+        .unwrap();
+    let markers = w.add_stream(&XdfStream::markers("markers")).unwrap();
+    w.push_numeric(eeg, &ts, data.view()).unwrap();
+    let mts: Vec<f64> = raw.events().iter().map(|e| ts[e.onset]).collect();
+    let texts: Vec<String> = raw.events().iter().map(|e| e.code.to_string()).collect();
+    let refs: Vec<&str> = texts.iter().map(String::as_str).collect();
+    w.push_strings(markers, &mts, &refs).unwrap();
+    w.flush_block().unwrap();
+    w.finish().unwrap();
+}
