@@ -16,7 +16,8 @@
 //! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
 //! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
 //! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
-//! [`metrics`] measures them. The modules keep their former paths too (`oddball_decode::svm`,
+//! [`metrics`] measures them; [`unsupervised`] decodes without labels (EM over the paradigm's
+//! constraint). The modules keep their former paths too (`oddball_decode::svm`,
 //! `oddball_decode::tuning`, …).
 //!
 //! # Example
@@ -49,6 +50,7 @@ pub mod stats;
 #[cfg(test)]
 mod testutil;
 pub mod traits;
+pub mod unsupervised;
 
 // The modules at their paths before the grouping by role.
 pub use classifiers::{ensemble, knn, lda, logistic, svm, toeplitz_lda};
