@@ -20,6 +20,7 @@ struct Golden {
     trials: Vec<usize>,
     init: Vec<f64>,
     shrinkage: f64,
+    mean_prior: f64,
     objective: Vec<f64>,
     posterior: Vec<Vec<f64>>,
     llr: Vec<f64>,
@@ -29,6 +30,7 @@ struct Golden {
 fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
     UnsupervisedParams {
         features: AmplitudeFeatures::decimate(1).unwrap(),
+        mean_prior: 2.0,
         n_inits: 4,
         max_iter,
         tol,
@@ -46,8 +48,11 @@ fn em_matches_the_dense_numpy_reference() {
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
     let constraint = Constraint::new(g.sets.clone()).unwrap();
-    let m = params(g.objective.len(), 0.0)
-        .fit_from_scores(x.view(), &g.codes, &g.trials, &constraint, &g.init)
+    let m = UnsupervisedParams {
+        mean_prior: g.mean_prior,
+        ..params(g.objective.len(), 0.0)
+    }
+    .fit_from_scores(x.view(), &g.codes, &g.trials, &constraint, &g.init)
         .unwrap();
     assert_eq!(m.init().0, Init::Given);
     assert!(

@@ -25,6 +25,7 @@ use oddball_arm::{ArmSim, Command};
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::unsupervised::{Constraint, Unsupervised, UnsupervisedParams};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -199,6 +200,21 @@ pub struct CalibrationReport {
     pub fit_seconds: f64,
 }
 
+impl CalibrationReport {
+    /// A session that did not calibrate (no trials; AUC and d′ unknown: NaN).
+    pub fn none() -> Self {
+        Self {
+            n_trials: 0,
+            n_epochs: 0,
+            n_targets: 0,
+            n_rejected: 0,
+            cv_auc: f64::NAN,
+            d_prime: f64::NAN,
+            fit_seconds: 0.0,
+        }
+    }
+}
+
 /// Everything a session showed, recorded and decided.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SessionLog {
@@ -236,6 +252,39 @@ pub struct Session<S: Subject> {
     arm: Option<ArmSim>,
     /// The arm runs from the first online decision on (it holds still during calibration).
     arm_running: bool,
+    /// Control without calibration ([`Session::start_uncalibrated`]).
+    unlabelled: Option<Unlabelled>,
+}
+
+/// Settings of a session without calibration: the unsupervised decoder, refitted after every
+/// decision on every epoch so far, and how sure it must be to move the arm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct UncalibratedParams {
+    pub decoder: UnsupervisedParams,
+    /// A decision whose best bulb has a smaller posterior abstains (the arm stays still).
+    pub abstain_below: f64,
+}
+
+impl UncalibratedParams {
+    /// The `lda` preset's features at `sfreq`, abstaining below a posterior of 0.9.
+    pub fn for_sfreq(sfreq: f64) -> Result<Self, SessionError> {
+        Ok(Self {
+            decoder: UnsupervisedParams::for_sfreq(sfreq)?,
+            abstain_below: 0.9,
+        })
+    }
+}
+
+/// What an uncalibrated session has seen: the feature row, code and trial of every accepted
+/// online epoch, and the latest EM fit.
+#[derive(Debug)]
+struct Unlabelled {
+    params: UncalibratedParams,
+    constraint: Constraint,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    model: Option<Unsupervised>,
 }
 
 impl<S: Subject> Session<S> {
@@ -263,7 +312,56 @@ impl<S: Subject> Session<S> {
             model: None,
             arm,
             arm_running: false,
+            unlabelled: None,
         })
+    }
+
+    /// Controls without calibration: the first decision comes from the first trial's epochs,
+    /// and after every decision the unsupervised decoder is refitted (EM over "one bulb per
+    /// trial", warm-started from the last fit) on all online epochs so far — no label is used.
+    pub fn start_uncalibrated(&mut self, params: UncalibratedParams) -> Result<(), SessionError> {
+        if !(params.abstain_below > 0.0 && params.abstain_below <= 1.0) {
+            return Err(SessionError::InvalidParameter {
+                name: "abstain_below",
+                value: params.abstain_below.to_string(),
+                reason: "a probability in (0, 1]".into(),
+            });
+        }
+        let codes: Vec<u32> = (1..=self.params.paradigm.bulbs.len() as u32).collect();
+        self.unlabelled = Some(Unlabelled {
+            params,
+            constraint: Constraint::one_of(&codes)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            model: None,
+        });
+        Ok(())
+    }
+
+    /// The latest unsupervised fit of an uncalibrated session.
+    pub fn unsupervised(&self) -> Option<&Unsupervised> {
+        self.unlabelled.as_ref().and_then(|u| u.model.as_ref())
+    }
+
+    /// Every online decision of an uncalibrated session re-decided by the latest fit ("post
+    /// hoc"): per online trial (index into [`Session::trials`]), the bulb code of highest
+    /// posterior and that posterior.
+    pub fn redecided(&self) -> Vec<(usize, u32, f64)> {
+        let Some(m) = self.unsupervised() else {
+            return Vec::new();
+        };
+        m.trials()
+            .iter()
+            .map(|t| {
+                let p = &t.sets[0];
+                let (k, best) = p
+                    .iter()
+                    .enumerate()
+                    .fold((0, f64::NEG_INFINITY), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+                (t.trial, k as u32 + 1, best)
+            })
+            .collect()
     }
 
     pub fn params(&self) -> &SessionParams {
@@ -432,7 +530,7 @@ impl<S: Subject> Session<S> {
 
     /// One online decision while the person attends `intended` (`None`: attends nothing).
     pub fn decide(&mut self, intended: Option<Command>) -> Result<TrialRecord, SessionError> {
-        if self.model.is_none() {
+        if self.model.is_none() && self.unlabelled.is_none() {
             return Err(SessionError::NotCalibrated);
         }
         let code = intended.map(|c| self.params.paradigm.code_of(c));
@@ -504,7 +602,19 @@ impl<S: Subject> Session<S> {
                     }
                 }
                 Phase::Online => {
-                    if e.accepted {
+                    if let (true, Some(u)) = (e.accepted, &mut self.unlabelled) {
+                        let row = u
+                            .params
+                            .decoder
+                            .features
+                            .transform(e.data.view().insert_axis(Axis(0)))?;
+                        if let Some(m) = &u.model {
+                            f.score = Some(m.decision_function_features(row.view())?[0]);
+                        }
+                        u.rows.extend(row.iter());
+                        u.codes.push(f.code);
+                        u.trials.push(f.trial);
+                    } else if e.accepted {
                         let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
                         f.score = Some(model.pipeline.score_epoch(e.data.view())?);
                     }
@@ -602,6 +712,13 @@ impl<S: Subject> Session<S> {
                         break;
                     }
                 }
+                Phase::Online if self.unlabelled.is_some() => {
+                    if next == planned.len() && shown.iter().all(|f| f.accepted.is_some()) {
+                        let verdict = self.decide_unlabelled(trial)?;
+                        self.conclude(trial, verdict, n_rounds)?;
+                        break;
+                    }
+                }
                 Phase::Online => {
                     let rounds = complete_rounds(shown);
                     let decision = self
@@ -620,6 +737,55 @@ impl<S: Subject> Session<S> {
         self.trials[trial].end = self.subject.position();
         self.subject.trial_ended(&self.trials[trial])?;
         Ok(trial)
+    }
+
+    /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it.
+    fn decide_unlabelled(&mut self, trial: usize) -> Result<Verdict, SessionError> {
+        let u = self.unlabelled.as_mut().ok_or(SessionError::NotCalibrated)?;
+        let n_stimuli = u.constraint.sets()[0].len();
+        let none = |p: Vec<f64>| Verdict::Abstain {
+            posterior: oddball_decode::decision::Posterior { p, p_none: 0.0 },
+        };
+        let uniform = vec![1.0 / n_stimuli as f64; n_stimuli];
+        // Two epochs at least, and some from this trial, or there is nothing to decide from.
+        if u.codes.len() < 2 || u.trials.last() != Some(&trial) {
+            return Ok(none(uniform));
+        }
+        let n = u.codes.len();
+        let x = ndarray::ArrayView2::from_shape((n, u.rows.len() / n), &u.rows)
+            .map_err(|e| SessionError::InvalidParameter {
+                name: "feature rows",
+                value: u.rows.len().to_string(),
+                reason: e.to_string(),
+            })?;
+        let fitted = match u.params.decoder.fit_features(
+            x,
+            &u.codes,
+            &u.trials,
+            &u.constraint,
+            u.model.as_ref(),
+        ) {
+            Ok(m) => m,
+            // Too little data to separate anything yet: keep the arm still.
+            Err(oddball_decode::unsupervised::UnsupervisedError::Degenerate { .. })
+            | Err(oddball_decode::unsupervised::UnsupervisedError::NotPositiveDefinite {
+                ..
+            }) => return Ok(none(uniform)),
+            Err(e) => return Err(e.into()),
+        };
+        let p = fitted
+            .averaged_trials()
+            .iter()
+            .find(|t| t.trial == trial)
+            .map_or(uniform, |t| t.sets[0].clone());
+        u.model = Some(fitted);
+        let posterior = oddball_decode::decision::Posterior { p, p_none: 0.0 };
+        let (index, best) = posterior.best();
+        Ok(if best >= u.params.abstain_below {
+            Verdict::Choose { index, posterior }
+        } else {
+            Verdict::Abstain { posterior }
+        })
     }
 
     fn conclude(

@@ -20,8 +20,8 @@ use oddball_live::clock::Clock;
 use oddball_live::source::SourceSpec;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
-    pen_report, report_text, row_text, rule_name, scores, CalibrationSummary, DecisionRow,
-    PenReport, Scores,
+    accuracy_over_time, accuracy_over_time_text, pen_report, report_text, row_text, rule_name,
+    scores, CalibrationSummary, DecisionRow, PenReport, Scores, Stretch,
 };
 use oddball_session::task::{run_copy, Pilot};
 use serde::Serialize;
@@ -57,6 +57,8 @@ struct Summary<'a> {
     simulated_seconds: f64,
     pen: PenReport,
     decisions: &'a [DecisionRow],
+    /// Accuracy of decisions 1–10, 11–20, …
+    accuracy_over_time: Vec<Stretch>,
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     note: Option<&'a str>,
@@ -151,12 +153,16 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let result = scores(&rows, &rule);
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
+    let over_time = accuracy_over_time(&rows, 10);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
-    fs::write(args.out.join("model.json"), &prep.model_json)
+    fs::write(args.out.join("model.json"), crate::pilot::model_json(&prep)?)
         .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
+    // An uncalibrated session has no labelled epochs to draw.
     let erp_png = args.out.join("erp.png");
-    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
-        .with_context(|| format!("drawing {}", erp_png.display()))?;
+    if prep.erp.n_epochs() > 0 {
+        oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+            .with_context(|| format!("drawing {}", erp_png.display()))?;
+    }
     let expected: Vec<Vector2<f64>> = pen
         .expected_m
         .iter()
@@ -173,9 +179,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "decisions.csv".to_string(),
         "summary.json".into(),
         "model.json".into(),
-        "erp.png".into(),
         "pen_trace.png".into(),
     ];
+    if erp_png.exists() {
+        files.insert(3, "erp.png".into());
+    }
     if let Some(f) = session_file.as_ref().and_then(|p| p.file_name()) {
         files.push(f.to_string_lossy().into_owned());
     }
@@ -190,6 +198,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         simulated_seconds,
         pen: pen.clone(),
         decisions: &rows,
+        accuracy_over_time: over_time.clone(),
         files,
         note,
     };
@@ -201,6 +210,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "{}",
         report_text(simulated_seconds, &result, comparison.as_ref(), &pen)
     );
+    println!("{}", accuracy_over_time_text(&over_time));
     println!("report in {}", args.out.display());
     // Wall-clock time goes to stderr: stdout, like every file, depends only on the options.
     eprintln!(

@@ -82,10 +82,8 @@ pub fn prepare(
     let subject = live_subject(opts, source, paced, Clock::new())?;
     let (session, calibration, pen_start) = opts.calibrated(subject, rule, true)?;
     let erp = session.calibration_epochs()?;
-    let model_json = session
-        .model()
-        .map(|m| m.to_json())
-        .context("the session has no model")?;
+    // An uncalibrated session has no model yet (see `model_json`).
+    let model_json = session.model().map(|m| m.to_json()).unwrap_or_default();
     Ok(Prepared {
         pilot: AnyPilot::Live(session),
         calibration,
@@ -108,6 +106,17 @@ pub fn save_session(prep: Prepared, out: &Path, end: &str) -> Result<Option<Path
     prep.save_session(&path, end)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(Some(path))
+}
+
+/// model.json of a run: the calibrated model, or for an uncalibrated session the latest
+/// unsupervised fit.
+pub fn model_json(prep: &Prepared) -> Result<String> {
+    if let AnyPilot::Live(s) = &prep.pilot {
+        if let Some(m) = s.unsupervised() {
+            return Ok(serde_json::to_string_pretty(m)? + "\n");
+        }
+    }
+    Ok(prep.model_json.clone())
 }
 
 /// decisions.csv: one row per step.

@@ -7,8 +7,9 @@
 //! `rᵢ` (P(epoch i attended)), `N_t = Σ rᵢ`, `N_n = N − N_t`:
 //!
 //! ```text
-//! Δμ = X̃ᵀr · N / (N_t N_n)            μ_t = (N_n / N) Δμ,  μ_n = −(N_t / N) Δμ
-//! Σ  = B − g ΔμΔμᵀ,  g = N_t N_n / (N (N + c))        (the exact M-step, see the module doc)
+//! a  = X̃ᵀr,  μ_t = a / (N_t + κ₀),  μ_n = −a / (N_n + κ₀)   (κ₀ pseudo-epochs at the mean)
+//! Δμ = h a,  h = 1/(N_t + κ₀) + 1/(N_n + κ₀)
+//! Σ  = B − g ΔμΔμᵀ,  g = 1 / (h (N + c))              (the exact M-step, see the module doc)
 //! u  = B⁻¹Δμ,  a = Δμᵀu,  w = Σ⁻¹Δμ = u / (1 − g a)    (Sherman–Morrison)
 //! LLRᵢ = wᵀ(x̃ᵢ − (μ_t + μ_n)/2)
 //! ```
@@ -183,9 +184,10 @@ pub(crate) fn e_step(layout: &Layout, llr: &[f64]) -> (Vec<Vec<f64>>, f64) {
     (evidence, total)
 }
 
-/// M-step from responsibilities `r`: the new parameters and the parameter-dependent part of the
-/// objective (everything but the E-step's log-sum-exp and [`Prepared::constant`]).
-fn m_step(prep: &Prepared, r: &[f64]) -> Result<(Linear, f64)> {
+/// M-step from responsibilities `r` with `kappa0` pseudo-epochs of prior on each class mean:
+/// the new parameters and the parameter-dependent part of the objective (everything but the
+/// E-step's log-sum-exp and [`Prepared::constant`]).
+fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
     let nf = prep.n as f64;
     let n_t: f64 = r.iter().sum();
     let n_n = nf - n_t;
@@ -194,11 +196,15 @@ fn m_step(prep: &Prepared, r: &[f64]) -> Result<(Linear, f64)> {
             what: format!("expected targets {n_t} of {nf} epochs"),
         });
     }
+    // a = Σ rᵢ x̃ᵢ; μ_t = a / (N_t + κ₀), μ_n = −a / (N_n + κ₀) (Σ x̃ᵢ = 0).
     let rv = DVector::from_column_slice(r);
-    let dmu = prep.xc.tr_mul(&rv) * (nf / (n_t * n_n));
+    let h = 1.0 / (n_t + kappa0) + 1.0 / (n_n + kappa0);
+    let dmu = prep.xc.tr_mul(&rv) * h;
+    // μ_t = β_t Δμ, μ_n = β_n Δμ.
+    let (beta_t, beta_n) = (1.0 / (h * (n_t + kappa0)), -1.0 / (h * (n_n + kappa0)));
     let u = prep.chol.solve(&dmu);
     let a = dmu.dot(&u);
-    let g = n_t * n_n / (nf * (nf + prep.c));
+    let g = 1.0 / (h * (nf + prep.c));
     let one_minus = 1.0 - g * a;
     if !(one_minus > 0.0 && one_minus.is_finite()) {
         return Err(UnsupervisedError::Degenerate {
@@ -207,14 +213,16 @@ fn m_step(prep: &Prepared, r: &[f64]) -> Result<(Linear, f64)> {
     }
     let kappa = g / one_minus;
     let w = &u / one_minus;
-    let offset = -((n_n - n_t) / (2.0 * nf)) * a / one_minus;
+    // Δμᵀ Σ⁻¹ Δμ.
+    let m = a / one_minus;
+    let offset = -0.5 * (beta_t + beta_n) * m;
     let xu = &prep.xc * &u;
     let u_s_u = xu.norm_squared() / nf;
     let u_d_u: f64 = u.iter().zip(prep.d.iter()).map(|(ui, di)| ui * ui * di).sum();
-    let ft = n_t / nf;
     let rest = -0.5 * (nf + prep.c) * one_minus.ln()
-        - 0.5 * nf * (ft * ft * a + kappa * (u_s_u + ft * ft * a * a))
-        - 0.5 * prep.c * kappa * u_d_u;
+        - 0.5 * nf * (kappa * u_s_u + beta_n * beta_n * m)
+        - 0.5 * prep.c * kappa * u_d_u
+        - 0.5 * kappa0 * (beta_t * beta_t + beta_n * beta_n) * m;
     Ok((Linear { w, offset }, rest))
 }
 
@@ -240,6 +248,7 @@ pub(crate) fn run(
     prep: &Prepared,
     layout: &Layout,
     init: &[f64],
+    kappa0: f64,
     max_iter: usize,
     tol: f64,
 ) -> Result<Run> {
@@ -248,7 +257,7 @@ pub(crate) fn run(
     let mut objective = Vec::new();
     let mut linear = None;
     for _ in 0..max_iter.max(1) {
-        let (lin, rest) = m_step(prep, &responsibilities(layout, &post))?;
+        let (lin, rest) = m_step(prep, &responsibilities(layout, &post), kappa0)?;
         let llr = scores(prep, &lin);
         let (p, lse) = e_step(layout, &llr);
         post = p;

@@ -11,11 +11,13 @@
 //! * **E-step**: each slot's posterior over its codes is the softmax of the summed
 //!   log-likelihood ratios `LLRᵢ = (μ_t − μ_n)ᵀΣ⁻¹(xᵢ − (μ_t + μ_n)/2)` of its epochs — the same
 //!   evidence accumulation as a calibrated decision ([`crate::decision`]);
-//! * **M-step**: with `rᵢ` = P(epoch i attended), the class means are the `r`-weighted means and
-//!   the covariance is the MAP estimate under an inverse-Wishart-type prior
-//!   `−(c/2) ln|Σ| − ½ tr(c·D·Σ⁻¹)`: `Σ = (c·D + W) / (N + c)`, `W` the within-class scatter.
-//!   Because the total scatter does not depend on the labels, `W = N·S − (N_t N_n / N)·ΔμΔμᵀ`
-//!   and `Σ = B − g·ΔμΔμᵀ`, where `B = (1 − λ)·S + λ·D` is a Ledoit–Wolf shrunk total covariance
+//! * **M-step**: with `rᵢ` = P(epoch i attended), the class means are the `r`-weighted means
+//!   (shrunk towards the grand mean by `κ₀` pseudo-epochs, [`UnsupervisedParams::mean_prior`]:
+//!   the penalty `−(κ₀/2)(μ_tᵀΣ⁻¹μ_t + μ_nᵀΣ⁻¹μ_n)` on centred means) and the covariance is the
+//!   MAP estimate under an inverse-Wishart-type prior `−(c/2) ln|Σ| − ½ tr(c·D·Σ⁻¹)`:
+//!   `Σ = (c·D + W) / (N + c)`, `W` the within-class scatter (with the means' penalty). Because
+//!   the total scatter does not depend on the labels, `W = N·S − ΔμΔμᵀ / h` and
+//!   `Σ = B − g·ΔμΔμᵀ` (`h = 1/(N_t + κ₀) + 1/(N_n + κ₀)`, `g = 1/(h(N + c))`), where `B = (1 − λ)·S + λ·D` is a Ledoit–Wolf shrunk total covariance
 //!   (computed once, without labels; `D = diag S`, `λ` scikit-learn's Ledoit–Wolf shrinkage of the
 //!   standardised rows, `c = λN/(1 − λ)`). This is a shrinkage LDA whose labels are soft, and one
 //!   iteration needs only one solve with the Cholesky factor of `B` (Sherman–Morrison).
@@ -152,6 +154,9 @@ impl Constraint {
 pub struct UnsupervisedParams {
     /// The feature map (the `lda` preset's bin means by default).
     pub features: AmplitudeFeatures,
+    /// Prior on each class mean, in pseudo-epochs at the grand mean (`κ₀`): keeps a fit on few
+    /// trials from finding confident structure in noise; its weight fades as epochs accrue.
+    pub mean_prior: f64,
     /// Random initialisations per fit (besides a warm start, if one is given).
     pub n_inits: usize,
     /// Most M-steps per initialisation.
@@ -163,11 +168,12 @@ pub struct UnsupervisedParams {
 }
 
 impl UnsupervisedParams {
-    /// The `lda` preset's features at `sfreq` (bins of round(sfreq / 25) samples), 8 random
-    /// initialisations, at most 200 iterations each, tolerance 1e-6 nats.
+    /// The `lda` preset's features at `sfreq` (bins of round(sfreq / 25) samples), no prior on
+    /// the means, 8 random initialisations, at most 200 iterations each, tolerance 1e-6 nats.
     pub fn for_sfreq(sfreq: f64) -> std::result::Result<Self, DecodeError> {
         Ok(Self {
             features: AmplitudeFeatures::for_sfreq(sfreq)?,
+            mean_prior: 0.0,
             n_inits: 8,
             max_iter: 200,
             tol: 1e-6,
@@ -181,6 +187,13 @@ impl UnsupervisedParams {
                 name: "n_inits/max_iter",
                 value: format!("{}/{}", self.n_inits, self.max_iter),
                 reason: "at least one initialisation and one iteration".into(),
+            });
+        }
+        if !(self.mean_prior >= 0.0 && self.mean_prior.is_finite()) {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "mean_prior",
+                value: self.mean_prior.to_string(),
+                reason: "pseudo-epochs: finite and >= 0".into(),
             });
         }
         if !(self.tol >= 0.0) {
@@ -262,10 +275,12 @@ impl UnsupervisedParams {
         let (layout, trial_ids) = layout(prep.n, codes, trials, constraint)?;
         let mut best: Option<(Init, em::Run)> = None;
         let mut init_objectives = Vec::with_capacity(inits.len());
+        let mut posteriors = Vec::with_capacity(inits.len());
         for (init, s) in inits {
-            let run = em::run(prep, &layout, &s, self.max_iter, self.tol)?;
+            let run = em::run(prep, &layout, &s, self.mean_prior, self.max_iter, self.tol)?;
             let j = *run.objective.last().expect("one M-step at least");
             init_objectives.push((init, j));
+            posteriors.push((j, run.posterior.clone()));
             if best
                 .as_ref()
                 .is_none_or(|(_, b)| j > *b.objective.last().expect("one M-step"))
@@ -274,6 +289,31 @@ impl UnsupervisedParams {
             }
         }
         let (init, run) = best.expect("at least one initialisation");
+        // Every initialisation's posterior, weighted by its likelihood relative to the best.
+        let j_max = posteriors.iter().map(|(j, _)| *j).fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = posteriors.iter().map(|(j, _)| (j - j_max).exp()).sum();
+        let mut averaged: Vec<Vec<f64>> = run.posterior.iter().map(|p| vec![0.0; p.len()]).collect();
+        for (j, post) in &posteriors {
+            let wgt = (j - j_max).exp() / z;
+            for (a, p) in averaged.iter_mut().zip(post) {
+                for (x, y) in a.iter_mut().zip(p) {
+                    *x += wgt * y;
+                }
+            }
+        }
+        let to_trials = |post: &[Vec<f64>]| -> Vec<TrialPosterior> {
+            trial_ids
+                .iter()
+                .enumerate()
+                .map(|(t, &id)| TrialPosterior {
+                    trial: id,
+                    sets: (0..constraint.sets.len())
+                        .map(|s| post[t * constraint.sets.len() + s].clone())
+                        .collect(),
+                })
+                .collect()
+        };
+        let averaged = to_trials(&averaged);
         let intercept = run.linear.offset - run.linear.w.dot(&prep.mean);
         let trials_out = trial_ids
             .iter()
@@ -291,6 +331,7 @@ impl UnsupervisedParams {
             intercept,
             constraint: constraint.clone(),
             trials: trials_out,
+            averaged,
             objective: run.objective,
             init,
             init_objectives,
@@ -390,6 +431,7 @@ pub struct Unsupervised {
     intercept: f64,
     constraint: Constraint,
     trials: Vec<TrialPosterior>,
+    averaged: Vec<TrialPosterior>,
     objective: Vec<f64>,
     init: Init,
     init_objectives: Vec<(Init, f64)>,
@@ -425,6 +467,13 @@ impl Unsupervised {
     /// The fitted trials' posteriors, in order of first appearance.
     pub fn trials(&self) -> &[TrialPosterior] {
         &self.trials
+    }
+
+    /// The fitted trials' posteriors averaged over every initialisation's local optimum, each
+    /// weighted by its likelihood relative to the best (`exp(J_k − J_max)`): where optima of
+    /// similar likelihood disagree about a trial, its posterior is spread between them.
+    pub fn averaged_trials(&self) -> &[TrialPosterior] {
+        &self.averaged
     }
 
     /// Per fitted trial, the most probable code of each set.
