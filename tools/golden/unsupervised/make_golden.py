@@ -11,10 +11,12 @@ The model (module doc of oddball_decode::unsupervised): x_i ~ N(mu_t, Sigma) whe
 N(mu_n, Sigma) otherwise; in every trial exactly one code of each choice set is attended (uniform prior).
 The penalised log-likelihood is
     J = sum_slots log sum_c (1/K) prod_i N(x_i; mu_{y_i(c)}, Sigma) - (c/2) log|Sigma| - (1/2) tr(c D Sigma^-1)
-with D = diag of the total (ML) covariance S, c = lam N / (1 - lam), lam = scikit-learn's
+        - (k0/2) sum_{class} (mu_class - m0)' Sigma^-1 (mu_class - m0)
+(m0 the grand mean, k0 = 3 pseudo-epochs of prior on each class mean) with D = diag of the total (ML) covariance S, c = lam N / (1 - lam), lam = scikit-learn's
 ledoit_wolf_shrinkage of the standardised features. Nothing here uses the Rust shortcuts
-(Sherman-Morrison, the label-free total scatter): the M-step forms the weighted means and the
-within-class scatter W directly, Sigma = (c D + W) / (N + c), and the likelihood uses dense inverses
+(Sherman-Morrison, the label-free total scatter): the M-step forms the shrunk weighted means
+(sum r_i x_i + k0 m0) / (N_t + k0) and the within-class scatter W (plus the prior's k0 (mu - m0)(mu - m0)')
+directly, Sigma = (c D + W) / (N + c), and the likelihood uses dense inverses
 and slogdet; the E-step enumerates each slot's codes.
 
 The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
@@ -64,6 +66,8 @@ D = np.diag(np.diag(S))
 lam = ledoit_wolf_shrinkage(xc / np.sqrt(np.diag(S)), assume_centered=True)
 lam = min(max(lam, 1e-4), 0.99)
 cst = lam * n / (1 - lam)
+k0 = 3.0
+m0 = X.mean(axis=0)
 
 # Slots: (trial, set) and each epoch's choice.
 def locate(code):
@@ -107,7 +111,9 @@ def objective(mu_t, mu_n, sigma):
         m = max(terms)
         total += m + np.log(np.exp(np.array(terms) - m).sum())
     _, logdet = np.linalg.slogdet(sigma)
-    pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ np.linalg.inv(sigma))
+    inv = np.linalg.inv(sigma)
+    pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
+    pen -= 0.5 * k0 * ((mu_t - m0) @ inv @ (mu_t - m0) + (mu_n - m0) @ inv @ (mu_n - m0))
     return total + pen
 
 
@@ -115,10 +121,11 @@ post, _ = e_step(init)
 objectives = []
 for it in range(6):
     r = post[slot, choice]
-    mu_t = (r[:, None] * X).sum(0) / r.sum()
-    mu_n = ((1 - r)[:, None] * X).sum(0) / (1 - r).sum()
+    mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
+    mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
     dt, dn = X - mu_t, X - mu_n
     W = (r[:, None] * dt).T @ dt + ((1 - r)[:, None] * dn).T @ dn
+    W += k0 * (np.outer(mu_t - m0, mu_t - m0) + np.outer(mu_n - m0, mu_n - m0))
     sigma = (cst * D + W) / (n + cst)
     objectives.append(float(objective(mu_t, mu_n, sigma)))
     w = np.linalg.solve(sigma, mu_t - mu_n)
@@ -133,6 +140,7 @@ fixture = {
     "trials": trials.tolist(),
     "init": init.tolist(),
     "shrinkage": float(lam),
+    "mean_prior": k0,
     "objective": objectives,
     "posterior": post.tolist(),
     "llr": llr.tolist(),
