@@ -33,6 +33,7 @@
 //! # Ok::<(), oddball_decode::DecodeError>(())
 //! ```
 
+pub mod adaptive;
 pub mod classifiers;
 pub mod decision;
 mod error;
