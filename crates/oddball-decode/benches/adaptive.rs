@@ -28,13 +28,16 @@ fn bench(c: &mut Criterion) {
     let (cal, ycal) = rows(800, 160, 1);
     let model = AdaptiveLdaParams::default().fit(cal.view(), &ycal).unwrap();
     let (x, y) = rows(20, 160, 2);
-    c.bench_function("adaptive lda: one decision's update (20 epochs x 160 features)", |b| {
-        b.iter_batched(
-            || model.clone(),
-            |mut m| m.update(x.view(), &y).unwrap(),
-            BatchSize::SmallInput,
-        )
-    });
+    c.bench_function(
+        "adaptive lda: one decision's update (20 epochs x 160 features)",
+        |b| {
+            b.iter_batched(
+                || model.clone(),
+                |mut m| m.update(x.view(), &y).unwrap(),
+                BatchSize::SmallInput,
+            )
+        },
+    );
     let (x, _) = rows(800, 160, 3);
     let codes: Vec<u32> = (0..800).map(|i| 1 + (i % 4) as u32).collect();
     let trials: Vec<usize> = (0..800).map(|i| i / 20).collect();
@@ -43,13 +46,16 @@ fn bench(c: &mut Criterion) {
         features: AmplitudeFeatures::decimate(1).unwrap(),
         ..UnsupervisedParams::for_sfreq(256.0).unwrap()
     };
-    c.bench_function("unsupervised: EM refit on 40 decisions (800 epochs x 160 features)", |b| {
-        b.iter(|| {
-            params
-                .fit_features(x.view(), &codes, &trials, &constraint, None)
-                .unwrap()
-        })
-    });
+    c.bench_function(
+        "unsupervised: EM refit on 40 decisions (800 epochs x 160 features)",
+        |b| {
+            b.iter(|| {
+                params
+                    .fit_features(x.view(), &codes, &trials, &constraint, None)
+                    .unwrap()
+            })
+        },
+    );
 }
 
 criterion_group! {

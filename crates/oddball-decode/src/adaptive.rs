@@ -48,9 +48,13 @@ impl Default for AdaptiveLdaParams {
 /// What an update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Update {
-    Accepted { cosine: f64 },
+    Accepted {
+        cosine: f64,
+    },
     /// Undone: the weights would have drifted to this cosine with the calibrated weights.
-    Rejected { cosine: f64 },
+    Rejected {
+        cosine: f64,
+    },
 }
 
 /// A calibrated LDA whose class means follow the session.
@@ -95,7 +99,8 @@ impl AdaptiveLda {
         let n_t = y.iter().filter(|&&t| t).count() as f64;
         let n = [y.len() as f64 - n_t, n_t];
         let means = lda.means();
-        let mean = [0, 1].map(|k| DVector::from_iterator(means.ncols(), means.row(k).iter().copied()));
+        let mean =
+            [0, 1].map(|k| DVector::from_iterator(means.ncols(), means.row(k).iter().copied()));
         let proj = [0, 1].map(|k| &precision * &mean[k]);
         let [pn, pt] = lda.priors();
         let mut m = Self {
@@ -180,7 +185,9 @@ mod tests {
     fn data(n: usize, seed: u64) -> (Array2<f64>, Vec<bool>) {
         let mut s = seed;
         let mut u = move || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         let y: Vec<bool> = (0..n).map(|i| i % 4 == 1).collect();
@@ -208,11 +215,16 @@ mod tests {
         for (a, b) in a.iter().zip(&b) {
             assert!((a - b).abs() < 1e-9 * (1.0 + b.abs()), "{a} vs {b}");
         }
-        assert!(matches!(m.update(x2.view(), &y2).unwrap(), Update::Accepted { .. }));
+        assert!(matches!(
+            m.update(x2.view(), &y2).unwrap(),
+            Update::Accepted { .. }
+        ));
         // Naive: class means of all 120 epochs, Σ of the calibration, dense inverse.
         let sigma = to_dmatrix(lda.covariance()).try_inverse().unwrap();
         let mean = |k: bool| {
-            let rows: Vec<usize> = (0..120).filter(|&i| (if i < 80 { y1[i] } else { y2[i - 80] }) == k).collect();
+            let rows: Vec<usize> = (0..120)
+                .filter(|&i| (if i < 80 { y1[i] } else { y2[i - 80] }) == k)
+                .collect();
             DVector::from_fn(6, |j, _| {
                 rows.iter()
                     .map(|&i| if i < 80 { x1[[i, j]] } else { x2[[i - 80, j]] })
@@ -227,7 +239,11 @@ mod tests {
         let got = m.decision_function(x2.view()).unwrap();
         for i in 0..40 {
             let want = w.iter().zip(x2.row(i)).map(|(a, b)| a * b).sum::<f64>() + b;
-            assert!((got[i] - want).abs() < 1e-9 * (1.0 + want.abs()), "{} vs {want}", got[i]);
+            assert!(
+                (got[i] - want).abs() < 1e-9 * (1.0 + want.abs()),
+                "{} vs {want}",
+                got[i]
+            );
         }
         assert_eq!(m.counts(), [90.0, 30.0]);
     }
@@ -241,7 +257,10 @@ mod tests {
         let (x2, y2) = data(400, 3);
         let flipped: Vec<bool> = y2.iter().map(|t| !t).collect();
         let r = m.update(x2.view(), &flipped).unwrap();
-        assert!(matches!(r, Update::Rejected { cosine } if cosine < 0.8), "{r:?}");
+        assert!(
+            matches!(r, Update::Rejected { cosine } if cosine < 0.8),
+            "{r:?}"
+        );
         assert_eq!(m.decision_function(x1.view()).unwrap(), before);
         assert_eq!(m.counts(), [60.0, 20.0]);
         assert!(m.update(x2.view(), &flipped[..3]).is_err());

@@ -61,13 +61,17 @@ fn concat(runs: &[Run]) -> (Array2<f64>, Vec<bool>) {
 fn replay(train: &[Run], test: &[Run], adapt: bool) -> (f64, f64, f64, usize) {
     let (x, y) = concat(train);
     let mut m = AdaptiveLdaParams::default().fit(x.view(), &y).unwrap();
-    let mut acc = vec![0.0; 15];
+    let mut acc = [0.0; 15];
     let mut n_chars = 0;
     let (mut scores, mut truth) = (Vec::new(), Vec::new());
     let mut rejected = 0;
     for run in test {
-        let rows: Vec<u32> = (0..run.speller.n_rows()).map(|r| run.speller.code_of_row(r)).collect();
-        let cols: Vec<u32> = (0..run.speller.n_cols()).map(|c| run.speller.code_of_col(c)).collect();
+        let rows: Vec<u32> = (0..run.speller.n_rows())
+            .map(|r| run.speller.code_of_row(r))
+            .collect();
+        let cols: Vec<u32> = (0..run.speller.n_cols())
+            .map(|c| run.speller.code_of_col(c))
+            .collect();
         for range in &run.chars {
             let xs = run.x.slice(s![range.clone(), ..]);
             let sc = m.decision_function(xs).unwrap();
@@ -131,8 +135,16 @@ fn adaptation_after_calibration_loses_nothing_on_real_replays() {
     .collect();
     let (iib_train, iib_test) = iib.split_at(4);
     let cases: [(&str, &[Run], &[Run]); 3] = [
-        ("eeg3_1 -> eeg3_2", std::slice::from_ref(&e1), std::slice::from_ref(&e2)),
-        ("eeg3_2 -> eeg3_1", std::slice::from_ref(&e2), std::slice::from_ref(&e1)),
+        (
+            "eeg3_1 -> eeg3_2",
+            std::slice::from_ref(&e1),
+            std::slice::from_ref(&e2),
+        ),
+        (
+            "eeg3_2 -> eeg3_1",
+            std::slice::from_ref(&e2),
+            std::slice::from_ref(&e1),
+        ),
         ("IIb runs 1-4 -> HAM, PIE", iib_train, iib_test),
     ];
     let mut gains = 0;

@@ -44,7 +44,8 @@ fn rows(x: &[Vec<f64>]) -> Array2<f64> {
 
 #[test]
 fn em_matches_the_dense_numpy_reference() {
-    let g: Golden = serde_json::from_str(include_str!("fixtures/unsupervised_golden.json")).unwrap();
+    let g: Golden =
+        serde_json::from_str(include_str!("fixtures/unsupervised_golden.json")).unwrap();
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
     let constraint = Constraint::new(g.sets.clone()).unwrap();
@@ -53,7 +54,7 @@ fn em_matches_the_dense_numpy_reference() {
         ..params(g.objective.len(), 0.0)
     }
     .fit_from_scores(x.view(), &g.codes, &g.trials, &constraint, &g.init)
-        .unwrap();
+    .unwrap();
     assert_eq!(m.init().0, Init::Given);
     assert!(
         (m.shrinkage() - g.shrinkage).abs() < 1e-12,
@@ -153,7 +154,12 @@ proptest! {
 /// Four-bulb trials (codes 1–4, `reps` rounds each) of 4 channels × 64 samples at 64 Hz: noise
 /// and a 10 Hz sine, and on the attended bulb's flashes a bump at 300 ms. Returns the epochs, the
 /// codes, the trials and the attended code of each trial.
-fn four_bulb(n_trials: usize, reps: usize, bump: f64, seed: u64) -> (Array3<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
+fn four_bulb(
+    n_trials: usize,
+    reps: usize,
+    bump: f64,
+    seed: u64,
+) -> (Array3<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
     let mut state = seed;
     let mut uniform = move || {
         state = state
@@ -207,7 +213,15 @@ fn synthetic_four_bulb_trials_are_recovered_without_labels() {
     println!("post hoc {right}/30, objective {:?}", m.objective().last());
     assert!(right >= 28, "{right}/30");
     // Online: the late trials are decided as well as post hoc.
-    let r = replay(&params, x.view(), &codes, &trials, &constraint, &mut |_, _| {}).unwrap();
+    let r = replay(
+        &params,
+        x.view(),
+        &codes,
+        &trials,
+        &constraint,
+        &mut |_, _| {},
+    )
+    .unwrap();
     let online: Vec<bool> = r
         .online
         .iter()
@@ -217,7 +231,11 @@ fn synthetic_four_bulb_trials_are_recovered_without_labels() {
     let late = online[10..].iter().filter(|&&b| b).count();
     println!("online {online:?}");
     assert!(late >= 19, "{late}/20 right online after the first 10");
-    assert_eq!(r.model.choices(), m.choices(), "post hoc equals the one-shot fit");
+    assert_eq!(
+        r.model.choices(),
+        m.choices(),
+        "post hoc equals the one-shot fit"
+    );
 }
 
 #[test]
@@ -226,13 +244,39 @@ fn bad_input_is_named() {
     let x = Array2::from_shape_fn((8, 2), |(i, j)| (i * 3 + j) as f64 % 5.0);
     let p = params(10, 1e-6);
     let err = p
-        .fit_features(x.view(), &[1, 2, 3, 4, 1, 2, 3, 9], &[0; 8], &constraint, None)
+        .fit_features(
+            x.view(),
+            &[1, 2, 3, 4, 1, 2, 3, 9],
+            &[0; 8],
+            &constraint,
+            None,
+        )
         .unwrap_err();
-    assert!(matches!(err, UnsupervisedError::UnknownCode { index: 7, code: 9, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::UnknownCode {
+                index: 7,
+                code: 9,
+                ..
+            }
+        ),
+        "{err}"
+    );
     let err = p
         .fit_features(x.view(), &[1, 2, 3], &[0; 8], &constraint, None)
         .unwrap_err();
-    assert!(matches!(err, UnsupervisedError::Length { n_epochs: 8, n_codes: 3, .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::Length {
+                n_epochs: 8,
+                n_codes: 3,
+                ..
+            }
+        ),
+        "{err}"
+    );
     assert!(matches!(
         Constraint::new(vec![vec![1, 2], vec![2, 3]]),
         Err(UnsupervisedError::SharedCode { code: 2 })
@@ -244,11 +288,36 @@ fn bad_input_is_named() {
     let mut bad = x.clone();
     bad[[5, 1]] = f64::NAN;
     let err = p
-        .fit_features(bad.view(), &[1, 2, 3, 4, 1, 2, 3, 4], &[0; 8], &constraint, None)
+        .fit_features(
+            bad.view(),
+            &[1, 2, 3, 4, 1, 2, 3, 4],
+            &[0; 8],
+            &constraint,
+            None,
+        )
         .unwrap_err();
-    assert_eq!(err, UnsupervisedError::NonFinite { epoch: 5, feature: 1 });
+    assert_eq!(
+        err,
+        UnsupervisedError::NonFinite {
+            epoch: 5,
+            feature: 1
+        }
+    );
     let e3 = Array3::<f64>::zeros((8, 1, 2));
-    let err = replay(&p, e3.view(), &[1, 2, 1, 2, 1, 2, 1, 2], &[0, 0, 1, 1, 0, 0, 2, 2], &constraint, &mut |_, _| {})
-        .unwrap_err();
-    assert!(matches!(err, UnsupervisedError::TrialsNotContiguous { trial: 0, index: 4 }), "{err}");
+    let err = replay(
+        &p,
+        e3.view(),
+        &[1, 2, 1, 2, 1, 2, 1, 2],
+        &[0, 0, 1, 1, 0, 0, 2, 2],
+        &constraint,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::TrialsNotContiguous { trial: 0, index: 4 }
+        ),
+        "{err}"
+    );
 }

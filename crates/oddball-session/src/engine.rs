@@ -358,7 +358,10 @@ impl<S: Subject> Session<S> {
                 let (k, best) = p
                     .iter()
                     .enumerate()
-                    .fold((0, f64::NEG_INFINITY), |b, (i, &v)| if v > b.1 { (i, v) } else { b });
+                    .fold(
+                        (0, f64::NEG_INFINITY),
+                        |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+                    );
                 (t.trial, k as u32 + 1, best)
             })
             .collect()
@@ -741,7 +744,10 @@ impl<S: Subject> Session<S> {
 
     /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it.
     fn decide_unlabelled(&mut self, trial: usize) -> Result<Verdict, SessionError> {
-        let u = self.unlabelled.as_mut().ok_or(SessionError::NotCalibrated)?;
+        let u = self
+            .unlabelled
+            .as_mut()
+            .ok_or(SessionError::NotCalibrated)?;
         let n_stimuli = u.constraint.sets()[0].len();
         let none = |p: Vec<f64>| Verdict::Abstain {
             posterior: oddball_decode::decision::Posterior { p, p_none: 0.0 },
@@ -752,12 +758,13 @@ impl<S: Subject> Session<S> {
             return Ok(none(uniform));
         }
         let n = u.codes.len();
-        let x = ndarray::ArrayView2::from_shape((n, u.rows.len() / n), &u.rows)
-            .map_err(|e| SessionError::InvalidParameter {
+        let x = ndarray::ArrayView2::from_shape((n, u.rows.len() / n), &u.rows).map_err(|e| {
+            SessionError::InvalidParameter {
                 name: "feature rows",
                 value: u.rows.len().to_string(),
                 reason: e.to_string(),
-            })?;
+            }
+        })?;
         let fitted = match u.params.decoder.fit_features(
             x,
             &u.codes,

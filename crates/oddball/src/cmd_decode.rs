@@ -402,9 +402,11 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
         let b = bar.get_or_insert_with(|| {
             let b = ProgressBar::new(n as u64);
             b.set_style(
-                ProgressStyle::with_template("unsupervised [{bar:30}] {pos}/{len} characters {elapsed}")
-                    .expect("a valid template")
-                    .progress_chars("=> "),
+                ProgressStyle::with_template(
+                    "unsupervised [{bar:30}] {pos}/{len} characters {elapsed}",
+                )
+                .expect("a valid template")
+                .progress_chars("=> "),
             );
             b
         });

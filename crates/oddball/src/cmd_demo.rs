@@ -155,8 +155,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let pen = pen_report(&arm, prep.pen_start, &rows);
     let over_time = accuracy_over_time(&rows, 10);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
-    fs::write(args.out.join("model.json"), crate::pilot::model_json(&prep)?)
-        .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
+    fs::write(
+        args.out.join("model.json"),
+        crate::pilot::model_json(&prep)?,
+    )
+    .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
     // An uncalibrated session has no labelled epochs to draw.
     let erp_png = args.out.join("erp.png");
     if prep.erp.n_epochs() > 0 {

@@ -66,7 +66,9 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     let uncalibrated = args.session.calibration == CalibrationSpec::None;
     match (&args.model, args.calibrate, uncalibrated) {
         (None, false, false) => {
-            bail!("give --model FILE, --calibrate (labelled calibration first) or --calibration none")
+            bail!(
+                "give --model FILE, --calibrate (labelled calibration first) or --calibration none"
+            )
         }
         (Some(_), _, true) => bail!("--calibration none starts without a model: not with --model"),
         _ => {}

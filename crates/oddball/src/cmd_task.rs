@@ -14,7 +14,9 @@ use anyhow::{Context, Result};
 use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
-use oddball_session::report::{accuracy_over_time, accuracy_over_time_text, draw_text, DecisionRow};
+use oddball_session::report::{
+    accuracy_over_time, accuracy_over_time_text, draw_text, DecisionRow,
+};
 use oddball_session::task::{
     drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
@@ -256,7 +258,10 @@ fn write_common(
         .enumerate()
         .map(|(i, s)| DecisionRow::of(i + 1, s))
         .collect();
-    println!("{}", accuracy_over_time_text(&accuracy_over_time(&rows, 10)));
+    println!(
+        "{}",
+        accuracy_over_time_text(&accuracy_over_time(&rows, 10))
+    );
     // An uncalibrated session has no labelled epochs to draw.
     if prep.erp.n_epochs() > 0 {
         let erp_png = out.join("erp.png");

@@ -39,7 +39,11 @@ fn eeg3_as_one_unlabelled_session_spells_like_supervised_lda() {
     assert_eq!(u["online_correct"].as_array().unwrap().len(), 8, "{out}");
     let posthoc = u["posthoc_chars_by_reps"].as_array().unwrap();
     assert_eq!(posthoc.len(), 15);
-    assert_eq!(posthoc[14].as_f64().unwrap(), 1.0, "post hoc 8/8 at 15 repetitions: {out}");
+    assert_eq!(
+        posthoc[14].as_f64().unwrap(),
+        1.0,
+        "post hoc 8/8 at 15 repetitions: {out}"
+    );
     assert_eq!(u["posthoc_text"], "T3OF6MK?", "{out}");
     assert!(right(u) >= 7, "online {} of 8: {out}", right(u));
 
@@ -47,7 +51,15 @@ fn eeg3_as_one_unlabelled_session_spells_like_supervised_lda() {
     let mut sup = Vec::new();
     for (train, test) in [(&e2, &e1), (&e1, &e2)] {
         let (v, _) = run_json(
-            &["evaluate", "--train", train, "--test", test, "--pipeline", "lda"],
+            &[
+                "evaluate",
+                "--train",
+                train,
+                "--test",
+                test,
+                "--pipeline",
+                "lda",
+            ],
             &tmp.join("s.json"),
         );
         sup.push(v[0]["auc"].as_f64().unwrap());

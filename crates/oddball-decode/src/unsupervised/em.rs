@@ -87,7 +87,13 @@ impl Prepared {
             n_epochs: n,
             n_features: p,
         })?;
-        let log_det_b = 2.0 * chol.l_dirty().diagonal().iter().map(|v| v.ln()).sum::<f64>();
+        let log_det_b = 2.0
+            * chol
+                .l_dirty()
+                .diagonal()
+                .iter()
+                .map(|v| v.ln())
+                .sum::<f64>();
         Ok(Self {
             n,
             p,
@@ -113,7 +119,11 @@ impl Prepared {
 /// scikit-learn's `ledoit_wolf_shrinkage` of the standardised rows `zᵢⱼ = x̃ᵢⱼ / √dⱼ`, from the
 /// centred rows and their covariance (the formula of `crate::covariance`, on the correlation
 /// matrix).
-pub(crate) fn ledoit_wolf_standardised(xc: &DMatrix<f64>, s: &DMatrix<f64>, d: &DVector<f64>) -> f64 {
+pub(crate) fn ledoit_wolf_standardised(
+    xc: &DMatrix<f64>,
+    s: &DMatrix<f64>,
+    d: &DVector<f64>,
+) -> f64 {
     let (n, p) = xc.shape();
     let (nf, pf) = (n as f64, p as f64);
     let inv_sd: Vec<f64> = d.iter().map(|v| 1.0 / v.sqrt()).collect();
@@ -218,7 +228,11 @@ fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
     let offset = -0.5 * (beta_t + beta_n) * m;
     let xu = &prep.xc * &u;
     let u_s_u = xu.norm_squared() / nf;
-    let u_d_u: f64 = u.iter().zip(prep.d.iter()).map(|(ui, di)| ui * ui * di).sum();
+    let u_d_u: f64 = u
+        .iter()
+        .zip(prep.d.iter())
+        .map(|(ui, di)| ui * ui * di)
+        .sum();
     let rest = -0.5 * (nf + prep.c) * one_minus.ln()
         - 0.5 * nf * (kappa * u_s_u + beta_n * beta_n * m)
         - 0.5 * prep.c * kappa * u_d_u

@@ -189,7 +189,10 @@ fn truth_of(block: &[oddball_signal::Event], constraint: &Constraint) -> Option<
         .iter()
         .map(|set| {
             let mut found = None;
-            for e in block.iter().filter(|e| e.target == Some(true) && set.contains(&e.code)) {
+            for e in block
+                .iter()
+                .filter(|e| e.target == Some(true) && set.contains(&e.code))
+            {
                 match found {
                     None => found = Some(e.code),
                     Some(c) if c == e.code => {}

@@ -130,8 +130,12 @@ impl Constraint {
     /// One attended row and one attended column per character of `speller`.
     pub fn speller(speller: &Speller) -> Result<Self> {
         Self::new(vec![
-            (0..speller.n_rows()).map(|r| speller.code_of_row(r)).collect(),
-            (0..speller.n_cols()).map(|c| speller.code_of_col(c)).collect(),
+            (0..speller.n_rows())
+                .map(|r| speller.code_of_row(r))
+                .collect(),
+            (0..speller.n_cols())
+                .map(|c| speller.code_of_col(c))
+                .collect(),
         ])
     }
 
@@ -196,7 +200,7 @@ impl UnsupervisedParams {
                 reason: "pseudo-epochs: finite and >= 0".into(),
             });
         }
-        if !(self.tol >= 0.0) {
+        if self.tol.is_nan() || self.tol < 0.0 {
             return Err(UnsupervisedError::InvalidParameter {
                 name: "tol",
                 value: self.tol.to_string(),
@@ -261,7 +265,13 @@ impl UnsupervisedParams {
             });
         }
         let prep = em::Prepared::new(x)?;
-        self.fit_prepared(&prep, codes, trials, constraint, vec![(Init::Given, init.to_vec())])
+        self.fit_prepared(
+            &prep,
+            codes,
+            trials,
+            constraint,
+            vec![(Init::Given, init.to_vec())],
+        )
     }
 
     fn fit_prepared(
@@ -290,9 +300,13 @@ impl UnsupervisedParams {
         }
         let (init, run) = best.expect("at least one initialisation");
         // Every initialisation's posterior, weighted by its likelihood relative to the best.
-        let j_max = posteriors.iter().map(|(j, _)| *j).fold(f64::NEG_INFINITY, f64::max);
+        let j_max = posteriors
+            .iter()
+            .map(|(j, _)| *j)
+            .fold(f64::NEG_INFINITY, f64::max);
         let z: f64 = posteriors.iter().map(|(j, _)| (j - j_max).exp()).sum();
-        let mut averaged: Vec<Vec<f64>> = run.posterior.iter().map(|p| vec![0.0; p.len()]).collect();
+        let mut averaged: Vec<Vec<f64>> =
+            run.posterior.iter().map(|p| vec![0.0; p.len()]).collect();
         for (j, post) in &posteriors {
             let wgt = (j - j_max).exp() / z;
             for (a, p) in averaged.iter_mut().zip(post) {
@@ -344,7 +358,9 @@ impl UnsupervisedParams {
 fn random_projection(prep: &em::Prepared, rng: &mut rand_mt::Mt) -> Vec<f64> {
     let v = nalgebra::DVector::from_fn(prep.p, |j, _| normal(rng) / prep.d[j].sqrt());
     let s = &prep.xc * v;
-    let sd = (s.norm_squared() / prep.n as f64).sqrt().max(f64::MIN_POSITIVE);
+    let sd = (s.norm_squared() / prep.n as f64)
+        .sqrt()
+        .max(f64::MIN_POSITIVE);
     s.iter().map(|x| x / sd).collect()
 }
 
@@ -376,13 +392,14 @@ fn layout(
     let mut slot_of = Vec::with_capacity(n_epochs);
     let mut choice_of = Vec::with_capacity(n_epochs);
     for (index, (&code, &trial)) in codes.iter().zip(trials).enumerate() {
-        let (set, choice) = constraint
-            .locate(code)
-            .ok_or_else(|| UnsupervisedError::UnknownCode {
-                index,
-                code,
-                sets: constraint.sets.clone(),
-            })?;
+        let (set, choice) =
+            constraint
+                .locate(code)
+                .ok_or_else(|| UnsupervisedError::UnknownCode {
+                    index,
+                    code,
+                    sets: constraint.sets.clone(),
+                })?;
         let t = *dense.entry(trial).or_insert_with(|| {
             ids.push(trial);
             ids.len() - 1
