@@ -59,6 +59,9 @@ struct Summary<'a> {
     decisions: &'a [DecisionRow],
     /// Accuracy of decisions 1–10, 11–20, …
     accuracy_over_time: Vec<Stretch>,
+    /// Without calibration: [right, decisions] when the last fit re-decides every decision.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    posthoc_correct: Option<[usize; 2]>,
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     note: Option<&'a str>,
@@ -154,6 +157,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
     let over_time = accuracy_over_time(&rows, 10);
+    let posthoc = crate::pilot::posthoc(&prep);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
     fs::write(
         args.out.join("model.json"),
@@ -202,6 +206,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         pen: pen.clone(),
         decisions: &rows,
         accuracy_over_time: over_time.clone(),
+        posthoc_correct: posthoc.map(|(r, n)| [r, n]),
         files,
         note,
     };
@@ -214,6 +219,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         report_text(simulated_seconds, &result, comparison.as_ref(), &pen)
     );
     println!("{}", accuracy_over_time_text(&over_time));
+    if let Some((right, n)) = posthoc {
+        println!("post hoc: the last unsupervised fit re-decides {right}/{n} decisions right");
+    }
     println!("report in {}", args.out.display());
     // Wall-clock time goes to stderr: stdout, like every file, depends only on the options.
     eprintln!(

@@ -119,6 +119,23 @@ pub fn model_json(prep: &Prepared) -> Result<String> {
     Ok(prep.model_json.clone())
 }
 
+/// An uncalibrated session's decisions re-decided by its last fit ("post hoc"): (right, decisions
+/// it re-decided); `None` after a labelled calibration.
+pub fn posthoc(prep: &Prepared) -> Option<(usize, usize)> {
+    let AnyPilot::Live(s) = &prep.pilot else {
+        return None;
+    };
+    let re = s.redecided();
+    if re.is_empty() {
+        return None;
+    }
+    let right = re
+        .iter()
+        .filter(|(trial, code, _)| s.trials()[*trial].intended == Some(*code))
+        .count();
+    Some((right, re.len()))
+}
+
 /// decisions.csv: one row per step.
 pub fn write_decisions_csv(path: &Path, steps: &[Step]) -> Result<()> {
     fs::write(path, decisions_csv(steps)).with_context(|| format!("writing {}", path.display()))

@@ -39,6 +39,14 @@ fn an_uncalibrated_demo_learns_within_ten_decisions() {
     assert_eq!(stretches.len(), 4);
     assert_eq!(stretches[1]["first"], 11);
     assert!(text.contains("accuracy over time: 1–10 "), "{text}");
+    // Every decision re-decided by the last fit: the early mistakes are corrected after the fact.
+    let posthoc = s["posthoc_correct"].as_array().unwrap();
+    assert_eq!(posthoc[1], 40);
+    assert!(posthoc[0].as_u64().unwrap() >= late as u64 + 5, "{text}");
+    assert!(
+        text.contains("post hoc: the last unsupervised fit re-decides"),
+        "{text}"
+    );
     // No labelled epochs to draw; the model is the session's last unsupervised fit.
     assert!(!out.join("erp.png").exists());
     let model: serde_json::Value =
