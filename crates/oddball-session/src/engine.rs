@@ -285,6 +285,9 @@ struct Unlabelled {
     codes: Vec<u32>,
     trials: Vec<usize>,
     model: Option<Unsupervised>,
+    /// A model from other recordings ([`Session::start_transfer`]) and its score of every epoch.
+    transfer: Option<Model>,
+    transfer_scores: Vec<f64>,
 }
 
 impl<S: Subject> Session<S> {
@@ -335,7 +338,33 @@ impl<S: Subject> Session<S> {
             codes: Vec::new(),
             trials: Vec::new(),
             model: None,
+            transfer: None,
+            transfer_scores: Vec::new(),
         });
+        Ok(())
+    }
+
+    /// As [`Session::start_uncalibrated`], starting from `model`, fitted on other recordings
+    /// (other people, other sessions): its scores of the session's epochs start the EM, which
+    /// from then on follows its own last fit only (no random initialisations), so the session
+    /// adapts the transferred model instead of searching from scratch.
+    pub fn start_transfer(
+        &mut self,
+        params: UncalibratedParams,
+        model: Model,
+    ) -> Result<(), SessionError> {
+        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        if model.preprocess != self.params.preprocess {
+            return Err(SessionError::InvalidParameter {
+                name: "transfer model preprocess",
+                value: format!("{:?}", model.preprocess),
+                reason: "differs from the session's pre-processing".into(),
+            });
+        }
+        self.start_uncalibrated(params)?;
+        if let Some(u) = &mut self.unlabelled {
+            u.transfer = Some(model);
+        }
         Ok(())
     }
 
@@ -611,6 +640,11 @@ impl<S: Subject> Session<S> {
                             .decoder
                             .features
                             .transform(e.data.view().insert_axis(Axis(0)))?;
+                        if let Some(t) = &u.transfer {
+                            let score = t.pipeline.score_epoch(e.data.view())?;
+                            u.transfer_scores.push(score);
+                            f.score = Some(score);
+                        }
                         if let Some(m) = &u.model {
                             f.score = Some(m.decision_function_features(row.view())?[0]);
                         }
@@ -765,13 +799,22 @@ impl<S: Subject> Session<S> {
                 reason: e.to_string(),
             }
         })?;
-        let fitted = match u.params.decoder.fit_features(
-            x,
-            &u.codes,
-            &u.trials,
-            &u.constraint,
-            u.model.as_ref(),
-        ) {
+        let fit = match (&u.transfer, &u.model) {
+            // From a transferred model: EM from its scores of every epoch so far.
+            (Some(_), _) => u.params.decoder.fit_from_scores(
+                x,
+                &u.codes,
+                &u.trials,
+                &u.constraint,
+                &u.transfer_scores,
+            ),
+            (None, warm) => {
+                u.params
+                    .decoder
+                    .fit_features(x, &u.codes, &u.trials, &u.constraint, warm.as_ref())
+            }
+        };
+        let fitted = match fit {
             Ok(m) => m,
             // Too little data to separate anything yet: keep the arm still.
             Err(oddball_decode::unsupervised::UnsupervisedError::Degenerate { .. })

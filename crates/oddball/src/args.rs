@@ -126,6 +126,11 @@ pub struct SessionOptions {
     /// recording).
     #[arg(long, value_name = "labelled|none|FILE", default_value = "labelled", value_parser = CalibrationSpec::from_str)]
     pub calibration: CalibrationSpec,
+    /// With --calibration none: start from this model (`model.json` of another person's or
+    /// another session's `oddball demo`/`train` run, same montage): its scores start the
+    /// unsupervised decoder, which then adapts it to this session without labels.
+    #[arg(long, value_name = "MODEL")]
+    pub transfer: Option<PathBuf>,
     /// Seed of the simulated subject and the flash orders.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -152,8 +157,9 @@ pub struct SessionOptions {
 }
 
 impl SessionOptions {
-    /// The fixed rule (5 rounds) and the rule in effect.
+    /// The fixed rule (5 rounds) and the rule in effect (the options checked first).
     pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
+        self.check()?;
         let fixed = DecisionRule::Fixed {
             rounds: FourBulbParams::paper().n_rounds,
         };
@@ -236,9 +242,7 @@ impl SessionOptions {
         if self.calibration == CalibrationSpec::None {
             let params = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;
-            session
-                .start_uncalibrated(params)
-                .context("setting up the uncalibrated decoder")?;
+            self.start_uncalibrated(&mut session, params)?;
             if verbose {
                 println!(
                     "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
@@ -261,6 +265,35 @@ impl SessionOptions {
             );
         }
         Ok((session, calibration, pen_start))
+    }
+
+    /// Starts `session` without calibration, from the `--transfer` model if given.
+    pub fn start_uncalibrated<S: Subject>(
+        &self,
+        session: &mut Session<S>,
+        params: UncalibratedParams,
+    ) -> Result<()> {
+        match &self.transfer {
+            Some(path) => {
+                let model = crate::load::load_model(path)?;
+                session
+                    .start_transfer(params, model)
+                    .with_context(|| format!("starting from --transfer {}", path.display()))?;
+                println!("transfer: starting from {}", path.display());
+            }
+            None => session
+                .start_uncalibrated(params)
+                .context("setting up the uncalibrated decoder")?,
+        }
+        Ok(())
+    }
+
+    /// Checks option combinations before any session starts.
+    pub fn check(&self) -> Result<()> {
+        if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
+            bail!("--transfer starts an uncalibrated session: it needs --calibration none");
+        }
+        Ok(())
     }
 
     /// Reads a replayed subject's files and calibrates on the first; prints the calibration.

@@ -177,9 +177,7 @@ fn run_with(
         None if args.session.calibration == CalibrationSpec::None => {
             let p = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;
-            session
-                .start_uncalibrated(p)
-                .context("setting up the uncalibrated decoder")?;
+            args.session.start_uncalibrated(&mut session, p)?;
             println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
         }
         None => {

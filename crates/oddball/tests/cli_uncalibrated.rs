@@ -56,6 +56,48 @@ fn an_uncalibrated_demo_learns_within_ten_decisions() {
 }
 
 #[test]
+fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
+    let tmp = tmp_dir("cli-transfer");
+    // Another simulated person (seed 2), calibrated with labels: the model to start from.
+    let other = tmp.join("other");
+    let (ok, _, err) = oddball(&["demo", "--seed", "2", "--out", other.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let model = other.join("model.json");
+    for (commands, need) in [
+        (None, 5),
+        (
+            Some(["up", "left", "down", "right"].repeat(10).join(",")),
+            37,
+        ),
+    ] {
+        let out = tmp.join("me");
+        let mut args = vec![
+            "demo",
+            "--calibration",
+            "none",
+            "--transfer",
+            model.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(c) = &commands {
+            args.extend(["--commands", c]);
+        }
+        let (ok, text, err) = oddball(&args);
+        assert!(ok, "{err}");
+        assert!(text.contains("transfer: starting from"), "{text}");
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        let correct = s["result"]["correct"].as_u64().unwrap();
+        // The G: at least 5 of its 6 strokes right; 40 decisions: at least 37 right.
+        assert!(correct >= need, "{correct} right:\n{text}");
+    }
+    let (ok, _, err) = oddball(&["demo", "--transfer", model.to_str().unwrap()]);
+    assert!(!ok && err.contains("needs --calibration none"), "{err}");
+}
+
+#[test]
 fn calibration_none_is_checked_before_a_session_starts() {
     let (ok, _, err) = oddball(&[
         "demo",
