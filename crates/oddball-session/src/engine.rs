@@ -22,6 +22,8 @@
 
 use ndarray::{Array2, Array3, Axis};
 use oddball_arm::{ArmSim, Command};
+use oddball_decode::adaptive::{AdaptiveLda, Update};
+use oddball_decode::classifiers::Classifier;
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
@@ -254,6 +256,37 @@ pub struct Session<S: Subject> {
     arm_running: bool,
     /// Control without calibration ([`Session::start_uncalibrated`]).
     unlabelled: Option<Unlabelled>,
+    /// Online adaptation after a labelled calibration ([`Session::start_adaptation`]).
+    adaptation: Option<Adaptation>,
+}
+
+/// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
+#[derive(Debug)]
+struct Adaptation {
+    model: AdaptiveLda,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    min_confidence: f64,
+    report: AdaptationReport,
+}
+
+/// What online adaptation did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdaptationReport {
+    /// Decisions whose epochs the model took in.
+    pub accepted: usize,
+    /// Updates the drift guard undid.
+    pub rejected: usize,
+    /// Decisions left out as too unsure.
+    pub unsure: usize,
+}
+
+impl Adaptation {
+    /// Features per row.
+    fn model_features(&self) -> usize {
+        self.rows.len() / self.codes.len().max(1)
+    }
 }
 
 /// Settings of a session without calibration: the unsupervised decoder, refitted after every
@@ -316,6 +349,7 @@ impl<S: Subject> Session<S> {
             arm,
             arm_running: false,
             unlabelled: None,
+            adaptation: None,
         })
     }
 
@@ -365,6 +399,76 @@ impl<S: Subject> Session<S> {
         if let Some(u) = &mut self.unlabelled {
             u.transfer = Some(model);
         }
+        Ok(())
+    }
+
+    /// After a labelled calibration of the `lda` pipeline: the model adapts online — after each
+    /// decision its class means take in the decision's epochs, labelled by the decision (the
+    /// person corrects nothing), through incremental statistics ([`AdaptiveLda`]); an update
+    /// that turns the weights below a cosine of `min_cosine` with the calibrated ones is undone.
+    ///
+    /// Only decisions whose posterior reaches `min_confidence` are taken in (a unsure decision
+    /// is more often wrong, and a wrong label pulls the means the wrong way).
+    pub fn start_adaptation(
+        &mut self,
+        min_cosine: f64,
+        min_confidence: f64,
+    ) -> Result<(), SessionError> {
+        let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
+        let not_lda = || SessionError::InvalidParameter {
+            name: "adaptation",
+            value: model.pipeline.name().to_string(),
+            reason: "online adaptation needs the lda pipeline, calibrated in this session".into(),
+        };
+        let Classifier::Lda(lda) = model.pipeline.classifier() else {
+            return Err(not_lda());
+        };
+        let y = &self.calibration.labels;
+        if !model.pipeline.fused().is_empty() || model.pipeline.pca().is_some() || y.is_empty() {
+            return Err(not_lda());
+        }
+        self.adaptation = Some(Adaptation {
+            model: AdaptiveLda::from_lda(lda, y, min_cosine)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            min_confidence,
+            report: AdaptationReport::default(),
+        });
+        Ok(())
+    }
+
+    /// What online adaptation did so far (`None` without it).
+    pub fn adaptation(&self) -> Option<AdaptationReport> {
+        self.adaptation.as_ref().map(|a| a.report)
+    }
+
+    /// Takes a decided trial's epochs into the adaptive model, labelled by the decision.
+    fn adapt(&mut self, trial: usize) -> Result<(), SessionError> {
+        let Some(a) = &mut self.adaptation else {
+            return Ok(());
+        };
+        let decided = self.trials[trial].decided();
+        let sure = self.trials[trial].confidence() >= a.min_confidence;
+        let keep: Vec<usize> = (0..a.trials.len())
+            .filter(|&i| a.trials[i] == trial)
+            .collect();
+        if decided.is_some() && !keep.is_empty() && !sure {
+            a.report.unsure += 1;
+        }
+        if let (Some(code), false, true) = (decided, keep.is_empty(), sure) {
+            let p = a.model_features();
+            let x =
+                ndarray::Array2::from_shape_fn((keep.len(), p), |(r, j)| a.rows[keep[r] * p + j]);
+            let y: Vec<bool> = keep.iter().map(|&i| a.codes[i] == code).collect();
+            match a.model.update(x.view(), &y)? {
+                Update::Accepted { .. } => a.report.accepted += 1,
+                Update::Rejected { .. } => a.report.rejected += 1,
+            }
+        }
+        a.rows.clear();
+        a.codes.clear();
+        a.trials.clear();
         Ok(())
     }
 
@@ -651,6 +755,16 @@ impl<S: Subject> Session<S> {
                         u.rows.extend(row.iter());
                         u.codes.push(f.code);
                         u.trials.push(f.trial);
+                    } else if let (true, Some(a)) = (e.accepted, &mut self.adaptation) {
+                        let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
+                        let row = model
+                            .pipeline
+                            .features(e.data.view().insert_axis(Axis(0)))?
+                            .into_rows("adaptive LDA")?;
+                        f.score = Some(a.model.decision_function(row.view())?[0]);
+                        a.rows.extend(row.iter());
+                        a.codes.push(f.code);
+                        a.trials.push(f.trial);
                     } else if e.accepted {
                         let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
                         f.score = Some(model.pipeline.score_epoch(e.data.view())?);
@@ -766,6 +880,7 @@ impl<S: Subject> Session<S> {
                     let (verdict, used) = decision.decide(&rounds);
                     if verdict != Verdict::Continue || rounds.len() == n_rounds {
                         self.conclude(trial, verdict, used)?;
+                        self.adapt(trial)?;
                         break;
                     }
                 }

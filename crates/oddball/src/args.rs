@@ -131,6 +131,12 @@ pub struct SessionOptions {
     /// unsupervised decoder, which then adapts it to this session without labels.
     #[arg(long, value_name = "MODEL")]
     pub transfer: Option<PathBuf>,
+    /// After the labelled calibration (`lda` pipeline), adapt the model online: after each
+    /// decision its class means take in the decision's epochs, labelled by the decision, through
+    /// incremental statistics; decisions with a posterior below 0.9 are left out, and an update
+    /// that turns the weights too far from the calibrated ones (cosine below 0.8) is undone.
+    #[arg(long)]
+    pub adapt: bool,
     /// Seed of the simulated subject and the flash orders.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -252,6 +258,11 @@ impl SessionOptions {
             return Ok((session, CalibrationReport::none(), pen_start));
         }
         let calibration = session.calibrate().context("calibrating")?;
+        if self.adapt {
+            session
+                .start_adaptation(0.8, 0.9)
+                .context("starting online adaptation")?;
+        }
         if verbose {
             println!(
                 "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
@@ -292,6 +303,12 @@ impl SessionOptions {
     pub fn check(&self) -> Result<()> {
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");
+        }
+        if self.adapt && self.calibration == CalibrationSpec::None {
+            bail!("--adapt adapts a labelled calibration; --calibration none adapts by itself");
+        }
+        if self.adapt && self.pipeline != "lda" {
+            bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
         }
         Ok(())
     }

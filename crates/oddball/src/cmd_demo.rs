@@ -158,6 +158,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let pen = pen_report(&arm, prep.pen_start, &rows);
     let over_time = accuracy_over_time(&rows, 10);
     let posthoc = crate::pilot::posthoc(&prep);
+    let adaptation = crate::pilot::adaptation(&prep);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
     fs::write(
         args.out.join("model.json"),
@@ -219,6 +220,12 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         report_text(simulated_seconds, &result, comparison.as_ref(), &pen)
     );
     println!("{}", accuracy_over_time_text(&over_time));
+    if let Some(a) = adaptation {
+        println!(
+            "online adaptation: {} decisions taken in, {} undone by the drift guard, {} too unsure (posterior < 0.9)",
+            a.accepted, a.rejected, a.unsure
+        );
+    }
     if let Some((right, n)) = posthoc {
         println!("post hoc: the last unsupervised fit re-decides {right}/{n} decisions right");
     }

@@ -71,6 +71,9 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
             )
         }
         (Some(_), _, true) => bail!("--calibration none starts without a model: not with --model"),
+        (Some(_), _, _) if args.session.adapt => {
+            bail!("--adapt adapts a calibration made in this session (--calibrate), not --model")
+        }
         _ => {}
     }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
@@ -182,6 +185,11 @@ fn run_with(
         }
         None => {
             let c = session.calibrate().context("calibrating")?;
+            if args.session.adapt {
+                session
+                    .start_adaptation(0.8, 0.9)
+                    .context("starting online adaptation")?;
+            }
             println!(
                 "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
                 c.n_trials, c.n_epochs, c.cv_auc

@@ -136,6 +136,14 @@ pub fn posthoc(prep: &Prepared) -> Option<(usize, usize)> {
     Some((right, re.len()))
 }
 
+/// What online adaptation did in a live session (`--adapt`).
+pub fn adaptation(prep: &Prepared) -> Option<oddball_session::engine::AdaptationReport> {
+    match &prep.pilot {
+        AnyPilot::Live(s) => s.adaptation(),
+        AnyPilot::Replay(_) => None,
+    }
+}
+
 /// decisions.csv: one row per step.
 pub fn write_decisions_csv(path: &Path, steps: &[Step]) -> Result<()> {
     fs::write(path, decisions_csv(steps)).with_context(|| format!("writing {}", path.display()))

@@ -112,3 +112,42 @@ fn calibration_none_is_checked_before_a_session_starts() {
     let (ok, _, err) = oddball(&["online"]);
     assert!(!ok && err.contains("--calibration none"), "{err}");
 }
+
+#[test]
+fn online_adaptation_after_a_labelled_calibration_keeps_the_accuracy() {
+    let tmp = tmp_dir("cli-adapt");
+    let commands = ["up", "left", "down", "right"].repeat(10).join(",");
+    let mut correct = Vec::new();
+    for adapt in [false, true] {
+        let out = tmp.join(if adapt { "adapt" } else { "static" });
+        let mut args = vec![
+            "demo",
+            "--commands",
+            &commands,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if adapt {
+            args.push("--adapt");
+        }
+        let (ok, text, err) = oddball(&args);
+        assert!(ok, "{err}");
+        assert_eq!(text.contains("online adaptation: "), adapt, "{text}");
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        correct.push(s["result"]["correct"].as_u64().unwrap());
+    }
+    // Seed 1, typical subject: 39/40 either way (the simulated person's ERP does not drift).
+    assert!(correct[1] >= correct[0], "{correct:?}");
+    for (bad, why) in [
+        (vec!["--adapt", "--calibration", "none"], "adapts by itself"),
+        (
+            vec!["--adapt", "--pipeline", "riemann"],
+            "needs --pipeline lda",
+        ),
+    ] {
+        let (ok, _, err) = oddball(&[&["demo"], bad.as_slice()].concat());
+        assert!(!ok && err.contains(why), "{err}");
+    }
+}
