@@ -17,7 +17,9 @@
 //! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
 //! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
 //! [`metrics`] measures them; [`dataset`] turns recordings into labelled epochs, [`evaluate`]
-//! scores presets on them and [`benchmark`] runs presets over data sets and subjects. The modules keep their former paths too (`oddball_decode::svm`,
+//! scores presets on them, [`benchmark`] runs presets over data sets and subjects, and
+//! [`unsupervised`] decodes without labels (EM over the paradigm's constraint). The modules
+//! keep their former paths too (`oddball_decode::svm`,
 //! `oddball_decode::tuning`, …).
 //!
 //! # Example
@@ -33,6 +35,7 @@
 //! # Ok::<(), oddball_decode::DecodeError>(())
 //! ```
 
+pub mod adaptive;
 pub mod benchmark;
 pub mod classifiers;
 pub mod dataset;
@@ -52,6 +55,7 @@ pub mod stats;
 #[cfg(test)]
 mod testutil;
 pub mod traits;
+pub mod unsupervised;
 
 // The modules at their paths before the grouping by role.
 pub use classifiers::{ensemble, knn, lda, logistic, svm, toeplitz_lda};

@@ -22,9 +22,12 @@
 
 use ndarray::{Array2, Array3, Axis};
 use oddball_arm::{ArmSim, Command};
+use oddball_decode::adaptive::{AdaptiveLda, Update};
+use oddball_decode::classifiers::Classifier;
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::unsupervised::{Constraint, Unsupervised, UnsupervisedParams};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -214,6 +217,21 @@ pub struct CalibrationReport {
     pub fit_seconds: f64,
 }
 
+impl CalibrationReport {
+    /// A session that did not calibrate (no trials; AUC and d′ unknown: NaN).
+    pub fn none() -> Self {
+        Self {
+            n_trials: 0,
+            n_epochs: 0,
+            n_targets: 0,
+            n_rejected: 0,
+            cv_auc: f64::NAN,
+            d_prime: f64::NAN,
+            fit_seconds: 0.0,
+        }
+    }
+}
+
 /// Everything a session showed, recorded and decided.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SessionLog {
@@ -253,6 +271,73 @@ pub struct Session<S: Subject> {
     arm_running: bool,
     /// Drawn onsets refused (see [`Session::refused_onsets`]).
     refused_onsets: u64,
+    /// Control without calibration ([`Session::start_uncalibrated`]).
+    unlabelled: Option<Unlabelled>,
+    /// Online adaptation after a labelled calibration ([`Session::start_adaptation`]).
+    adaptation: Option<Adaptation>,
+}
+
+/// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
+#[derive(Debug)]
+struct Adaptation {
+    model: AdaptiveLda,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    min_confidence: f64,
+    report: AdaptationReport,
+}
+
+/// What online adaptation did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdaptationReport {
+    /// Decisions whose epochs the model took in.
+    pub accepted: usize,
+    /// Updates the drift guard undid.
+    pub rejected: usize,
+    /// Decisions left out as too unsure.
+    pub unsure: usize,
+}
+
+impl Adaptation {
+    /// Features per row.
+    fn model_features(&self) -> usize {
+        self.rows.len() / self.codes.len().max(1)
+    }
+}
+
+/// Settings of a session without calibration: the unsupervised decoder, refitted after every
+/// decision on every epoch so far, and how sure it must be to move the arm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct UncalibratedParams {
+    pub decoder: UnsupervisedParams,
+    /// A decision whose best bulb has a smaller posterior abstains (the arm stays still).
+    pub abstain_below: f64,
+}
+
+impl UncalibratedParams {
+    /// The `lda` preset's features at `sfreq`, abstaining below a posterior of 0.9.
+    pub fn for_sfreq(sfreq: f64) -> Result<Self, SessionError> {
+        Ok(Self {
+            decoder: UnsupervisedParams::for_sfreq(sfreq)?,
+            abstain_below: 0.9,
+        })
+    }
+}
+
+/// What an uncalibrated session has seen: the feature row, code and trial of every accepted
+/// online epoch, and the latest EM fit.
+#[derive(Debug)]
+struct Unlabelled {
+    params: UncalibratedParams,
+    constraint: Constraint,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    model: Option<Unsupervised>,
+    /// A model from other recordings ([`Session::start_transfer`]) and its score of every epoch.
+    transfer: Option<Model>,
+    transfer_scores: Vec<f64>,
 }
 
 impl<S: Subject> Session<S> {
@@ -281,7 +366,156 @@ impl<S: Subject> Session<S> {
             arm,
             arm_running: false,
             refused_onsets: 0,
+            unlabelled: None,
+            adaptation: None,
         })
+    }
+
+    /// Controls without calibration: the first decision comes from the first trial's epochs,
+    /// and after every decision the unsupervised decoder is refitted (EM over "one bulb per
+    /// trial", warm-started from the last fit) on all online epochs so far — no label is used.
+    pub fn start_uncalibrated(&mut self, params: UncalibratedParams) -> Result<(), SessionError> {
+        if !(params.abstain_below > 0.0 && params.abstain_below <= 1.0) {
+            return Err(SessionError::InvalidParameter {
+                name: "abstain_below",
+                value: params.abstain_below.to_string(),
+                reason: "a probability in (0, 1]".into(),
+            });
+        }
+        let codes: Vec<u32> = (1..=self.params.paradigm.bulbs.len() as u32).collect();
+        self.unlabelled = Some(Unlabelled {
+            params,
+            constraint: Constraint::one_of(&codes)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            model: None,
+            transfer: None,
+            transfer_scores: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// As [`Session::start_uncalibrated`], starting from `model`, fitted on other recordings
+    /// (other people, other sessions): its scores of the session's epochs start the EM, which
+    /// from then on follows its own last fit only (no random initialisations), so the session
+    /// adapts the transferred model instead of searching from scratch.
+    pub fn start_transfer(
+        &mut self,
+        params: UncalibratedParams,
+        model: Model,
+    ) -> Result<(), SessionError> {
+        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        if model.preprocess != self.params.preprocess {
+            return Err(SessionError::InvalidParameter {
+                name: "transfer model preprocess",
+                value: format!("{:?}", model.preprocess),
+                reason: "differs from the session's pre-processing".into(),
+            });
+        }
+        self.start_uncalibrated(params)?;
+        if let Some(u) = &mut self.unlabelled {
+            u.transfer = Some(model);
+        }
+        Ok(())
+    }
+
+    /// After a labelled calibration of the `lda` pipeline: the model adapts online — after each
+    /// decision its class means take in the decision's epochs, labelled by the decision (the
+    /// person corrects nothing), through incremental statistics ([`AdaptiveLda`]); an update
+    /// that turns the weights below a cosine of `min_cosine` with the calibrated ones is undone.
+    ///
+    /// Only decisions whose posterior reaches `min_confidence` are taken in (a unsure decision
+    /// is more often wrong, and a wrong label pulls the means the wrong way).
+    pub fn start_adaptation(
+        &mut self,
+        min_cosine: f64,
+        min_confidence: f64,
+    ) -> Result<(), SessionError> {
+        let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
+        let not_lda = || SessionError::InvalidParameter {
+            name: "adaptation",
+            value: model.pipeline.name().to_string(),
+            reason: "online adaptation needs the lda pipeline, calibrated in this session".into(),
+        };
+        let Classifier::Lda(lda) = model.pipeline.classifier() else {
+            return Err(not_lda());
+        };
+        let y = &self.calibration.labels;
+        if !model.pipeline.fused().is_empty() || model.pipeline.pca().is_some() || y.is_empty() {
+            return Err(not_lda());
+        }
+        self.adaptation = Some(Adaptation {
+            model: AdaptiveLda::from_lda(lda, y, min_cosine)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            min_confidence,
+            report: AdaptationReport::default(),
+        });
+        Ok(())
+    }
+
+    /// What online adaptation did so far (`None` without it).
+    pub fn adaptation(&self) -> Option<AdaptationReport> {
+        self.adaptation.as_ref().map(|a| a.report)
+    }
+
+    /// Takes a decided trial's epochs into the adaptive model, labelled by the decision.
+    fn adapt(&mut self, trial: usize) -> Result<(), SessionError> {
+        let Some(a) = &mut self.adaptation else {
+            return Ok(());
+        };
+        let decided = self.trials[trial].decided();
+        let sure = self.trials[trial].confidence() >= a.min_confidence;
+        let keep: Vec<usize> = (0..a.trials.len())
+            .filter(|&i| a.trials[i] == trial)
+            .collect();
+        if decided.is_some() && !keep.is_empty() && !sure {
+            a.report.unsure += 1;
+        }
+        if let (Some(code), false, true) = (decided, keep.is_empty(), sure) {
+            let p = a.model_features();
+            let x =
+                ndarray::Array2::from_shape_fn((keep.len(), p), |(r, j)| a.rows[keep[r] * p + j]);
+            let y: Vec<bool> = keep.iter().map(|&i| a.codes[i] == code).collect();
+            match a.model.update(x.view(), &y)? {
+                Update::Accepted { .. } => a.report.accepted += 1,
+                Update::Rejected { .. } => a.report.rejected += 1,
+            }
+        }
+        a.rows.clear();
+        a.codes.clear();
+        a.trials.clear();
+        Ok(())
+    }
+
+    /// The latest unsupervised fit of an uncalibrated session.
+    pub fn unsupervised(&self) -> Option<&Unsupervised> {
+        self.unlabelled.as_ref().and_then(|u| u.model.as_ref())
+    }
+
+    /// Every online decision of an uncalibrated session re-decided by the latest fit ("post
+    /// hoc"): per online trial (index into [`Session::trials`]), the bulb code of highest
+    /// posterior and that posterior.
+    pub fn redecided(&self) -> Vec<(usize, u32, f64)> {
+        let Some(m) = self.unsupervised() else {
+            return Vec::new();
+        };
+        m.trials()
+            .iter()
+            .map(|t| {
+                let p = &t.sets[0];
+                let (k, best) = p
+                    .iter()
+                    .enumerate()
+                    .fold(
+                        (0, f64::NEG_INFINITY),
+                        |b, (i, &v)| if v > b.1 { (i, v) } else { b },
+                    );
+                (t.trial, k as u32 + 1, best)
+            })
+            .collect()
     }
 
     /// Measured onsets refused: a flash reported drawn before the oldest buffered sample (its
@@ -458,7 +692,7 @@ impl<S: Subject> Session<S> {
 
     /// One online decision while the person attends `intended` (`None`: attends nothing).
     pub fn decide(&mut self, intended: Option<Command>) -> Result<TrialRecord, SessionError> {
-        if self.model.is_none() {
+        if self.model.is_none() && self.unlabelled.is_none() {
             return Err(SessionError::NotCalibrated);
         }
         let code = intended.map(|c| self.params.paradigm.code_of(c));
@@ -535,7 +769,34 @@ impl<S: Subject> Session<S> {
                     }
                 }
                 Phase::Online => {
-                    if e.accepted {
+                    if let (true, Some(u)) = (e.accepted, &mut self.unlabelled) {
+                        let row = u
+                            .params
+                            .decoder
+                            .features
+                            .transform(e.data.view().insert_axis(Axis(0)))?;
+                        if let Some(t) = &u.transfer {
+                            let score = t.pipeline.score_epoch(e.data.view())?;
+                            u.transfer_scores.push(score);
+                            f.score = Some(score);
+                        }
+                        if let Some(m) = &u.model {
+                            f.score = Some(m.decision_function_features(row.view())?[0]);
+                        }
+                        u.rows.extend(row.iter());
+                        u.codes.push(f.code);
+                        u.trials.push(f.trial);
+                    } else if let (true, Some(a)) = (e.accepted, &mut self.adaptation) {
+                        let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
+                        let row = model
+                            .pipeline
+                            .features(e.data.view().insert_axis(Axis(0)))?
+                            .into_rows("adaptive LDA")?;
+                        f.score = Some(a.model.decision_function(row.view())?[0]);
+                        a.rows.extend(row.iter());
+                        a.codes.push(f.code);
+                        a.trials.push(f.trial);
+                    } else if e.accepted {
                         let model = self.model.as_ref().ok_or(SessionError::NotCalibrated)?;
                         f.score = Some(model.pipeline.score_epoch(e.data.view())?);
                     }
@@ -647,6 +908,13 @@ impl<S: Subject> Session<S> {
                         break;
                     }
                 }
+                Phase::Online if self.unlabelled.is_some() => {
+                    if next == planned.len() && shown.iter().all(|f| f.accepted.is_some()) {
+                        let verdict = self.decide_unlabelled(trial)?;
+                        self.conclude(trial, verdict, n_rounds)?;
+                        break;
+                    }
+                }
                 Phase::Online => {
                     let rounds = complete_rounds(shown);
                     let decision = self
@@ -657,6 +925,7 @@ impl<S: Subject> Session<S> {
                     let (verdict, used) = decision.decide(&rounds);
                     if verdict != Verdict::Continue || rounds.len() == n_rounds {
                         self.conclude(trial, verdict, used)?;
+                        self.adapt(trial)?;
                         break;
                     }
                 }
@@ -665,6 +934,68 @@ impl<S: Subject> Session<S> {
         self.trials[trial].end = self.subject.position();
         self.subject.trial_ended(&self.trials[trial])?;
         Ok(trial)
+    }
+
+    /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it.
+    fn decide_unlabelled(&mut self, trial: usize) -> Result<Verdict, SessionError> {
+        let u = self
+            .unlabelled
+            .as_mut()
+            .ok_or(SessionError::NotCalibrated)?;
+        let n_stimuli = u.constraint.sets()[0].len();
+        let none = |p: Vec<f64>| Verdict::Abstain {
+            posterior: oddball_decode::decision::Posterior { p, p_none: 0.0 },
+        };
+        let uniform = vec![1.0 / n_stimuli as f64; n_stimuli];
+        // Two epochs at least, and some from this trial, or there is nothing to decide from.
+        if u.codes.len() < 2 || u.trials.last() != Some(&trial) {
+            return Ok(none(uniform));
+        }
+        let n = u.codes.len();
+        let x = ndarray::ArrayView2::from_shape((n, u.rows.len() / n), &u.rows).map_err(|e| {
+            SessionError::InvalidParameter {
+                name: "feature rows",
+                value: u.rows.len().to_string(),
+                reason: e.to_string(),
+            }
+        })?;
+        let fit = match (&u.transfer, &u.model) {
+            // From a transferred model: EM from its scores of every epoch so far.
+            (Some(_), _) => u.params.decoder.fit_from_scores(
+                x,
+                &u.codes,
+                &u.trials,
+                &u.constraint,
+                &u.transfer_scores,
+            ),
+            (None, warm) => {
+                u.params
+                    .decoder
+                    .fit_features(x, &u.codes, &u.trials, &u.constraint, warm.as_ref())
+            }
+        };
+        let fitted = match fit {
+            Ok(m) => m,
+            // Too little data to separate anything yet: keep the arm still.
+            Err(oddball_decode::unsupervised::UnsupervisedError::Degenerate { .. })
+            | Err(oddball_decode::unsupervised::UnsupervisedError::NotPositiveDefinite {
+                ..
+            }) => return Ok(none(uniform)),
+            Err(e) => return Err(e.into()),
+        };
+        let p = fitted
+            .averaged_trials()
+            .iter()
+            .find(|t| t.trial == trial)
+            .map_or(uniform, |t| t.sets[0].clone());
+        u.model = Some(fitted);
+        let posterior = oddball_decode::decision::Posterior { p, p_none: 0.0 };
+        let (index, best) = posterior.best();
+        Ok(if best >= u.params.abstain_below {
+            Verdict::Choose { index, posterior }
+        } else {
+            Verdict::Abstain { posterior }
+        })
     }
 
     fn conclude(

@@ -30,5 +30,7 @@ pub enum SessionError {
     #[error(transparent)]
     Arm(#[from] oddball_arm::ArmError),
     #[error(transparent)]
+    Unsupervised(#[from] oddball_decode::unsupervised::UnsupervisedError),
+    #[error(transparent)]
     Io(#[from] oddball_io::IoError),
 }

@@ -97,6 +97,59 @@ pub fn scores(rows: &[DecisionRow], rule: &DecisionRule) -> Scores {
     }
 }
 
+/// The decisions of one stretch of a session (`first`..=`last`, from 1).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Stretch {
+    pub first: usize,
+    pub last: usize,
+    pub correct: usize,
+    pub abstained: usize,
+    /// Right decisions over all decisions of the stretch (abstentions count as not right).
+    pub accuracy: f64,
+}
+
+/// Accuracy over time: `rows` cut into stretches of `size` decisions (1–10, 11–20, …; the last
+/// may be shorter). Shows how an uncalibrated session learns.
+pub fn accuracy_over_time(rows: &[DecisionRow], size: usize) -> Vec<Stretch> {
+    rows.chunks(size.max(1))
+        .enumerate()
+        .map(|(k, c)| {
+            let correct = c
+                .iter()
+                .filter(|r| r.decided.is_some() && r.decided == r.intended)
+                .count();
+            Stretch {
+                first: k * size.max(1) + 1,
+                last: k * size.max(1) + c.len(),
+                correct,
+                abstained: c.iter().filter(|r| r.abstained).count(),
+                accuracy: correct as f64 / c.len() as f64,
+            }
+        })
+        .collect()
+}
+
+/// `accuracy over time: 1–10 6/10 (3 abstained), 11–20 10/10`.
+pub fn accuracy_over_time_text(stretches: &[Stretch]) -> String {
+    let parts: Vec<String> = stretches
+        .iter()
+        .map(|s| {
+            let mut t = format!(
+                "{}–{} {}/{}",
+                s.first,
+                s.last,
+                s.correct,
+                s.last - s.first + 1
+            );
+            if s.abstained > 0 {
+                let _ = write!(t, " ({} abstained)", s.abstained);
+            }
+            t
+        })
+        .collect();
+    format!("accuracy over time: {}", parts.join(", "))
+}
+
 /// The stopping rule in words (`fixed 10 rounds`, `dynamic stopping (p >= …, at most … rounds)`).
 pub fn rule_name(rule: &DecisionRule) -> String {
     match rule {

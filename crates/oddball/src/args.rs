@@ -14,7 +14,9 @@ use oddball_io::nic::{NicFormat, NicMode};
 use oddball_live::clock::Clock;
 use oddball_live::panel::{PanelConfig, PanelServer};
 use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
-use oddball_session::engine::{CalibrationReport, Session, SessionParams, Subject};
+use oddball_session::engine::{
+    CalibrationReport, Session, SessionParams, Subject, UncalibratedParams,
+};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
@@ -29,6 +31,30 @@ pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
         return Err("empty: give at least one of up, down, left, right".into());
     }
     Ok(c)
+}
+
+/// How a session starts: `--calibration labelled|none|FILE`.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum CalibrationSpec {
+    /// Labelled calibration decisions (a replayed subject: its sibling recording).
+    #[default]
+    Labelled,
+    /// No calibration: the unsupervised decoder learns from the session itself.
+    None,
+    /// The calibration recording of a replayed subject.
+    File(PathBuf),
+}
+
+impl FromStr for CalibrationSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Ok(match s {
+            "labelled" | "labeled" => Self::Labelled,
+            "none" => Self::None,
+            "" => return Err("give labelled, none or a calibration recording".into()),
+            file => Self::File(PathBuf::from(file)),
+        })
+    }
 }
 
 /// Who watches the panel.
@@ -94,10 +120,25 @@ pub struct SessionOptions {
     /// P300-speller recording played back as four-choice decisions).
     #[arg(long, default_value = "typical")]
     pub subject: SubjectSpec,
-    /// Calibration recording for a replayed subject [default: the replay file's sibling whose
-    /// name ends in _1 instead of _N, e.g. eeg3_1.dat for eeg3_2.dat].
-    #[arg(long, value_name = "FILE")]
-    pub calibration: Option<PathBuf>,
+    /// How the session starts: `labelled` (calibration-per-bulb labelled decisions per bulb;
+    /// for a replayed subject, the replay file's sibling whose name ends in _1 instead of _N,
+    /// e.g. eeg3_1.dat for eeg3_2.dat), `none` (no calibration: the first command comes from the
+    /// first trial, the decoder is refitted without labels after every decision — EM over "one
+    /// bulb per trial" — and abstains while unsure), or FILE (a replayed subject's calibration
+    /// recording).
+    #[arg(long, value_name = "labelled|none|FILE", default_value = "labelled", value_parser = CalibrationSpec::from_str)]
+    pub calibration: CalibrationSpec,
+    /// With --calibration none: start from this model (`model.json` of another person's or
+    /// another session's `oddball demo`/`train` run, same montage): its scores start the
+    /// unsupervised decoder, which then adapts it to this session without labels.
+    #[arg(long, value_name = "MODEL")]
+    pub transfer: Option<PathBuf>,
+    /// After the labelled calibration (`lda` pipeline), adapt the model online: after each
+    /// decision its class means take in the decision's epochs, labelled by the decision, through
+    /// incremental statistics; decisions with a posterior below 0.9 are left out, and an update
+    /// that turns the weights too far from the calibrated ones (cosine below 0.8) is undone.
+    #[arg(long)]
+    pub adapt: bool,
     /// Seed of the simulated subject and the flash orders.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -124,8 +165,9 @@ pub struct SessionOptions {
 }
 
 impl SessionOptions {
-    /// The fixed rule (5 rounds) and the rule in effect.
+    /// The fixed rule (5 rounds) and the rule in effect (the options checked first).
     pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
+        self.check()?;
         let fixed = DecisionRule::Fixed {
             rounds: FourBulbParams::paper().n_rounds,
         };
@@ -174,8 +216,13 @@ impl SessionOptions {
             return Ok(None);
         };
         let cal = match &self.calibration {
-            Some(c) => c.clone(),
-            None => sibling_calibration(file)?,
+            CalibrationSpec::File(c) => c.clone(),
+            CalibrationSpec::Labelled => sibling_calibration(file)?,
+            CalibrationSpec::None => bail!(
+                "--calibration none runs a live or simulated session; a replayed subject \
+                 (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
+                 --unsupervised` to replay a recording without labels)"
+            ),
         };
         Ok(Some((file.clone(), cal)))
     }
@@ -200,7 +247,24 @@ impl SessionOptions {
         let pen_start = arm.pen();
         let mut session = Session::new(self.params(rule), subject, Some(arm))
             .context("setting up the session")?;
+        if self.calibration == CalibrationSpec::None {
+            let params = UncalibratedParams::for_sfreq(session.sfreq())
+                .context("setting up the uncalibrated decoder")?;
+            self.start_uncalibrated(&mut session, params)?;
+            if verbose {
+                println!(
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
+                    params.abstain_below
+                );
+            }
+            return Ok((session, CalibrationReport::none(), pen_start));
+        }
         let calibration = session.calibrate().context("calibrating")?;
+        if self.adapt {
+            session
+                .start_adaptation(0.8, 0.9)
+                .context("starting online adaptation")?;
+        }
         if verbose {
             println!(
                 "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
@@ -214,6 +278,41 @@ impl SessionOptions {
             );
         }
         Ok((session, calibration, pen_start))
+    }
+
+    /// Starts `session` without calibration, from the `--transfer` model if given.
+    pub fn start_uncalibrated<S: Subject>(
+        &self,
+        session: &mut Session<S>,
+        params: UncalibratedParams,
+    ) -> Result<()> {
+        match &self.transfer {
+            Some(path) => {
+                let model = crate::load::load_model(path)?;
+                session
+                    .start_transfer(params, model)
+                    .with_context(|| format!("starting from --transfer {}", path.display()))?;
+                println!("transfer: starting from {}", path.display());
+            }
+            None => session
+                .start_uncalibrated(params)
+                .context("setting up the uncalibrated decoder")?,
+        }
+        Ok(())
+    }
+
+    /// Checks option combinations before any session starts.
+    pub fn check(&self) -> Result<()> {
+        if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
+            bail!("--transfer starts an uncalibrated session: it needs --calibration none");
+        }
+        if self.adapt && self.calibration == CalibrationSpec::None {
+            bail!("--adapt adapts a labelled calibration; --calibration none adapts by itself");
+        }
+        if self.adapt && self.pipeline != "lda" {
+            bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
+        }
+        Ok(())
     }
 
     /// Reads a replayed subject's files and calibrates on the first; prints the calibration.

@@ -48,10 +48,16 @@ pub struct EvaluateArgs {
     #[arg(
         long,
         num_args = 1..,
-        required_unless_present = "model",
+        required_unless_present_any = ["model", "unsupervised"],
         help = concat!("Training recordings: ", crate::load::formats!(), ".")
     )]
     pub train: Vec<PathBuf>,
+    /// Decode the test recordings (speller runs, played in order as one session) without
+    /// labels and without training files: each character decided by the model fitted (EM over
+    /// one row + one column per character) on the characters so far, then all re-decided by the
+    /// final model; the labels only score the result.
+    #[arg(long, requires = "test", conflicts_with_all = ["train", "model", "tune", "plot"])]
+    pub unsupervised: bool,
     /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
     /// oddball session files (`session.dat` of `oddball demo`) get every online decision
     /// recomputed.
@@ -249,6 +255,9 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
 }
 
 pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
+    if args.unsupervised {
+        return evaluate_unsupervised(args);
+    }
     if let Some(path) = &args.model {
         let model = load_model(path)?;
         if let Some(first) = args.test.first() {
@@ -388,6 +397,63 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
     }
     if let Some(path) = &args.out {
         oddball_io::write_atomic(path, serde_json::to_string_pretty(&results)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// `evaluate --unsupervised`: the test recordings as one unlabelled session.
+fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
+    use oddball_decode::unsupervised::{evaluate::evaluate_unsupervised, UnsupervisedParams};
+
+    let pre = Preprocess::peer();
+    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
+    let sfreq = test.first().map_or(0.0, |r| r.epochs.sfreq());
+    let params = UnsupervisedParams::for_sfreq(sfreq)?;
+    let mut bar: Option<ProgressBar> = None;
+    let r = evaluate_unsupervised(&params, &test, &mut |k, n| {
+        let b = bar.get_or_insert_with(|| {
+            let b = ProgressBar::new(n as u64);
+            b.set_style(
+                ProgressStyle::with_template(
+                    "unsupervised [{bar:30}] {pos}/{len} characters {elapsed}",
+                )
+                .expect("a valid template")
+                .progress_chars("=> "),
+            );
+            b
+        });
+        b.set_position(k as u64 + 1);
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let r = r?;
+    let right = |v: &[u8]| v.iter().map(|&b| b as usize).sum::<usize>();
+    let acc: Vec<String> = r
+        .posthoc_chars_by_reps
+        .iter()
+        .map(|a| format!("{:.0}", a * 100.0))
+        .collect();
+    println!(
+        "unsupervised: {} characters, no labels seen; online {}/{} ({}), post hoc {} (chars % by reps: {}), final model AUC {:.3} ({})",
+        r.n_characters,
+        right(&r.online_correct),
+        r.n_characters,
+        r.online_text,
+        r.posthoc_text,
+        acc.join(" "),
+        r.auc,
+        r.auc_by_recording
+            .iter()
+            .map(|a| format!("{} {:.3}", a.recording, a.auc))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if let Some(path) = &args.out {
+        let v = serde_json::json!({ "unsupervised": r });
+        std::fs::write(path, serde_json::to_string_pretty(&v)?)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("wrote {}", path.display());
     }

@@ -20,8 +20,8 @@ use oddball_live::clock::Clock;
 use oddball_live::source::SourceSpec;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
-    pen_report, report_text, row_text, rule_name, scores, CalibrationSummary, DecisionRow,
-    PenReport, Scores,
+    accuracy_over_time, accuracy_over_time_text, pen_report, report_text, row_text, rule_name,
+    scores, CalibrationSummary, DecisionRow, PenReport, Scores, Stretch,
 };
 use oddball_session::task::{run_copy, Pilot};
 use serde::Serialize;
@@ -57,6 +57,11 @@ struct Summary<'a> {
     simulated_seconds: f64,
     pen: PenReport,
     decisions: &'a [DecisionRow],
+    /// Accuracy of decisions 1–10, 11–20, …
+    accuracy_over_time: Vec<Stretch>,
+    /// Without calibration: [right, decisions] when the last fit re-decides every decision.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    posthoc_correct: Option<[usize; 2]>,
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     note: Option<String>,
@@ -159,12 +164,21 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let result = scores(&rows, &rule);
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
+    let over_time = accuracy_over_time(&rows, 10);
+    let posthoc = crate::pilot::posthoc(&prep);
+    let adaptation = crate::pilot::adaptation(&prep);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
-    oddball_io::write_atomic(args.out.join("model.json"), &prep.model_json)
-        .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
+    oddball_io::write_atomic(
+        args.out.join("model.json"),
+        crate::pilot::model_json(&prep)?,
+    )
+    .with_context(|| format!("writing {}", args.out.join("model.json").display()))?;
+    // An uncalibrated session has no labelled epochs to draw.
     let erp_png = args.out.join("erp.png");
-    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
-        .with_context(|| format!("drawing {}", erp_png.display()))?;
+    if prep.erp.n_epochs() > 0 {
+        oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+            .with_context(|| format!("drawing {}", erp_png.display()))?;
+    }
     let expected: Vec<Vector2<f64>> = pen
         .expected_m
         .iter()
@@ -181,9 +195,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "decisions.csv".to_string(),
         "summary.json".into(),
         "model.json".into(),
-        "erp.png".into(),
         "pen_trace.png".into(),
     ];
+    if erp_png.exists() {
+        files.insert(3, "erp.png".into());
+    }
     if let Some(f) = session_file.as_ref().and_then(|p| p.file_name()) {
         files.push(f.to_string_lossy().into_owned());
     }
@@ -198,6 +214,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         simulated_seconds,
         pen: pen.clone(),
         decisions: &rows,
+        accuracy_over_time: over_time.clone(),
+        posthoc_correct: posthoc.map(|(r, n)| [r, n]),
         files,
         note,
     };
@@ -209,6 +227,16 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         "{}",
         report_text(simulated_seconds, &result, comparison.as_ref(), &pen)
     );
+    println!("{}", accuracy_over_time_text(&over_time));
+    if let Some(a) = adaptation {
+        println!(
+            "online adaptation: {} decisions taken in, {} undone by the drift guard, {} too unsure (posterior < 0.9)",
+            a.accepted, a.rejected, a.unsure
+        );
+    }
+    if let Some((right, n)) = posthoc {
+        println!("post hoc: the last unsupervised fit re-decides {right}/{n} decisions right");
+    }
     println!("report in {}", args.out.display());
     // Wall-clock time goes to stderr: stdout, like every file, depends only on the options.
     eprintln!(

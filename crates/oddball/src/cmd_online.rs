@@ -20,13 +20,14 @@ use oddball_live::online::{
 use oddball_live::panel::PanelConfig;
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
-use oddball_session::engine::Session;
+use oddball_session::engine::{Session, UncalibratedParams};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
 
 use crate::args::{
-    commands_arg, recording_arm, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
+    commands_arg, recording_arm, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs,
+    LETTER_G,
 };
 
 /// Options of `oddball online`.
@@ -34,10 +35,12 @@ use crate::args::{
 pub struct OnlineArgs {
     #[command(flatten)]
     pub source: SourceArgs,
-    /// A model trained in a session (`oddball demo` writes one: out/demo/model.json).
-    #[arg(long, value_name = "FILE", required_unless_present = "calibrate")]
+    /// A model trained in a session (`oddball demo` writes one: out/demo/model.json); one of
+    /// --model, --calibrate and --calibration none is needed.
+    #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
-    /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model.
+    /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model
+    /// (`--calibration none`: no calibration at all, the decoder learns from the session).
     #[arg(long, conflicts_with = "model")]
     pub calibrate: bool,
     #[command(flatten)]
@@ -60,6 +63,19 @@ pub struct OnlineArgs {
 
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
+    let uncalibrated = args.session.calibration == CalibrationSpec::None;
+    match (&args.model, args.calibrate, uncalibrated) {
+        (None, false, false) => {
+            bail!(
+                "give --model FILE, --calibrate (labelled calibration first) or --calibration none"
+            )
+        }
+        (Some(_), _, true) => bail!("--calibration none starts without a model: not with --model"),
+        (Some(_), _, _) if args.session.adapt => {
+            bail!("--adapt adapts a calibration made in this session (--calibrate), not --model")
+        }
+        _ => {}
+    }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
@@ -126,7 +142,9 @@ fn run_with(
             .pipeline
             .name()
             .to_string()),
-        if args.calibrate {
+        if args.session.calibration == CalibrationSpec::None {
+            "no calibration"
+        } else if args.calibrate {
             "calibrating first"
         } else {
             "model loaded"
@@ -162,8 +180,19 @@ fn run_with(
     let mut ended = None;
     match model {
         Some(m) => session.set_model(m).context("using the model")?,
+        None if args.session.calibration == CalibrationSpec::None => {
+            let p = UncalibratedParams::for_sfreq(session.sfreq())
+                .context("setting up the uncalibrated decoder")?;
+            args.session.start_uncalibrated(&mut session, p)?;
+            println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
+        }
         None => match session.calibrate() {
             Ok(c) => {
+                if args.session.adapt {
+                    session
+                        .start_adaptation(0.8, 0.9)
+                        .context("starting online adaptation")?;
+                }
                 println!(
                     "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
                     c.n_trials, c.n_epochs, c.cv_auc

@@ -14,7 +14,9 @@ use anyhow::{Context, Result};
 use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
-use oddball_session::report::draw_text;
+use oddball_session::report::{
+    accuracy_over_time, accuracy_over_time_text, draw_text, DecisionRow,
+};
 use oddball_session::task::{
     drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
@@ -241,7 +243,8 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
     finish(prep, &args.out, wall)
 }
 
-/// decisions.csv, model.json, erp.png and pen_trace.png.
+/// decisions.csv, model.json, erp.png (after a labelled calibration) and pen_trace.png; prints
+/// the accuracy over time.
 fn write_common(
     out: &Path,
     prep: &Prepared,
@@ -249,11 +252,23 @@ fn write_common(
     expected: &[Vector2<f64>],
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
-    oddball_io::write_atomic(out.join("model.json"), &prep.model_json)
+    oddball_io::write_atomic(out.join("model.json"), crate::pilot::model_json(prep)?)
         .context("writing model.json")?;
-    let erp_png = out.join("erp.png");
-    oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
-        .with_context(|| format!("drawing {}", erp_png.display()))?;
+    let rows: Vec<DecisionRow> = steps
+        .iter()
+        .enumerate()
+        .map(|(i, s)| DecisionRow::of(i + 1, s))
+        .collect();
+    println!(
+        "{}",
+        accuracy_over_time_text(&accuracy_over_time(&rows, 10))
+    );
+    // An uncalibrated session has no labelled epochs to draw.
+    if prep.erp.n_epochs() > 0 {
+        let erp_png = out.join("erp.png");
+        oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
+            .with_context(|| format!("drawing {}", erp_png.display()))?;
+    }
     let pen_png = out.join("pen_trace.png");
     oddball_plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &pen_png)
         .with_context(|| format!("drawing {}", pen_png.display()))

@@ -81,10 +81,8 @@ pub fn prepare(
     let subject = live_subject(opts, source, paced, Clock::new())?;
     let (session, calibration, pen_start) = opts.calibrated(subject, rule, true)?;
     let erp = session.calibration_epochs()?;
-    let model_json = session
-        .model()
-        .map(|m| m.to_json())
-        .context("the session has no model")?;
+    // An uncalibrated session has no model yet (see `model_json`).
+    let model_json = session.model().map(|m| m.to_json()).unwrap_or_default();
     Ok(Prepared {
         pilot: AnyPilot::Live(session),
         calibration,
@@ -107,6 +105,42 @@ pub fn save_session(prep: Prepared, out: &Path, end: &str) -> Result<Option<Path
     prep.save_session(&path, end)
         .with_context(|| format!("writing {}", path.display()))?;
     Ok(Some(path))
+}
+
+/// model.json of a run: the calibrated model, or for an uncalibrated session the latest
+/// unsupervised fit.
+pub fn model_json(prep: &Prepared) -> Result<String> {
+    if let AnyPilot::Live(s) = &prep.pilot {
+        if let Some(m) = s.unsupervised() {
+            return Ok(serde_json::to_string_pretty(m)? + "\n");
+        }
+    }
+    Ok(prep.model_json.clone())
+}
+
+/// An uncalibrated session's decisions re-decided by its last fit ("post hoc"): (right, decisions
+/// it re-decided); `None` after a labelled calibration.
+pub fn posthoc(prep: &Prepared) -> Option<(usize, usize)> {
+    let AnyPilot::Live(s) = &prep.pilot else {
+        return None;
+    };
+    let re = s.redecided();
+    if re.is_empty() {
+        return None;
+    }
+    let right = re
+        .iter()
+        .filter(|(trial, code, _)| s.trials()[*trial].intended == Some(*code))
+        .count();
+    Some((right, re.len()))
+}
+
+/// What online adaptation did in a live session (`--adapt`).
+pub fn adaptation(prep: &Prepared) -> Option<oddball_session::engine::AdaptationReport> {
+    match &prep.pilot {
+        AnyPilot::Live(s) => s.adaptation(),
+        AnyPilot::Replay(_) => None,
+    }
 }
 
 /// decisions.csv: one row per step.

@@ -1,0 +1,66 @@
+//! One online update of the adaptive LDA (`oddball_decode::adaptive`) at 8 channels: the 20
+//! epochs of one four-bulb decision (5 rounds × 4 flashes) of the `lda` preset's features
+//! (8 channels × 20 bins = 160) taken into a model calibrated on 800 epochs; and, for scale, one
+//! unsupervised refit (EM) of 40 decisions.
+
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use ndarray::Array2;
+use oddball_decode::adaptive::AdaptiveLdaParams;
+use oddball_decode::amplitude::AmplitudeFeatures;
+use oddball_decode::unsupervised::{Constraint, UnsupervisedParams};
+
+fn rows(n: usize, p: usize, seed: u64) -> (Array2<f64>, Vec<bool>) {
+    let mut s = seed;
+    let mut u = move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    let y: Vec<bool> = (0..n).map(|i| i % 4 == 1).collect();
+    let x = Array2::from_shape_fn((n, p), |(i, j)| {
+        10.0 * u() + if y[i] { (j % 20) as f64 * 0.2 } else { 0.0 }
+    });
+    (x, y)
+}
+
+fn bench(c: &mut Criterion) {
+    let (cal, ycal) = rows(800, 160, 1);
+    let model = AdaptiveLdaParams::default().fit(cal.view(), &ycal).unwrap();
+    let (x, y) = rows(20, 160, 2);
+    c.bench_function(
+        "adaptive lda: one decision's update (20 epochs x 160 features)",
+        |b| {
+            b.iter_batched(
+                || model.clone(),
+                |mut m| m.update(x.view(), &y).unwrap(),
+                BatchSize::SmallInput,
+            )
+        },
+    );
+    let (x, _) = rows(800, 160, 3);
+    let codes: Vec<u32> = (0..800).map(|i| 1 + (i % 4) as u32).collect();
+    let trials: Vec<usize> = (0..800).map(|i| i / 20).collect();
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::decimate(1).unwrap(),
+        ..UnsupervisedParams::for_sfreq(256.0).unwrap()
+    };
+    c.bench_function(
+        "unsupervised: EM refit on 40 decisions (800 epochs x 160 features)",
+        |b| {
+            b.iter(|| {
+                params
+                    .fit_features(x.view(), &codes, &trials, &constraint, None)
+                    .unwrap()
+            })
+        },
+    );
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(20).measurement_time(std::time::Duration::from_secs(3));
+    targets = bench
+}
+criterion_main!(benches);

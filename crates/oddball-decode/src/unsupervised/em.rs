@@ -1,0 +1,293 @@
+//! The EM itself, on feature rows: label-free statistics of the data ([`Prepared`]), one EM run
+//! from an initial score per epoch ([`run`]) and the penalised log-likelihood it climbs.
+//!
+//! Notation (module doc of [`super`]): `x̃ᵢ` the centred feature rows, `S = X̃ᵀX̃ / N`, `D` its
+//! diagonal, `B = (1 − λ)·S + λ·D` with `λ` the Ledoit–Wolf shrinkage of the standardised rows,
+//! `c = λN / (1 − λ)` the strength of the covariance prior. Per iteration, with responsibilities
+//! `rᵢ` (P(epoch i attended)), `N_t = Σ rᵢ`, `N_n = N − N_t`:
+//!
+//! ```text
+//! a  = X̃ᵀr,  μ_t = a / (N_t + κ₀),  μ_n = −a / (N_n + κ₀)   (κ₀ pseudo-epochs at the mean)
+//! Δμ = h a,  h = 1/(N_t + κ₀) + 1/(N_n + κ₀)
+//! Σ  = B − g ΔμΔμᵀ,  g = 1 / (h (N + c))              (the exact M-step, see the module doc)
+//! u  = B⁻¹Δμ,  a = Δμᵀu,  w = Σ⁻¹Δμ = u / (1 − g a)    (Sherman–Morrison)
+//! LLRᵢ = wᵀ(x̃ᵢ − (μ_t + μ_n)/2)
+//! ```
+//!
+//! so one iteration costs one triangular solve pair with the Cholesky factor of `B` (`p²`) and
+//! two passes over the rows (`N·p`).
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use ndarray::ArrayView2;
+
+use super::{Result, UnsupervisedError};
+
+/// Where each epoch sits in the paradigm's constraint: its slot (one trial's choice set, in
+/// which exactly one code is attended) and its choice within the slot.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Layout {
+    pub slot_of: Vec<usize>,
+    pub choice_of: Vec<usize>,
+    /// Choices per slot.
+    pub n_choices: Vec<usize>,
+}
+
+/// Label-free statistics of the feature rows an EM runs on.
+#[derive(Debug)]
+pub(crate) struct Prepared {
+    pub n: usize,
+    pub p: usize,
+    /// Mean row `(p,)`.
+    pub mean: DVector<f64>,
+    /// Centred rows `(N, p)`.
+    pub xc: DMatrix<f64>,
+    /// `diag(S)` (floored, so `B` is positive definite).
+    pub d: DVector<f64>,
+    /// Ledoit–Wolf shrinkage `λ` of the standardised rows (clamped to `[1e-4, 0.99]`).
+    pub shrinkage: f64,
+    /// Prior strength `c = λN / (1 − λ)`.
+    pub c: f64,
+    pub chol: Cholesky<f64, Dyn>,
+    /// `ln |B|`.
+    pub log_det_b: f64,
+}
+
+impl Prepared {
+    /// Centres `x` `(N, p)`, computes `S`, the shrinkage and the factor of `B`.
+    pub fn new(x: ArrayView2<f64>) -> Result<Self> {
+        let (n, p) = x.dim();
+        if n < 2 || p == 0 {
+            return Err(UnsupervisedError::TooFewEpochs { n_epochs: n });
+        }
+        if let Some((i, _)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(UnsupervisedError::NonFinite {
+                epoch: i / p,
+                feature: i % p,
+            });
+        }
+        let nf = n as f64;
+        let mut xc = DMatrix::from_fn(n, p, |i, j| x[[i, j]]);
+        let mut mean = DVector::zeros(p);
+        for (j, mut col) in xc.column_iter_mut().enumerate() {
+            let m = col.sum() / nf;
+            mean[j] = m;
+            col.add_scalar_mut(-m);
+        }
+        let s = xc.tr_mul(&xc) / nf;
+        let mean_var = s.trace() / p as f64;
+        let floor = (mean_var * 1e-12).max(f64::MIN_POSITIVE);
+        let d = DVector::from_fn(p, |j, _| s[(j, j)].max(floor));
+        let shrinkage = ledoit_wolf_standardised(&xc, &s, &d).clamp(1e-4, 0.99);
+        let c = shrinkage * nf / (1.0 - shrinkage);
+        let mut b = s * (1.0 - shrinkage);
+        for j in 0..p {
+            b[(j, j)] += shrinkage * d[j];
+        }
+        let chol = Cholesky::new(b).ok_or(UnsupervisedError::NotPositiveDefinite {
+            n_epochs: n,
+            n_features: p,
+        })?;
+        let log_det_b = 2.0
+            * chol
+                .l_dirty()
+                .diagonal()
+                .iter()
+                .map(|v| v.ln())
+                .sum::<f64>();
+        Ok(Self {
+            n,
+            p,
+            mean,
+            xc,
+            d,
+            shrinkage,
+            c,
+            chol,
+            log_det_b,
+        })
+    }
+
+    /// The part of the objective that does not depend on the parameters:
+    /// `−(Np/2) ln 2π − ((N + c)/2)(ln|B| + p)` (from `N tr(B⁻¹S) + c tr(B⁻¹D) = (N + c) p`).
+    fn constant(&self) -> f64 {
+        let (nf, pf) = (self.n as f64, self.p as f64);
+        -0.5 * nf * pf * (2.0 * std::f64::consts::PI).ln()
+            - 0.5 * (nf + self.c) * (self.log_det_b + pf)
+    }
+}
+
+/// scikit-learn's `ledoit_wolf_shrinkage` of the standardised rows `zᵢⱼ = x̃ᵢⱼ / √dⱼ`, from the
+/// centred rows and their covariance (the formula of `crate::covariance`, on the correlation
+/// matrix).
+pub(crate) fn ledoit_wolf_standardised(
+    xc: &DMatrix<f64>,
+    s: &DMatrix<f64>,
+    d: &DVector<f64>,
+) -> f64 {
+    let (n, p) = xc.shape();
+    let (nf, pf) = (n as f64, p as f64);
+    let inv_sd: Vec<f64> = d.iter().map(|v| 1.0 / v.sqrt()).collect();
+    let mut row_sq = vec![0.0; n];
+    for (j, col) in xc.column_iter().enumerate() {
+        let k = inv_sd[j] * inv_sd[j];
+        for (acc, v) in row_sq.iter_mut().zip(col.iter()) {
+            *acc += v * v * k;
+        }
+    }
+    let beta_: f64 = row_sq.iter().map(|r| r * r).sum();
+    let mut delta_ = 0.0;
+    let mut trace = 0.0;
+    for j in 0..p {
+        for i in 0..p {
+            let r = s[(i, j)] * inv_sd[i] * inv_sd[j];
+            delta_ += r * r;
+        }
+        trace += s[(j, j)] * inv_sd[j] * inv_sd[j];
+    }
+    let mu = trace / pf;
+    let beta = (beta_ / nf - delta_) / (pf * nf);
+    let delta = (delta_ - 2.0 * mu * trace + pf * mu * mu) / pf;
+    let beta = beta.min(delta);
+    if beta <= 0.0 || delta <= 0.0 {
+        0.0
+    } else {
+        beta / delta
+    }
+}
+
+/// The parameters after an M-step, as a linear log-likelihood ratio on centred rows.
+#[derive(Debug, Clone)]
+pub(crate) struct Linear {
+    /// `w = Σ⁻¹Δμ` `(p,)`.
+    pub w: DVector<f64>,
+    /// `LLR = wᵀx̃ + offset`.
+    pub offset: f64,
+}
+
+/// One EM run's result.
+#[derive(Debug, Clone)]
+pub(crate) struct Run {
+    /// The penalised log-likelihood of each M-step's parameters, in order (non-decreasing).
+    pub objective: Vec<f64>,
+    /// The final parameters.
+    pub linear: Linear,
+    /// Posterior per slot over its choices, under the final parameters.
+    pub posterior: Vec<Vec<f64>>,
+}
+
+/// E-step: the posterior of each slot's choices from per-epoch LLRs (uniform prior), and
+/// `Σ_slots ln Σ_c (1/K) exp(E_c)`.
+pub(crate) fn e_step(layout: &Layout, llr: &[f64]) -> (Vec<Vec<f64>>, f64) {
+    let mut evidence: Vec<Vec<f64>> = layout.n_choices.iter().map(|&k| vec![0.0; k]).collect();
+    for (i, &l) in llr.iter().enumerate() {
+        evidence[layout.slot_of[i]][layout.choice_of[i]] += l;
+    }
+    let mut total = 0.0;
+    for e in &mut evidence {
+        let m = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = e.iter().map(|v| (v - m).exp()).sum();
+        total += m + z.ln() - (e.len() as f64).ln();
+        for v in e.iter_mut() {
+            *v = (*v - m).exp() / z;
+        }
+    }
+    (evidence, total)
+}
+
+/// M-step from responsibilities `r` with `kappa0` pseudo-epochs of prior on each class mean:
+/// the new parameters and the parameter-dependent part of the objective (everything but the
+/// E-step's log-sum-exp and [`Prepared::constant`]).
+fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
+    let nf = prep.n as f64;
+    let n_t: f64 = r.iter().sum();
+    let n_n = nf - n_t;
+    if !(n_t > 0.0 && n_n > 0.0) {
+        return Err(UnsupervisedError::Degenerate {
+            what: format!("expected targets {n_t} of {nf} epochs"),
+        });
+    }
+    // a = Σ rᵢ x̃ᵢ; μ_t = a / (N_t + κ₀), μ_n = −a / (N_n + κ₀) (Σ x̃ᵢ = 0).
+    let rv = DVector::from_column_slice(r);
+    let h = 1.0 / (n_t + kappa0) + 1.0 / (n_n + kappa0);
+    let dmu = prep.xc.tr_mul(&rv) * h;
+    // μ_t = β_t Δμ, μ_n = β_n Δμ.
+    let (beta_t, beta_n) = (1.0 / (h * (n_t + kappa0)), -1.0 / (h * (n_n + kappa0)));
+    let u = prep.chol.solve(&dmu);
+    let a = dmu.dot(&u);
+    let g = 1.0 / (h * (nf + prep.c));
+    let one_minus = 1.0 - g * a;
+    if !(one_minus > 0.0 && one_minus.is_finite()) {
+        return Err(UnsupervisedError::Degenerate {
+            what: format!("within-class covariance lost definiteness (1 − g·a = {one_minus})"),
+        });
+    }
+    let kappa = g / one_minus;
+    let w = &u / one_minus;
+    // Δμᵀ Σ⁻¹ Δμ.
+    let m = a / one_minus;
+    let offset = -0.5 * (beta_t + beta_n) * m;
+    let xu = &prep.xc * &u;
+    let u_s_u = xu.norm_squared() / nf;
+    let u_d_u: f64 = u
+        .iter()
+        .zip(prep.d.iter())
+        .map(|(ui, di)| ui * ui * di)
+        .sum();
+    let rest = -0.5 * (nf + prep.c) * one_minus.ln()
+        - 0.5 * nf * (kappa * u_s_u + beta_n * beta_n * m)
+        - 0.5 * prep.c * kappa * u_d_u
+        - 0.5 * kappa0 * (beta_t * beta_t + beta_n * beta_n) * m;
+    Ok((Linear { w, offset }, rest))
+}
+
+/// LLR per epoch of the centred rows.
+pub(crate) fn scores(prep: &Prepared, lin: &Linear) -> Vec<f64> {
+    let s = &prep.xc * &lin.w;
+    s.iter().map(|v| v + lin.offset).collect()
+}
+
+/// Responsibilities of each epoch from the slot posteriors.
+fn responsibilities(layout: &Layout, post: &[Vec<f64>]) -> Vec<f64> {
+    layout
+        .slot_of
+        .iter()
+        .zip(&layout.choice_of)
+        .map(|(&s, &c)| post[s][c])
+        .collect()
+}
+
+/// One EM run from `init` (a score per epoch, used as the first E-step's LLRs): iterates until
+/// the objective gains less than `tol` (nats) or `max_iter` M-steps were made.
+pub(crate) fn run(
+    prep: &Prepared,
+    layout: &Layout,
+    init: &[f64],
+    kappa0: f64,
+    max_iter: usize,
+    tol: f64,
+) -> Result<Run> {
+    let (mut post, _) = e_step(layout, init);
+    let constant = prep.constant();
+    let mut objective = Vec::new();
+    let mut linear = None;
+    for _ in 0..max_iter.max(1) {
+        let (lin, rest) = m_step(prep, &responsibilities(layout, &post), kappa0)?;
+        let llr = scores(prep, &lin);
+        let (p, lse) = e_step(layout, &llr);
+        post = p;
+        let j = lse + rest + constant;
+        let done = objective
+            .last()
+            .is_some_and(|&last: &f64| (j - last).abs() <= tol);
+        objective.push(j);
+        linear = Some(lin);
+        if done {
+            break;
+        }
+    }
+    Ok(Run {
+        objective,
+        linear: linear.expect("at least one M-step"),
+        posterior: post,
+    })
+}

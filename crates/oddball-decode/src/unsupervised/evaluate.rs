@@ -1,0 +1,218 @@
+//! Speller recordings played as one unlabelled session ([`super::replay`]), then scored: the
+//! labels are read only after the decoder has finished, to count what it got right.
+
+use ndarray::Array1;
+use oddball_io::Speller;
+use oddball_signal::{Epochs, Events, SignalError};
+use serde::Serialize;
+
+use super::{replay, Constraint, UnsupervisedError, UnsupervisedParams};
+use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
+use crate::metrics::roc_auc;
+
+/// Why an unsupervised replay could not run or be scored.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    #[error("{recording} is not a speller recording: an unsupervised replay needs its characters (rows and columns)")]
+    NotSpeller { recording: String },
+    #[error("{recording} flashes other codes than {first} ({a:?} vs {b:?}); one session needs one speller layout")]
+    DifferentLayout {
+        recording: String,
+        first: String,
+        a: Vec<Vec<u32>>,
+        b: Vec<Vec<u32>>,
+    },
+    #[error("no recordings to replay")]
+    Empty,
+    #[error("{recording}: character {character} has no single target row and column, so it cannot be scored (label the run, e.g. with --test-text)")]
+    Unscorable { recording: String, character: usize },
+    #[error(transparent)]
+    Unsupervised(#[from] UnsupervisedError),
+    #[error(transparent)]
+    Evaluate(#[from] EvaluateError),
+    #[error(transparent)]
+    Signal(#[from] SignalError),
+}
+
+/// AUC of one recording's epochs under the final model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordingAuc {
+    pub recording: String,
+    pub auc: f64,
+}
+
+/// What the replay got right.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnsupervisedResult {
+    /// Per character, in order: 1 when the decision made online (the model fitted on the
+    /// characters so far) was right.
+    pub online_correct: Vec<u8>,
+    /// Character accuracy of the final model's decisions with 1..=R repetitions (pooled over
+    /// the recordings, up to the fewest repetitions of any).
+    pub posthoc_chars_by_reps: Vec<f64>,
+    /// Epoch ROC-AUC of the final model over every epoch.
+    pub auc: f64,
+    pub auc_by_recording: Vec<RecordingAuc>,
+    pub online_text: String,
+    pub posthoc_text: String,
+    pub n_characters: usize,
+    /// Log-likelihood of the final model (penalised), and which initialisation it came from.
+    pub objective: f64,
+    pub init: String,
+}
+
+/// Plays `recs` (speller recordings, every flash epoched) one after the other as one session
+/// whose labels the decoder never sees; `on_character(k, n)` after each online decision.
+pub fn evaluate_unsupervised(
+    params: &UnsupervisedParams,
+    recs: &[EpochedRecording],
+    on_character: &mut dyn FnMut(usize, usize),
+) -> Result<UnsupervisedResult, ReplayError> {
+    let first = recs.first().ok_or(ReplayError::Empty)?;
+    let mut constraint: Option<Constraint> = None;
+    let mut codes = Vec::new();
+    let mut trials = Vec::new();
+    for rec in recs {
+        let speller = speller_of(rec)?;
+        let c = Constraint::speller(speller)?;
+        match &constraint {
+            Some(c0) if c0 != &c => {
+                return Err(ReplayError::DifferentLayout {
+                    recording: rec.name.clone(),
+                    first: first.name.clone(),
+                    a: c.sets().to_vec(),
+                    b: c0.sets().to_vec(),
+                })
+            }
+            Some(_) => {}
+            None => constraint = Some(c),
+        }
+        if rec.epochs.n_epochs() != rec.n_events {
+            return Err(EvaluateError::DroppedFlashes {
+                recording: rec.name.clone(),
+                dropped: rec.n_events - rec.epochs.n_epochs(),
+                n_events: rec.n_events,
+            }
+            .into());
+        }
+        let events = Events::new(rec.epochs.events().to_vec());
+        let blocks = speller.character_blocks(&events);
+        for b in &blocks {
+            let k = trials.last().map_or(0, |&l: &usize| l + 1);
+            codes.extend(b.iter().map(|e| e.code));
+            trials.extend(std::iter::repeat_n(k, b.len()));
+        }
+    }
+    let constraint = constraint.expect("at least one recording");
+    let parts: Vec<Epochs> = recs.iter().map(|r| r.epochs.clone()).collect();
+    let all = Epochs::concatenate(&parts)?;
+    // The decoder sees epochs, codes and characters only.
+    let r = replay(
+        params,
+        all.data().view(),
+        &codes,
+        &trials,
+        &constraint,
+        on_character,
+    )?;
+
+    // Scoring: the labels, from here on only.
+    let mut online_correct = Vec::new();
+    let mut online_text = String::new();
+    let mut posthoc_text = String::new();
+    let mut all_scores = Vec::new();
+    let mut all_y = Vec::new();
+    let mut auc_by_recording = Vec::new();
+    let mut spellers = Vec::new();
+    let mut k = 0;
+    for rec in recs {
+        let speller = speller_of(rec)?;
+        let y = labels(&rec.epochs)?;
+        let events = Events::new(rec.epochs.events().to_vec());
+        for (c, block) in speller.character_blocks(&events).iter().enumerate() {
+            let truth = truth_of(block, &constraint).ok_or_else(|| ReplayError::Unscorable {
+                recording: rec.name.clone(),
+                character: c,
+            })?;
+            let online = &r.online[k].codes;
+            online_correct.push(u8::from(online == &truth));
+            online_text.push_str(&symbol(speller, online));
+            k += 1;
+        }
+        let scores: Array1<f64> = r.model.decision_function(rec.epochs.data().view())?;
+        let s = score_speller(rec, speller, &scores)?;
+        posthoc_text.push_str(&s.text);
+        auc_by_recording.push(RecordingAuc {
+            recording: rec.name.clone(),
+            auc: roc_auc(&scores.to_vec(), &y).map_err(UnsupervisedError::from)?,
+        });
+        all_scores.extend(scores.iter().copied());
+        all_y.extend(y);
+        spellers.push(s);
+    }
+    let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
+    let reps = spellers.iter().map(|s| s.accuracy.len()).min().unwrap_or(0);
+    let posthoc_chars_by_reps = (0..reps)
+        .map(|i| {
+            spellers
+                .iter()
+                .map(|s| s.accuracy[i] * s.n_chars as f64)
+                .sum::<f64>()
+                / n_chars.max(1) as f64
+        })
+        .collect();
+    let (init, _) = r.model.init();
+    Ok(UnsupervisedResult {
+        online_correct,
+        posthoc_chars_by_reps,
+        auc: roc_auc(&all_scores, &all_y).map_err(UnsupervisedError::from)?,
+        auc_by_recording,
+        online_text,
+        posthoc_text,
+        n_characters: n_chars,
+        objective: r.model.objective().last().copied().unwrap_or(f64::NAN),
+        init: format!("{init:?}"),
+    })
+}
+
+fn speller_of(rec: &EpochedRecording) -> Result<&Speller, ReplayError> {
+    rec.speller.as_ref().ok_or_else(|| ReplayError::NotSpeller {
+        recording: rec.name.clone(),
+    })
+}
+
+/// The attended code of each constraint set in a character's events (`None` unless exactly
+/// one code of each set is flagged target).
+fn truth_of(block: &[oddball_signal::Event], constraint: &Constraint) -> Option<Vec<u32>> {
+    constraint
+        .sets()
+        .iter()
+        .map(|set| {
+            let mut found = None;
+            for e in block
+                .iter()
+                .filter(|e| e.target == Some(true) && set.contains(&e.code))
+            {
+                match found {
+                    None => found = Some(e.code),
+                    Some(c) if c == e.code => {}
+                    Some(_) => return None,
+                }
+            }
+            found
+        })
+        .collect()
+}
+
+/// The symbol at a (row code, column code) pick, `?` when there is none.
+fn symbol(speller: &Speller, codes: &[u32]) -> String {
+    let (mut row, mut col) = (None, None);
+    for &c in codes {
+        row = row.or(speller.row_of_code(c));
+        col = col.or(speller.col_of_code(c));
+    }
+    row.zip(col)
+        .and_then(|(r, c)| speller.symbol(r, c))
+        .unwrap_or("?")
+        .to_string()
+}

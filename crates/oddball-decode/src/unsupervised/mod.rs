@@ -1,0 +1,555 @@
+//! Decoding without labels: expectation–maximisation over the paradigm's constraint
+//! (Kindermans, Verstraeten & Schrauwen 2012, PLoS ONE 7(4):e33758), on a shrinkage LDA of the
+//! `lda` preset's amplitude features.
+//!
+//! The paradigm says which labels are possible: in every trial exactly one code of each
+//! [`Constraint`] set is attended — one of the four bulbs; one row and one column of a speller
+//! character. Which one is the latent variable. The model is the LDA's own generative model:
+//! feature rows `xᵢ ~ N(μ_t, Σ)` for attended flashes and `N(μ_n, Σ)` for the others, with one
+//! covariance, and a uniform prior over each slot's choices. Then
+//!
+//! * **E-step**: each slot's posterior over its codes is the softmax of the summed
+//!   log-likelihood ratios `LLRᵢ = (μ_t − μ_n)ᵀΣ⁻¹(xᵢ − (μ_t + μ_n)/2)` of its epochs — the same
+//!   evidence accumulation as a calibrated decision ([`crate::decision`]);
+//! * **M-step**: with `rᵢ` = P(epoch i attended), the class means are the `r`-weighted means
+//!   (shrunk towards the grand mean by `κ₀` pseudo-epochs, [`UnsupervisedParams::mean_prior`]:
+//!   the penalty `−(κ₀/2)(μ_tᵀΣ⁻¹μ_t + μ_nᵀΣ⁻¹μ_n)` on centred means) and the covariance is the
+//!   MAP estimate under an inverse-Wishart-type prior `−(c/2) ln|Σ| − ½ tr(c·D·Σ⁻¹)`:
+//!   `Σ = (c·D + W) / (N + c)`, `W` the within-class scatter (with the means' penalty). Because
+//!   the total scatter does not depend on the labels, `W = N·S − ΔμΔμᵀ / h` and
+//!   `Σ = B − g·ΔμΔμᵀ` (`h = 1/(N_t + κ₀) + 1/(N_n + κ₀)`, `g = 1/(h(N + c))`), where `B = (1 − λ)·S + λ·D` is a Ledoit–Wolf shrunk total covariance
+//!   (computed once, without labels; `D = diag S`, `λ` scikit-learn's Ledoit–Wolf shrinkage of the
+//!   standardised rows, `c = λN/(1 − λ)`). This is a shrinkage LDA whose labels are soft, and one
+//!   iteration needs only one solve with the Cholesky factor of `B` (Sherman–Morrison).
+//!
+//! Both steps are exact, so the penalised log-likelihood (marginal over the unknown choices)
+//! never decreases ([`Unsupervised::objective`]). EM finds a local maximum: a fit starts from
+//! several initialisations (random projections of the standardised features, and optionally a
+//! previous model) and keeps the one of highest likelihood — no label is ever used, and the API
+//! takes none: epochs, stimulus codes and the trial of each epoch only. [`replay`] decodes a
+//! recording as a live session would: each trial with the model fitted on the trials so far,
+//! then every trial re-decoded by the final model.
+//!
+//! Written here: no Rust crate (nor scikit-learn, MNE or pyRiemann) has EM over such a
+//! constraint. Checked against a dense numpy implementation that forms the means, scatter,
+//! inverses and determinants directly and enumerates each trial's codes
+//! (`tools/golden/unsupervised/`, objective per iteration, posteriors and LLRs to 1e-9), and by
+//! property tests (posteriors sum to one; the objective never falls) in `tests/unsupervised.rs`.
+
+mod em;
+pub mod evaluate;
+mod replay;
+
+use std::collections::BTreeMap;
+
+use ndarray::{Array1, ArrayView2, ArrayView3};
+use oddball_io::Speller;
+use serde::{Deserialize, Serialize};
+
+use crate::amplitude::AmplitudeFeatures;
+use crate::DecodeError;
+
+pub use replay::{replay, OnlineChoice, Replay};
+
+/// Why an unsupervised fit could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UnsupervisedError {
+    #[error("{n_epochs} epochs but {n_codes} stimulus codes and {n_trials} trial numbers")]
+    Length {
+        n_epochs: usize,
+        n_codes: usize,
+        n_trials: usize,
+    },
+    #[error("{n_scores} initial scores for {n_epochs} epochs")]
+    InitLength { n_epochs: usize, n_scores: usize },
+    #[error("epoch {index}: stimulus code {code} is in none of the choice sets {sets:?}")]
+    UnknownCode {
+        index: usize,
+        code: u32,
+        sets: Vec<Vec<u32>>,
+    },
+    #[error("choice set {set} has {n_codes} codes; a choice needs at least two")]
+    TooFewChoices { set: usize, n_codes: usize },
+    #[error("stimulus code {code} is in more than one choice set")]
+    SharedCode { code: u32 },
+    #[error("an unsupervised fit needs at least two epochs, got {n_epochs}")]
+    TooFewEpochs { n_epochs: usize },
+    #[error("non-finite feature {feature} in epoch {epoch}")]
+    NonFinite { epoch: usize, feature: usize },
+    #[error("the shrunk feature covariance of {n_epochs} epochs × {n_features} features is not positive definite")]
+    NotPositiveDefinite { n_epochs: usize, n_features: usize },
+    #[error("trial {trial} resumes at epoch {index} after another trial: a trial's epochs must be contiguous")]
+    TrialsNotContiguous { trial: usize, index: usize },
+    #[error("the EM degenerated: {what}")]
+    Degenerate { what: String },
+    #[error("parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        reason: String,
+    },
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+}
+
+type Result<T> = std::result::Result<T, UnsupervisedError>;
+
+/// Which codes compete: in every trial exactly one code of each set is attended.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Constraint {
+    sets: Vec<Vec<u32>>,
+}
+
+impl Constraint {
+    /// Sets of at least two codes each, no code in two sets.
+    pub fn new(sets: Vec<Vec<u32>>) -> Result<Self> {
+        let mut seen = std::collections::BTreeSet::new();
+        for (set, codes) in sets.iter().enumerate() {
+            if codes.len() < 2 {
+                return Err(UnsupervisedError::TooFewChoices {
+                    set,
+                    n_codes: codes.len(),
+                });
+            }
+            for &code in codes {
+                if !seen.insert(code) {
+                    return Err(UnsupervisedError::SharedCode { code });
+                }
+            }
+        }
+        if sets.is_empty() {
+            return Err(UnsupervisedError::TooFewChoices { set: 0, n_codes: 0 });
+        }
+        Ok(Self { sets })
+    }
+
+    /// One attended code among `codes` per trial (the four-bulb panel: codes 1–4).
+    pub fn one_of(codes: &[u32]) -> Result<Self> {
+        Self::new(vec![codes.to_vec()])
+    }
+
+    /// One attended row and one attended column per character of `speller`.
+    pub fn speller(speller: &Speller) -> Result<Self> {
+        Self::new(vec![
+            (0..speller.n_rows())
+                .map(|r| speller.code_of_row(r))
+                .collect(),
+            (0..speller.n_cols())
+                .map(|c| speller.code_of_col(c))
+                .collect(),
+        ])
+    }
+
+    /// The sets of competing codes.
+    pub fn sets(&self) -> &[Vec<u32>] {
+        &self.sets
+    }
+
+    /// (set, index within the set) of `code`.
+    pub fn locate(&self, code: u32) -> Option<(usize, usize)> {
+        self.sets
+            .iter()
+            .enumerate()
+            .find_map(|(s, codes)| codes.iter().position(|&c| c == code).map(|i| (s, i)))
+    }
+}
+
+/// Settings of the unsupervised decoder.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct UnsupervisedParams {
+    /// The feature map (the `lda` preset's bin means by default).
+    pub features: AmplitudeFeatures,
+    /// Prior on each class mean, in pseudo-epochs at the grand mean (`κ₀`): keeps a fit on few
+    /// trials from finding confident structure in noise; its weight fades as epochs accrue.
+    pub mean_prior: f64,
+    /// Random initialisations per fit (besides a warm start, if one is given).
+    pub n_inits: usize,
+    /// Most M-steps per initialisation.
+    pub max_iter: usize,
+    /// Stop when an iteration gains less than this (nats).
+    pub tol: f64,
+    /// Seed of the random initialisations.
+    pub seed: u32,
+}
+
+impl UnsupervisedParams {
+    /// The `lda` preset's features at `sfreq` (bins of round(sfreq / 25) samples), no prior on
+    /// the means, 8 random initialisations, at most 200 iterations each, tolerance 1e-6 nats.
+    pub fn for_sfreq(sfreq: f64) -> std::result::Result<Self, DecodeError> {
+        Ok(Self {
+            features: AmplitudeFeatures::for_sfreq(sfreq)?,
+            mean_prior: 0.0,
+            n_inits: 8,
+            max_iter: 200,
+            tol: 1e-6,
+            seed: 0,
+        })
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.n_inits == 0 || self.max_iter == 0 {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "n_inits/max_iter",
+                value: format!("{}/{}", self.n_inits, self.max_iter),
+                reason: "at least one initialisation and one iteration".into(),
+            });
+        }
+        if !(self.mean_prior >= 0.0 && self.mean_prior.is_finite()) {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "mean_prior",
+                value: self.mean_prior.to_string(),
+                reason: "pseudo-epochs: finite and >= 0".into(),
+            });
+        }
+        if self.tol.is_nan() || self.tol < 0.0 {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "tol",
+                value: self.tol.to_string(),
+                reason: "must be >= 0".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Fits on `epochs` `(n_epochs, n_channels, n_times)` with each epoch's stimulus `codes` and
+    /// `trials` (any numbers: epochs with the same number form one trial).
+    pub fn fit(
+        &self,
+        epochs: ArrayView3<f64>,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+    ) -> Result<Unsupervised> {
+        let x = self.features.transform(epochs)?;
+        self.fit_features(x.view(), codes, trials, constraint, None)
+    }
+
+    /// Fits on feature rows `x` `(n_epochs, n_features)`; `warm` (a previous model of the same
+    /// features) is one more initialisation.
+    pub fn fit_features(
+        &self,
+        x: ArrayView2<f64>,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        warm: Option<&Unsupervised>,
+    ) -> Result<Unsupervised> {
+        self.validate()?;
+        let prep = em::Prepared::new(x)?;
+        let mut inits: Vec<(Init, Vec<f64>)> = Vec::new();
+        if let Some(w) = warm {
+            let s = w.decision_function_features(x)?;
+            inits.push((Init::Warm, s.to_vec()));
+        }
+        let mut rng = rand_mt::Mt::new(self.seed);
+        for k in 0..self.n_inits {
+            inits.push((Init::Random(k), random_projection(&prep, &mut rng)));
+        }
+        self.fit_prepared(&prep, codes, trials, constraint, inits)
+    }
+
+    /// One EM run on feature rows `x` from `init`, a score per epoch taken as the first E-step's
+    /// log-likelihood ratios (e.g. another model's scores); no random initialisations.
+    pub fn fit_from_scores(
+        &self,
+        x: ArrayView2<f64>,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        init: &[f64],
+    ) -> Result<Unsupervised> {
+        self.validate()?;
+        if init.len() != x.nrows() {
+            return Err(UnsupervisedError::InitLength {
+                n_epochs: x.nrows(),
+                n_scores: init.len(),
+            });
+        }
+        let prep = em::Prepared::new(x)?;
+        self.fit_prepared(
+            &prep,
+            codes,
+            trials,
+            constraint,
+            vec![(Init::Given, init.to_vec())],
+        )
+    }
+
+    fn fit_prepared(
+        &self,
+        prep: &em::Prepared,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        inits: Vec<(Init, Vec<f64>)>,
+    ) -> Result<Unsupervised> {
+        let (layout, trial_ids) = layout(prep.n, codes, trials, constraint)?;
+        let mut best: Option<(Init, em::Run)> = None;
+        let mut init_objectives = Vec::with_capacity(inits.len());
+        let mut posteriors = Vec::with_capacity(inits.len());
+        for (init, s) in inits {
+            let run = em::run(prep, &layout, &s, self.mean_prior, self.max_iter, self.tol)?;
+            let j = *run.objective.last().expect("one M-step at least");
+            init_objectives.push((init, j));
+            posteriors.push((j, run.posterior.clone()));
+            if best
+                .as_ref()
+                .is_none_or(|(_, b)| j > *b.objective.last().expect("one M-step"))
+            {
+                best = Some((init, run));
+            }
+        }
+        let (init, run) = best.expect("at least one initialisation");
+        // Every initialisation's posterior, weighted by its likelihood relative to the best.
+        let j_max = posteriors
+            .iter()
+            .map(|(j, _)| *j)
+            .fold(f64::NEG_INFINITY, f64::max);
+        let z: f64 = posteriors.iter().map(|(j, _)| (j - j_max).exp()).sum();
+        let mut averaged: Vec<Vec<f64>> =
+            run.posterior.iter().map(|p| vec![0.0; p.len()]).collect();
+        for (j, post) in &posteriors {
+            let wgt = (j - j_max).exp() / z;
+            for (a, p) in averaged.iter_mut().zip(post) {
+                for (x, y) in a.iter_mut().zip(p) {
+                    *x += wgt * y;
+                }
+            }
+        }
+        let to_trials = |post: &[Vec<f64>]| -> Vec<TrialPosterior> {
+            trial_ids
+                .iter()
+                .enumerate()
+                .map(|(t, &id)| TrialPosterior {
+                    trial: id,
+                    sets: (0..constraint.sets.len())
+                        .map(|s| post[t * constraint.sets.len() + s].clone())
+                        .collect(),
+                })
+                .collect()
+        };
+        let averaged = to_trials(&averaged);
+        let intercept = run.linear.offset - run.linear.w.dot(&prep.mean);
+        let trials_out = trial_ids
+            .iter()
+            .enumerate()
+            .map(|(t, &id)| TrialPosterior {
+                trial: id,
+                sets: (0..constraint.sets.len())
+                    .map(|s| run.posterior[t * constraint.sets.len() + s].clone())
+                    .collect(),
+            })
+            .collect();
+        Ok(Unsupervised {
+            features: self.features,
+            coef: Array1::from_iter(run.linear.w.iter().copied()),
+            intercept,
+            constraint: constraint.clone(),
+            trials: trials_out,
+            averaged,
+            objective: run.objective,
+            init,
+            init_objectives,
+            shrinkage: prep.shrinkage,
+        })
+    }
+}
+
+/// Scores of a random projection of the standardised features, scaled to unit spread.
+fn random_projection(prep: &em::Prepared, rng: &mut rand_mt::Mt) -> Vec<f64> {
+    let v = nalgebra::DVector::from_fn(prep.p, |j, _| normal(rng) / prep.d[j].sqrt());
+    let s = &prep.xc * v;
+    let sd = (s.norm_squared() / prep.n as f64)
+        .sqrt()
+        .max(f64::MIN_POSITIVE);
+    s.iter().map(|x| x / sd).collect()
+}
+
+/// A standard normal draw (Box–Muller).
+fn normal(rng: &mut rand_mt::Mt) -> f64 {
+    let u = |rng: &mut rand_mt::Mt| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let (u1, u2) = (u(rng), u(rng));
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
+
+/// The slots of the epochs (trial in order of first appearance × set) and the trial numbers in
+/// that order.
+fn layout(
+    n_epochs: usize,
+    codes: &[u32],
+    trials: &[usize],
+    constraint: &Constraint,
+) -> Result<(em::Layout, Vec<usize>)> {
+    if codes.len() != n_epochs || trials.len() != n_epochs {
+        return Err(UnsupervisedError::Length {
+            n_epochs,
+            n_codes: codes.len(),
+            n_trials: trials.len(),
+        });
+    }
+    let n_sets = constraint.sets.len();
+    let mut dense: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut ids = Vec::new();
+    let mut slot_of = Vec::with_capacity(n_epochs);
+    let mut choice_of = Vec::with_capacity(n_epochs);
+    for (index, (&code, &trial)) in codes.iter().zip(trials).enumerate() {
+        let (set, choice) =
+            constraint
+                .locate(code)
+                .ok_or_else(|| UnsupervisedError::UnknownCode {
+                    index,
+                    code,
+                    sets: constraint.sets.clone(),
+                })?;
+        let t = *dense.entry(trial).or_insert_with(|| {
+            ids.push(trial);
+            ids.len() - 1
+        });
+        slot_of.push(t * n_sets + set);
+        choice_of.push(choice);
+    }
+    let n_choices = (0..ids.len())
+        .flat_map(|_| constraint.sets.iter().map(Vec::len))
+        .collect();
+    Ok((
+        em::Layout {
+            slot_of,
+            choice_of,
+            n_choices,
+        },
+        ids,
+    ))
+}
+
+/// Where a fit started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Init {
+    /// From the model given as the warm start.
+    Warm,
+    /// From the k-th random projection.
+    Random(usize),
+    /// From scores given to [`UnsupervisedParams::fit_from_scores`].
+    Given,
+}
+
+/// One trial's posterior: per constraint set, P(code attended) in the set's order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TrialPosterior {
+    /// The trial's number as given.
+    pub trial: usize,
+    pub sets: Vec<Vec<f64>>,
+}
+
+/// A fitted unsupervised decoder: a linear log-likelihood ratio per epoch and the posterior of
+/// every trial it was fitted on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Unsupervised {
+    features: AmplitudeFeatures,
+    coef: Array1<f64>,
+    intercept: f64,
+    constraint: Constraint,
+    trials: Vec<TrialPosterior>,
+    averaged: Vec<TrialPosterior>,
+    objective: Vec<f64>,
+    init: Init,
+    init_objectives: Vec<(Init, f64)>,
+    shrinkage: f64,
+}
+
+impl Unsupervised {
+    /// LLR (target vs non-target, nats) per epoch `(n_epochs, n_channels, n_times)`.
+    pub fn decision_function(&self, epochs: ArrayView3<f64>) -> Result<Array1<f64>> {
+        let x = self.features.transform(epochs)?;
+        self.decision_function_features(x.view())
+    }
+
+    /// LLR per feature row.
+    pub fn decision_function_features(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        if x.ncols() != self.coef.len() {
+            return Err(DecodeError::ShapeMismatch {
+                what: "unsupervised decoder input".into(),
+                expected: format!("{} features", self.coef.len()),
+                got: x.ncols().to_string(),
+            }
+            .into());
+        }
+        Ok(x.dot(&self.coef) + self.intercept)
+    }
+
+    /// LLR of one epoch `(n_channels, n_times)`.
+    pub fn score_epoch(&self, epoch: ndarray::ArrayView2<f64>) -> Result<f64> {
+        let e = epoch.insert_axis(ndarray::Axis(0));
+        Ok(self.decision_function(e)?[0])
+    }
+
+    /// The fitted trials' posteriors, in order of first appearance.
+    pub fn trials(&self) -> &[TrialPosterior] {
+        &self.trials
+    }
+
+    /// The fitted trials' posteriors averaged over every initialisation's local optimum, each
+    /// weighted by its likelihood relative to the best (`exp(J_k − J_max)`): where optima of
+    /// similar likelihood disagree about a trial, its posterior is spread between them.
+    pub fn averaged_trials(&self) -> &[TrialPosterior] {
+        &self.averaged
+    }
+
+    /// Per fitted trial, the most probable code of each set.
+    pub fn choices(&self) -> Vec<Vec<u32>> {
+        self.trials
+            .iter()
+            .map(|t| {
+                t.sets
+                    .iter()
+                    .zip(&self.constraint.sets)
+                    .map(|(p, codes)| codes[argmax(p)])
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The penalised log-likelihood after each iteration of the chosen initialisation
+    /// (non-decreasing).
+    pub fn objective(&self) -> &[f64] {
+        &self.objective
+    }
+
+    /// Where the chosen run started, and every initialisation's final objective.
+    pub fn init(&self) -> (Init, &[(Init, f64)]) {
+        (self.init, &self.init_objectives)
+    }
+
+    pub fn constraint(&self) -> &Constraint {
+        &self.constraint
+    }
+
+    pub fn features(&self) -> AmplitudeFeatures {
+        self.features
+    }
+
+    /// Weights of the LLR per feature.
+    pub fn coef(&self) -> ndarray::ArrayView1<'_, f64> {
+        self.coef.view()
+    }
+
+    pub fn intercept(&self) -> f64 {
+        self.intercept
+    }
+
+    /// The Ledoit–Wolf shrinkage of the total covariance.
+    pub fn shrinkage(&self) -> f64 {
+        self.shrinkage
+    }
+}
+
+/// Index of the largest value (first on ties).
+pub(crate) fn argmax(p: &[f64]) -> usize {
+    let mut best = 0;
+    for (i, &v) in p.iter().enumerate() {
+        if v > p[best] {
+            best = i;
+        }
+    }
+    best
+}

@@ -1,0 +1,91 @@
+//! A recording decoded as a live session without calibration would decode it: after each trial's
+//! last epoch the model is refitted (EM, warm-started from the previous model, plus the random
+//! initialisations) on every epoch so far and the trial is decided with it ("online"); the final
+//! model re-decides every trial ("post hoc").
+
+use ndarray::{s, ArrayView3};
+
+use super::{argmax, Constraint, Result, Unsupervised, UnsupervisedError, UnsupervisedParams};
+
+/// One trial as decided online.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OnlineChoice {
+    /// The trial's number as given.
+    pub trial: usize,
+    /// The most probable code of each constraint set.
+    pub codes: Vec<u32>,
+    /// Its posterior, per set.
+    pub confidence: Vec<f64>,
+}
+
+/// The online decisions and the final model.
+#[derive(Debug, Clone)]
+pub struct Replay {
+    pub online: Vec<OnlineChoice>,
+    /// Fitted on every epoch: its [`Unsupervised::choices`] are the post-hoc decisions.
+    pub model: Unsupervised,
+}
+
+/// Replays `epochs` (in the order they were recorded, each trial's epochs contiguous) with their
+/// stimulus `codes` and `trials`; `on_trial(k, n)` is told when trial `k` of `n` is decided.
+pub fn replay(
+    params: &UnsupervisedParams,
+    epochs: ArrayView3<f64>,
+    codes: &[u32],
+    trials: &[usize],
+    constraint: &Constraint,
+    on_trial: &mut dyn FnMut(usize, usize),
+) -> Result<Replay> {
+    let n = epochs.dim().0;
+    if codes.len() != n || trials.len() != n {
+        return Err(UnsupervisedError::Length {
+            n_epochs: n,
+            n_codes: codes.len(),
+            n_trials: trials.len(),
+        });
+    }
+    // Ends (exclusive) of each trial's run of epochs.
+    let mut ends: Vec<usize> = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    for i in 0..n {
+        if i > 0 && trials[i] != trials[i - 1] {
+            ends.push(i);
+        }
+        if (i == 0 || trials[i] != trials[i - 1]) && !seen.insert(trials[i]) {
+            return Err(UnsupervisedError::TrialsNotContiguous {
+                trial: trials[i],
+                index: i,
+            });
+        }
+    }
+    if n > 0 {
+        ends.push(n);
+    }
+    let x = params.features.transform(epochs)?;
+    let mut model: Option<Unsupervised> = None;
+    let mut online = Vec::with_capacity(ends.len());
+    for (k, &end) in ends.iter().enumerate() {
+        let fitted = params.fit_features(
+            x.slice(s![..end, ..]),
+            &codes[..end],
+            &trials[..end],
+            constraint,
+            model.as_ref(),
+        )?;
+        let last = fitted.trials().last().expect("a trial per end");
+        online.push(OnlineChoice {
+            trial: last.trial,
+            codes: last
+                .sets
+                .iter()
+                .zip(constraint.sets())
+                .map(|(p, c)| c[argmax(p)])
+                .collect(),
+            confidence: last.sets.iter().map(|p| p[argmax(p)]).collect(),
+        });
+        model = Some(fitted);
+        on_trial(k, ends.len());
+    }
+    let model = model.ok_or(UnsupervisedError::TooFewEpochs { n_epochs: 0 })?;
+    Ok(Replay { online, model })
+}

@@ -1,0 +1,323 @@
+//! The unsupervised decoder (EM over the paradigm's constraint) against a dense numpy
+//! implementation of the same model (`tools/golden/unsupervised/make_golden.py`), its invariants
+//! on random problems (posteriors sum to one per trial and set; the penalised log-likelihood never
+//! falls across iterations), and what it recovers from synthetic P300 epochs without labels.
+
+use ndarray::{Array2, Array3};
+use oddball_decode::amplitude::AmplitudeFeatures;
+use oddball_decode::unsupervised::{
+    replay, Constraint, Init, UnsupervisedError, UnsupervisedParams,
+};
+use proptest::prelude::*;
+use serde::Deserialize;
+
+#[derive(Deserialize)]
+struct Golden {
+    versions: std::collections::HashMap<String, String>,
+    sets: Vec<Vec<u32>>,
+    x: Vec<Vec<f64>>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    init: Vec<f64>,
+    shrinkage: f64,
+    mean_prior: f64,
+    objective: Vec<f64>,
+    posterior: Vec<Vec<f64>>,
+    llr: Vec<f64>,
+    truth: Vec<Vec<u32>>,
+}
+
+fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
+    UnsupervisedParams {
+        features: AmplitudeFeatures::decimate(1).unwrap(),
+        mean_prior: 2.0,
+        n_inits: 4,
+        max_iter,
+        tol,
+        seed: 7,
+    }
+}
+
+fn rows(x: &[Vec<f64>]) -> Array2<f64> {
+    Array2::from_shape_fn((x.len(), x[0].len()), |(i, j)| x[i][j])
+}
+
+#[test]
+fn em_matches_the_dense_numpy_reference() {
+    let g: Golden =
+        serde_json::from_str(include_str!("fixtures/unsupervised_golden.json")).unwrap();
+    println!("reference: {:?}", g.versions);
+    let x = rows(&g.x);
+    let constraint = Constraint::new(g.sets.clone()).unwrap();
+    let m = UnsupervisedParams {
+        mean_prior: g.mean_prior,
+        ..params(g.objective.len(), 0.0)
+    }
+    .fit_from_scores(x.view(), &g.codes, &g.trials, &constraint, &g.init)
+    .unwrap();
+    assert_eq!(m.init().0, Init::Given);
+    assert!(
+        (m.shrinkage() - g.shrinkage).abs() < 1e-12,
+        "{} vs {}",
+        m.shrinkage(),
+        g.shrinkage
+    );
+    assert_eq!(m.objective().len(), g.objective.len());
+    for (k, (a, b)) in m.objective().iter().zip(&g.objective).enumerate() {
+        assert!((a - b).abs() < 1e-9 * b.abs(), "iteration {k}: {a} vs {b}");
+    }
+    for (t, tp) in m.trials().iter().enumerate() {
+        assert_eq!(tp.trial, t);
+        for (s, p) in tp.sets.iter().enumerate() {
+            for (a, b) in p.iter().zip(&g.posterior[2 * t + s]) {
+                assert!((a - b).abs() < 1e-9, "trial {t} set {s}: {p:?}");
+            }
+        }
+    }
+    // The final LLRs are the numpy model's (the golden's last E-step).
+    let llr = m.decision_function_features(x.view()).unwrap();
+    for (a, b) in llr.iter().zip(&g.llr) {
+        assert!((a - b).abs() < 1e-9 * (1.0 + b.abs()), "{a} vs {b}");
+    }
+    assert_eq!(m.choices(), g.truth);
+}
+
+/// A random problem: `n_trials` trials flashing every code of `sets` `reps` times, features
+/// `p` wide drawn from `values`.
+fn problem(
+    sets: &[Vec<u32>],
+    n_trials: usize,
+    reps: usize,
+    p: usize,
+    values: &[f64],
+) -> (Array2<f64>, Vec<u32>, Vec<usize>) {
+    let all: Vec<u32> = sets.iter().flatten().copied().collect();
+    let mut codes = Vec::new();
+    let mut trials = Vec::new();
+    for t in 0..n_trials {
+        for _ in 0..reps {
+            codes.extend(&all);
+            trials.extend(std::iter::repeat_n(t, all.len()));
+        }
+    }
+    let n = codes.len();
+    let x = Array2::from_shape_fn((n, p), |(i, j)| values[(i * p + j) % values.len()]);
+    (x, codes, trials)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn posteriors_sum_to_one_and_the_likelihood_never_falls(
+        speller in any::<bool>(),
+        n_trials in 1usize..5,
+        reps in 1usize..4,
+        p in 1usize..6,
+        values in proptest::collection::vec(-5.0f64..5.0, 97),
+        init in proptest::collection::vec(-3.0f64..3.0, 1..40),
+    ) {
+        let sets = if speller { vec![vec![1, 2, 3], vec![4, 5, 6]] } else { vec![vec![1, 2, 3, 4]] };
+        let (x, codes, trials) = problem(&sets, n_trials, reps, p, &values);
+        let constraint = Constraint::new(sets.clone()).unwrap();
+        let init: Vec<f64> = (0..codes.len()).map(|i| init[i % init.len()]).collect();
+        let fits = [
+            params(30, 0.0).fit_from_scores(x.view(), &codes, &trials, &constraint, &init),
+            params(30, 0.0).fit_features(x.view(), &codes, &trials, &constraint, None),
+        ];
+        for fit in fits {
+            let m = match fit {
+                Ok(m) => m,
+                // A constant feature set can leave nothing to separate; that must be said.
+                Err(e @ UnsupervisedError::Degenerate { .. }) => {
+                    prop_assert!(!e.to_string().is_empty());
+                    continue;
+                }
+                Err(e) => return Err(TestCaseError::fail(e.to_string())),
+            };
+            prop_assert_eq!(m.trials().len(), n_trials);
+            for t in m.trials() {
+                prop_assert_eq!(t.sets.len(), sets.len());
+                for p in &t.sets {
+                    let sum: f64 = p.iter().sum();
+                    prop_assert!((sum - 1.0).abs() < 1e-12, "{:?}", p);
+                    prop_assert!(p.iter().all(|v| (0.0..=1.0).contains(v)));
+                }
+            }
+            for w in m.objective().windows(2) {
+                prop_assert!(w[1] >= w[0] - 1e-9 * (1.0 + w[0].abs()), "{:?}", m.objective());
+            }
+        }
+    }
+}
+
+/// Four-bulb trials (codes 1–4, `reps` rounds each) of 4 channels × 64 samples at 64 Hz: noise
+/// and a 10 Hz sine, and on the attended bulb's flashes a bump at 300 ms. Returns the epochs, the
+/// codes, the trials and the attended code of each trial.
+fn four_bulb(
+    n_trials: usize,
+    reps: usize,
+    bump: f64,
+    seed: u64,
+) -> (Array3<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
+    let mut state = seed;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    let mut codes = Vec::new();
+    let mut trials = Vec::new();
+    let mut attended = Vec::new();
+    for t in 0..n_trials {
+        let a = 1 + ((uniform() + 0.5) * 4.0).floor().min(3.0) as u32;
+        attended.push(a);
+        for r in 0..reps {
+            for k in 0..4u32 {
+                codes.push(1 + (k + r as u32 + t as u32) % 4);
+                trials.push(t);
+            }
+        }
+    }
+    let n = codes.len();
+    let x = Array3::from_shape_fn((n, 4, 64), |(e, c, i)| {
+        let tt = i as f64 / 64.0;
+        let b = if codes[e] == attended[trials[e]] {
+            bump * (c as f64 + 1.0) * (-((tt - 0.3) / 0.05).powi(2)).exp()
+        } else {
+            0.0
+        };
+        b + (2.0 * std::f64::consts::PI * 10.0 * tt + c as f64).sin()
+    });
+    // Noise drawn in a second pass so the bump's parameters do not shift the stream.
+    let noise = Array3::from_shape_fn((n, 4, 64), |_| 8.0 * uniform());
+    (x + noise, codes, trials, attended)
+}
+
+#[test]
+fn synthetic_four_bulb_trials_are_recovered_without_labels() {
+    let (x, codes, trials, attended) = four_bulb(30, 5, 3.0, 11);
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::bin_mean(4).unwrap(),
+        ..UnsupervisedParams::for_sfreq(64.0).unwrap()
+    };
+    let m = params.fit(x.view(), &codes, &trials, &constraint).unwrap();
+    let right = m
+        .choices()
+        .iter()
+        .zip(&attended)
+        .filter(|(c, &a)| c[0] == a)
+        .count();
+    println!("post hoc {right}/30, objective {:?}", m.objective().last());
+    assert!(right >= 28, "{right}/30");
+    // Online: the late trials are decided as well as post hoc.
+    let r = replay(
+        &params,
+        x.view(),
+        &codes,
+        &trials,
+        &constraint,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let online: Vec<bool> = r
+        .online
+        .iter()
+        .zip(&attended)
+        .map(|(c, &a)| c.codes[0] == a)
+        .collect();
+    let late = online[10..].iter().filter(|&&b| b).count();
+    println!("online {online:?}");
+    assert!(late >= 19, "{late}/20 right online after the first 10");
+    assert_eq!(
+        r.model.choices(),
+        m.choices(),
+        "post hoc equals the one-shot fit"
+    );
+}
+
+#[test]
+fn bad_input_is_named() {
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let x = Array2::from_shape_fn((8, 2), |(i, j)| (i * 3 + j) as f64 % 5.0);
+    let p = params(10, 1e-6);
+    let err = p
+        .fit_features(
+            x.view(),
+            &[1, 2, 3, 4, 1, 2, 3, 9],
+            &[0; 8],
+            &constraint,
+            None,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::UnknownCode {
+                index: 7,
+                code: 9,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let err = p
+        .fit_features(x.view(), &[1, 2, 3], &[0; 8], &constraint, None)
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::Length {
+                n_epochs: 8,
+                n_codes: 3,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(matches!(
+        Constraint::new(vec![vec![1, 2], vec![2, 3]]),
+        Err(UnsupervisedError::SharedCode { code: 2 })
+    ));
+    assert!(matches!(
+        Constraint::one_of(&[1]),
+        Err(UnsupervisedError::TooFewChoices { set: 0, n_codes: 1 })
+    ));
+    let mut bad = x.clone();
+    bad[[5, 1]] = f64::NAN;
+    let err = p
+        .fit_features(
+            bad.view(),
+            &[1, 2, 3, 4, 1, 2, 3, 4],
+            &[0; 8],
+            &constraint,
+            None,
+        )
+        .unwrap_err();
+    assert_eq!(
+        err,
+        UnsupervisedError::NonFinite {
+            epoch: 5,
+            feature: 1
+        }
+    );
+    let e3 = Array3::<f64>::zeros((8, 1, 2));
+    let err = replay(
+        &p,
+        e3.view(),
+        &[1, 2, 1, 2, 1, 2, 1, 2],
+        &[0, 0, 1, 1, 0, 0, 2, 2],
+        &constraint,
+        &mut |_, _| {},
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::TrialsNotContiguous { trial: 0, index: 4 }
+        ),
+        "{err}"
+    );
+}

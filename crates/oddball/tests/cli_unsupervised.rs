@@ -1,0 +1,107 @@
+//! `oddball evaluate --unsupervised`: real speller recordings played as one session whose labels
+//! the decoder never sees (EM over one row + one column per character), scored afterwards —
+//! beside the supervised `lda` trained on labels.
+
+mod common;
+
+use common::{data_dir, oddball, tmp_dir};
+
+fn run_json(args: &[&str], json: &std::path::Path) -> (serde_json::Value, String) {
+    let (ok, out, err) = oddball(&[args, &["--json", json.to_str().unwrap()]].concat());
+    assert!(ok, "{err}");
+    let v = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    (v, out)
+}
+
+fn right(v: &serde_json::Value) -> usize {
+    v["online_correct"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b.as_u64().unwrap() as usize)
+        .sum()
+}
+
+#[test]
+fn eeg3_as_one_unlabelled_session_spells_like_supervised_lda() {
+    let Some(d) = data_dir() else { return };
+    let d = d.join("bci2000-samplefiles-p300");
+    let f = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let (e1, e2) = (f("eeg3_1.dat"), f("eeg3_2.dat"));
+    let tmp = tmp_dir("cli-unsupervised-eeg3");
+
+    let (v, out) = run_json(
+        &["evaluate", "--unsupervised", "--test", &e1, &e2],
+        &tmp.join("u.json"),
+    );
+    println!("{out}");
+    let u = &v["unsupervised"];
+    assert_eq!(u["online_correct"].as_array().unwrap().len(), 8, "{out}");
+    let posthoc = u["posthoc_chars_by_reps"].as_array().unwrap();
+    assert_eq!(posthoc.len(), 15);
+    assert_eq!(
+        posthoc[14].as_f64().unwrap(),
+        1.0,
+        "post hoc 8/8 at 15 repetitions: {out}"
+    );
+    assert_eq!(u["posthoc_text"], "T3OF6MK?", "{out}");
+    assert!(right(u) >= 7, "online {} of 8: {out}", right(u));
+
+    // Supervised lda trained on the other file, scored on each file.
+    let mut sup = Vec::new();
+    for (train, test) in [(&e2, &e1), (&e1, &e2)] {
+        let (v, _) = run_json(
+            &[
+                "evaluate",
+                "--train",
+                train,
+                "--test",
+                test,
+                "--pipeline",
+                "lda",
+            ],
+            &tmp.join("s.json"),
+        );
+        sup.push(v[0]["auc"].as_f64().unwrap());
+    }
+    let by_file: Vec<f64> = u["auc_by_recording"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a["auc"].as_f64().unwrap())
+        .collect();
+    println!("unsupervised AUC by file {by_file:?}, supervised lda (other file) {sup:?}");
+    for (a, s) in by_file.iter().zip(&sup) {
+        assert!(*a >= s - 0.03, "AUC {a} vs supervised {s}: {out}");
+    }
+}
+
+#[test]
+fn bci_competition_iib_six_runs_as_one_unlabelled_session() {
+    let Some(d) = data_dir() else { return };
+    let d = d.join("bci-competition-ii-iib");
+    let runs: Vec<String> = [
+        "AAS010R01.mat",
+        "AAS010R02.mat",
+        "AAS011R01.mat",
+        "AAS011R02.mat",
+        "AAS012R03.mat",
+        "AAS012R04.mat",
+    ]
+    .iter()
+    .map(|n| d.join(n).to_str().unwrap().to_string())
+    .collect();
+    let tmp = tmp_dir("cli-unsupervised-iib");
+    let mut args = vec!["evaluate", "--unsupervised", "--test"];
+    args.extend(runs.iter().map(String::as_str));
+    // The texts score the runs (the test runs carry no labels); the decoder never sees them.
+    args.extend(["--test-text", "CAT,DOG,HAT,HAT,HAM,PIE"]);
+    let (v, out) = run_json(&args, &tmp.join("u.json"));
+    println!("{out}");
+    let u = &v["unsupervised"];
+    assert_eq!(u["online_correct"].as_array().unwrap().len(), 18, "{out}");
+    let posthoc = u["posthoc_chars_by_reps"].as_array().unwrap();
+    let last = posthoc.last().unwrap().as_f64().unwrap();
+    assert!(last * 18.0 >= 17.0 - 1e-9, "post hoc {last}: {out}");
+    assert!(right(u) >= 15, "online {} of 18: {out}", right(u));
+}

@@ -1,0 +1,151 @@
+"""Reference values for oddball-decode's unsupervised decoder (EM over the paradigm's constraint,
+Kindermans, Verstraeten & Schrauwen 2012) from a dense numpy implementation of the same model.
+
+Run from the repository root in a throwaway venv:
+    python3 -m venv /tmp/golden && /tmp/golden/bin/pip install -r tools/golden/unsupervised/requirements.txt
+    /tmp/golden/bin/python tools/golden/unsupervised/make_golden.py
+Writes crates/oddball-decode/tests/fixtures/unsupervised_golden.json (read by
+crates/oddball-decode/tests/unsupervised.rs).
+
+The model (module doc of oddball_decode::unsupervised): x_i ~ N(mu_t, Sigma) when epoch i is attended,
+N(mu_n, Sigma) otherwise; in every trial exactly one code of each choice set is attended (uniform prior).
+The penalised log-likelihood is
+    J = sum_slots log sum_c (1/K) prod_i N(x_i; mu_{y_i(c)}, Sigma) - (c/2) log|Sigma| - (1/2) tr(c D Sigma^-1)
+        - (k0/2) sum_{class} (mu_class - m0)' Sigma^-1 (mu_class - m0)
+(m0 the grand mean, k0 = 3 pseudo-epochs of prior on each class mean) with D = diag of the total (ML) covariance S, c = lam N / (1 - lam), lam = scikit-learn's
+ledoit_wolf_shrinkage of the standardised features. Nothing here uses the Rust shortcuts
+(Sherman-Morrison, the label-free total scatter): the M-step forms the shrunk weighted means
+(sum r_i x_i + k0 m0) / (N_t + k0) and the within-class scatter W (plus the prior's k0 (mu - m0)(mu - m0)')
+directly, Sigma = (c D + W) / (N + c), and the likelihood uses dense inverses
+and slogdet; the E-step enumerates each slot's codes.
+
+The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
+flashed twice per trial (48 epochs), 5 features; attended epochs carry a mean shift. The EM starts
+from given initial scores (a fixed random vector), runs 6 M-steps, and the fixture holds the
+objective after each and the final posteriors.
+"""
+import json
+import pathlib
+
+import numpy as np
+import sklearn
+from sklearn.covariance import ledoit_wolf_shrinkage
+
+OUT = (
+    pathlib.Path(__file__).resolve().parents[3]
+    / "crates/oddball-decode/tests/fixtures/unsupervised_golden.json"
+)
+
+rng = np.random.default_rng(20261125)
+sets = [[1, 2, 3], [4, 5, 6]]
+n_trials, reps, p = 4, 2, 5
+codes, trials, attended = [], [], []
+truth = []
+for t in range(n_trials):
+    row, col = rng.integers(0, 3), rng.integers(0, 3)
+    truth.append([sets[0][row], sets[1][col]])
+    for _ in range(reps):
+        for c in rng.permutation(6) + 1:
+            codes.append(int(c))
+            trials.append(t)
+            attended.append(int(c) in truth[-1])
+codes = np.array(codes)
+trials = np.array(trials)
+attended = np.array(attended)
+n = len(codes)
+mix = np.eye(p) + 0.3 * rng.normal(size=(p, p))
+shift = np.array([1.5, 1.0, 0.5, 0.0, -0.5])
+X = rng.normal(size=(n, p)) @ mix.T + np.outer(attended, shift)
+X = np.round(X, 4)
+init = np.round(rng.normal(size=n), 4)
+
+# Label-free statistics.
+xc = X - X.mean(axis=0)
+S = xc.T @ xc / n
+D = np.diag(np.diag(S))
+lam = ledoit_wolf_shrinkage(xc / np.sqrt(np.diag(S)), assume_centered=True)
+lam = min(max(lam, 1e-4), 0.99)
+cst = lam * n / (1 - lam)
+k0 = 3.0
+m0 = X.mean(axis=0)
+
+# Slots: (trial, set) and each epoch's choice.
+def locate(code):
+    for s, cs in enumerate(sets):
+        if code in cs:
+            return s, cs.index(code)
+slot = np.array([trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
+choice = np.array([locate(codes[i])[1] for i in range(n)])
+n_slots = n_trials * 2
+
+
+def e_step(llr):
+    post = np.zeros((n_slots, 3))
+    lse = 0.0
+    for s in range(n_slots):
+        e = np.array([llr[(slot == s) & (choice == c)].sum() for c in range(3)])
+        m = e.max()
+        z = np.exp(e - m).sum()
+        lse += m + np.log(z) - np.log(3)
+        post[s] = np.exp(e - m) / z
+    return post, lse
+
+
+def log_normal(x, mu, sigma):
+    inv = np.linalg.inv(sigma)
+    _, logdet = np.linalg.slogdet(sigma)
+    d = x - mu
+    return -0.5 * (p * np.log(2 * np.pi) + logdet + np.einsum("ij,jk,ik->i", d, inv, d))
+
+
+def objective(mu_t, mu_n, sigma):
+    # Enumerate each slot's codes exactly: per slot, log sum_c (1/K) prod_i N(x_i; mu_{y_i(c)}, Sigma).
+    lt = log_normal(X, mu_t, sigma)
+    ln = log_normal(X, mu_n, sigma)
+    total = 0.0
+    for s in range(n_slots):
+        idx = slot == s
+        terms = [
+            np.where(choice[idx] == c, lt[idx], ln[idx]).sum() - np.log(3) for c in range(3)
+        ]
+        m = max(terms)
+        total += m + np.log(np.exp(np.array(terms) - m).sum())
+    _, logdet = np.linalg.slogdet(sigma)
+    inv = np.linalg.inv(sigma)
+    pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
+    pen -= 0.5 * k0 * ((mu_t - m0) @ inv @ (mu_t - m0) + (mu_n - m0) @ inv @ (mu_n - m0))
+    return total + pen
+
+
+post, _ = e_step(init)
+objectives = []
+for it in range(6):
+    r = post[slot, choice]
+    mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
+    mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
+    dt, dn = X - mu_t, X - mu_n
+    W = (r[:, None] * dt).T @ dt + ((1 - r)[:, None] * dn).T @ dn
+    W += k0 * (np.outer(mu_t - m0, mu_t - m0) + np.outer(mu_n - m0, mu_n - m0))
+    sigma = (cst * D + W) / (n + cst)
+    objectives.append(float(objective(mu_t, mu_n, sigma)))
+    w = np.linalg.solve(sigma, mu_t - mu_n)
+    llr = (X - 0.5 * (mu_t + mu_n)) @ w
+    post, _ = e_step(llr)
+
+fixture = {
+    "versions": {"numpy": np.__version__, "scikit-learn": sklearn.__version__},
+    "sets": sets,
+    "x": X.tolist(),
+    "codes": codes.tolist(),
+    "trials": trials.tolist(),
+    "init": init.tolist(),
+    "shrinkage": float(lam),
+    "mean_prior": k0,
+    "objective": objectives,
+    "posterior": post.tolist(),
+    "llr": llr.tolist(),
+    "truth": truth,
+}
+OUT.write_text(json.dumps(fixture, indent=1) + "\n")
+print(f"wrote {OUT} ({OUT.stat().st_size} B): shrinkage {lam:.6f}, objective {objectives}")
+print("truth", truth, "decoded", [[sets[0][int(np.argmax(post[2*t]))], sets[1][int(np.argmax(post[2*t+1]))]] for t in range(n_trials)])
