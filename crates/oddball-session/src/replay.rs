@@ -265,7 +265,7 @@ impl ReplayDecision {
 /// Seconds a decision of `rounds` rounds takes on the four-bulb panel: countdown, the rounds,
 /// and the last flash's epoch (the decision comes when its last sample has arrived).
 pub fn panel_seconds(p: &FourBulbParams, pre: &Preprocess, rounds: usize) -> f64 {
-    p.countdown_s + rounds.saturating_sub(1) as f64 * p.round_s + p.onset_in_round(3) + pre.tmax
+    p.time_split(rounds, pre.tmax).total_s()
 }
 
 /// One decision's worth of real flashes: a character's rows (or columns) over

@@ -15,7 +15,7 @@ use oddball_live::clock::Clock;
 use oddball_live::panel::{PanelConfig, PanelServer};
 use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
 use oddball_session::engine::{CalibrationReport, Session, SessionParams, Subject};
-use oddball_session::paradigm::FourBulbParams;
+use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides};
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
 
@@ -119,13 +119,56 @@ pub struct SessionOptions {
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]
     pub calibration_per_bulb: usize,
+    #[command(flatten)]
+    pub timing: TimingArgs,
+}
+
+/// The panel's timing: a named preset and changes to it.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TimingArgs {
+    /// Timing of the four-bulb panel: paper (100 ms on, 150 ms gap, rounds of 1 s, 5 s
+    /// countdown) or fast (100 ms on, 75 ms off, rounds not padded, 1 s cue).
+    #[arg(long, default_value = "paper", value_parser = paradigm_preset)]
+    pub paradigm: ParadigmPreset,
+    /// Time a bulb stays lit, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub flash_ms: Option<f64>,
+    /// Dark time between flashes, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub gap_ms: Option<f64>,
+    /// The cue (countdown) before each decision, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub cue_ms: Option<f64>,
+    /// Pad each round of four flashes to this length, ms; 0 pads nothing [default: 1000 for
+    /// paper, none for fast].
+    #[arg(long, value_name = "MS")]
+    pub round_ms: Option<f64>,
+}
+
+fn paradigm_preset(s: &str) -> Result<ParadigmPreset, String> {
+    s.parse()
+        .map_err(|e: oddball_session::SessionError| e.to_string())
+}
+
+impl TimingArgs {
+    /// The panel's timing, checked.
+    pub fn paradigm(&self) -> Result<FourBulbParams> {
+        let o = TimingOverrides {
+            flash_ms: self.flash_ms,
+            gap_ms: self.gap_ms,
+            cue_ms: self.cue_ms,
+            round_ms: self.round_ms,
+        };
+        FourBulbParams::timed(self.paradigm, &o)
+            .context("checking --paradigm/--flash-ms/--gap-ms/--cue-ms/--round-ms")
+    }
 }
 
 impl SessionOptions {
     /// The fixed rule (5 rounds) and the rule in effect.
     pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
         let fixed = DecisionRule::Fixed {
-            rounds: FourBulbParams::paper().n_rounds,
+            rounds: self.timing.paradigm()?.n_rounds,
         };
         let dynamic = DecisionRule::Dynamic {
             threshold: self.threshold,
@@ -145,6 +188,12 @@ impl SessionOptions {
                 fixed
             },
         ))
+    }
+
+    /// The panel's timing (checked by [`Self::rules`], which every command calls first; the
+    /// paper's should it be invalid).
+    pub fn paradigm(&self) -> FourBulbParams {
+        self.timing.paradigm().unwrap_or_default()
     }
 
     /// The simulated preset (the subject of a `sim` source, and the montage of a NIC stream).
@@ -181,6 +230,7 @@ impl SessionOptions {
     /// The session's settings under `rule`.
     pub fn params(&self, rule: DecisionRule) -> SessionParams {
         let mut params = SessionParams::paper(&self.pipeline);
+        params.paradigm = self.paradigm();
         params.seed = self.seed;
         params.rule = rule;
         params.calibration_per_bulb = self.calibration_per_bulb;
@@ -225,9 +275,10 @@ impl SessionOptions {
             .with_context(|| format!("reading {}", cal_file.display()))?;
         let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
         let mut params = ReplayParams::paper(&self.pipeline);
+        params.paradigm = self.paradigm();
         params.seed = self.seed;
         params.rule = rule;
-        params.rounds_per_decision = rule.max_rounds().max(FourBulbParams::paper().n_rounds);
+        params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
         let (model, calibration) = replay::calibrate(&cal, &params)
             .with_context(|| format!("calibrating on {}", cal_file.display()))?;
         println!(

@@ -21,7 +21,6 @@ use oddball_live::panel::PanelConfig;
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
 use oddball_session::engine::Session;
-use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
 
@@ -95,7 +94,7 @@ fn run_with(
     commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let paradigm = FourBulbParams::paper();
+    let paradigm = args.session.paradigm();
     let arm = recording_arm()?;
     let model = match &args.model {
         Some(path) => {
