@@ -25,6 +25,7 @@ use oddball_arm::{ArmSim, Command};
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::stopping::{Expected, StoppingSearch};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -52,6 +53,10 @@ pub struct SessionParams {
     pub cv_folds: usize,
     /// Seed of the flash orders and the calibration order.
     pub seed: u64,
+    /// Choose the stopping rule from the calibration to maximise the expected bit rate
+    /// (replacing `rule`); `None` keeps `rule`.
+    #[serde(default)]
+    pub stopping: Option<StoppingSearch>,
 }
 
 impl SessionParams {
@@ -70,12 +75,16 @@ impl SessionParams {
             chunk: 20,
             cv_folds: 5,
             seed: 0,
+            stopping: None,
         }
     }
 
     pub fn validate(&self) -> Result<(), SessionError> {
         self.paradigm.validate()?;
         self.rule.validate()?;
+        if let Some(s) = &self.stopping {
+            s.validate()?;
+        }
         let bad = |name: &'static str, value: usize, reason: &str| {
             Err(SessionError::InvalidParameter {
                 name,
@@ -236,6 +245,8 @@ pub struct Session<S: Subject> {
     arm: Option<ArmSim>,
     /// The arm runs from the first online decision on (it holds still during calibration).
     arm_running: bool,
+    /// The stopping rule chosen from the calibration, with its expected performance.
+    stopping: Option<Expected>,
 }
 
 impl<S: Subject> Session<S> {
@@ -263,11 +274,17 @@ impl<S: Subject> Session<S> {
             model: None,
             arm,
             arm_running: false,
+            stopping: None,
         })
     }
 
     pub fn params(&self) -> &SessionParams {
         &self.params
+    }
+
+    /// The stopping rule calibration chose ([`SessionParams::stopping`]) and what it expects.
+    pub fn stopping(&self) -> Option<&Expected> {
+        self.stopping.as_ref()
     }
 
     pub fn model(&self) -> Option<&Model> {
@@ -407,7 +424,7 @@ impl<S: Subject> Session<S> {
         let y = &cal.labels;
         let sfreq = self.subject.sfreq();
         let groups: Vec<usize> = cal.trials.iter().map(|&t| t - first_trial).collect();
-        let (model, cv_auc, d_prime) = fit_session_model(
+        let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
             &self.params.pipeline,
             self.params.preprocess,
             self.params.rule,
@@ -418,6 +435,19 @@ impl<S: Subject> Session<S> {
             y,
             &groups,
         )?;
+        if let (Some(search), Some(decision)) = (&self.params.stopping, &mut model.decision) {
+            let chosen = crate::timing::choose_stopping(
+                search,
+                &decision.scores,
+                &oof,
+                y,
+                &self.params.paradigm,
+                &self.params.preprocess,
+            )?;
+            decision.rule = chosen.rule;
+            self.params.rule = chosen.rule;
+            self.stopping = Some(chosen);
+        }
         self.model = Some(model);
         Ok(CalibrationReport {
             n_trials: self.trials.len() - first_trial,
@@ -679,6 +709,25 @@ pub(crate) fn fit_session_model(
     y: &[bool],
     groups: &[usize],
 ) -> Result<(Model, f64, f64), SessionError> {
+    let (model, auc, d, _) = fit_session_model_oof(
+        pipeline, preprocess, rule, folds, sfreq, ch_names, x, y, groups,
+    )?;
+    Ok((model, auc, d))
+}
+
+/// [`fit_session_model`], also returning the out-of-fold scores.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fit_session_model_oof(
+    pipeline: &str,
+    preprocess: oddball_decode::pipeline::Preprocess,
+    rule: DecisionRule,
+    folds: usize,
+    sfreq: f64,
+    ch_names: &[String],
+    x: &Array3<f64>,
+    y: &[bool],
+    groups: &[usize],
+) -> Result<(Model, f64, f64, Vec<f64>), SessionError> {
     let params = PipelineParams::preset(pipeline, sfreq)?;
     let k = folds.max(2);
     let mut oof = vec![0.0; y.len()];
@@ -705,7 +754,7 @@ pub(crate) fn fit_session_model(
         params.fit_grouped(x.view(), y, Some(groups))?,
     );
     model.decision = Some(DecisionModel { scores, rule });
-    Ok((model, cv_auc, scores.d_prime()))
+    Ok((model, cv_auc, scores.d_prime(), oof))
 }
 
 /// The scores of a trial's complete rounds, in order, stopping at the first incomplete one:

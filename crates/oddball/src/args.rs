@@ -121,6 +121,14 @@ pub struct SessionOptions {
     pub calibration_per_bulb: usize,
     #[command(flatten)]
     pub timing: TimingArgs,
+    /// Choose the dynamic-stopping threshold and round limit from the calibration (its
+    /// cross-validated scores) for the most expected bits per minute (Wolpaw) at this timing;
+    /// abstains as dynamic stopping does.
+    #[arg(long, conflicts_with_all = ["dynamic_stopping", "threshold", "max_rounds"])]
+    pub optimise_stopping: bool,
+    /// The most rounds --optimise-stopping may choose.
+    #[arg(long, default_value_t = 12, value_name = "N")]
+    pub round_limit: usize,
 }
 
 /// The panel's timing: a named preset and changes to it.
@@ -180,6 +188,12 @@ impl SessionOptions {
         dynamic
             .validate()
             .context("checking --threshold/--max-rounds")?;
+        if self.optimise_stopping {
+            let search = self.stopping_search();
+            search.validate().context("checking --round-limit")?;
+            // Replaced by the rule calibration chooses.
+            return Ok((fixed, DecisionRule::dynamic(search.max_rounds)));
+        }
         Ok((
             fixed,
             if self.dynamic_stopping {
@@ -234,7 +248,19 @@ impl SessionOptions {
         params.seed = self.seed;
         params.rule = rule;
         params.calibration_per_bulb = self.calibration_per_bulb;
+        // Only for the rule in effect (a fixed-rounds comparison keeps its rounds).
+        params.stopping = (self.optimise_stopping && !matches!(rule, DecisionRule::Fixed { .. }))
+            .then(|| self.stopping_search());
         params
+    }
+
+    /// What --optimise-stopping searches.
+    pub fn stopping_search(&self) -> oddball_decode::stopping::StoppingSearch {
+        oddball_decode::stopping::StoppingSearch {
+            max_rounds: self.round_limit,
+            seed: self.seed,
+            ..Default::default()
+        }
     }
 
     /// A session with any subject, driving a recording arm, calibrated; the pen's start.
