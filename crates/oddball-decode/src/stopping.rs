@@ -49,6 +49,10 @@ pub struct StoppingSearch {
     /// Prior of "attending nothing" (kept so abstention works as online).
     pub p_no_control: f64,
     pub objective: Objective,
+    /// Only candidates expected to be right at least this often compete on the objective (the
+    /// most accurate wins when none is); 0 for no floor.
+    #[serde(default)]
+    pub min_accuracy: f64,
     /// Simulated decisions per candidate.
     pub n_decisions: usize,
     pub seed: u64,
@@ -64,6 +68,7 @@ impl Default for StoppingSearch {
             credible: 0.5,
             p_no_control: 0.2,
             objective: Objective::Wolpaw,
+            min_accuracy: 0.0,
             n_decisions: 4000,
             seed: 0,
         }
@@ -119,6 +124,13 @@ impl StoppingSearch {
         }
         if self.max_rounds == 0 {
             return bad("max_rounds", "0".into(), "at least one round");
+        }
+        if !(0.0..=1.0).contains(&self.min_accuracy) {
+            return bad(
+                "min_accuracy",
+                self.min_accuracy.to_string(),
+                "a probability in [0, 1]",
+            );
         }
         if self.n_decisions == 0 {
             return bad("n_decisions", "0".into(), "at least one decision");
@@ -224,10 +236,19 @@ impl StoppingSearch {
                 });
             }
         }
-        let objective = self.objective;
+        let (objective, floor) = (self.objective, self.min_accuracy);
+        // Candidates over the accuracy floor first, by the objective; the rest by accuracy.
+        let key = |e: &Expected| {
+            if e.accuracy >= floor {
+                (1, e.value(objective))
+            } else {
+                (0, e.accuracy)
+            }
+        };
         out.sort_by(|a, b| {
-            b.value(objective)
-                .total_cmp(&a.value(objective))
+            let (ka, kb) = (key(a), key(b));
+            kb.0.cmp(&ka.0)
+                .then(kb.1.total_cmp(&ka.1))
                 .then(a.rule.max_rounds().cmp(&b.rule.max_rounds()))
         });
         Ok(out)
@@ -337,6 +358,33 @@ mod tests {
             .iter()
             .all(|e| e.wolpaw_bits_per_min <= weak.wolpaw_bits_per_min));
         assert_eq!(all.len(), 12 * search.thresholds.len());
+    }
+
+    #[test]
+    fn an_accuracy_floor_buys_accuracy_with_time() {
+        let secs = |r: usize| 1.0 + 0.7 * r as f64 + 0.4;
+        let (t, n) = scores(1.2, 300);
+        let m = fit(&t, &n);
+        let free = StoppingSearch::default()
+            .choose(&m, &t, &n, 4, secs)
+            .unwrap();
+        let floored = StoppingSearch {
+            min_accuracy: 0.95,
+            ..Default::default()
+        };
+        let sure = floored.choose(&m, &t, &n, 4, secs).unwrap();
+        assert!(free.accuracy < 0.95, "{free:?}");
+        assert!(sure.accuracy >= 0.95, "{sure:?}");
+        assert!(sure.mean_rounds > free.mean_rounds);
+        assert!(sure.wolpaw_bits_per_min <= free.wolpaw_bits_per_min);
+        // Out of reach: the most accurate candidate.
+        let out_of_reach = StoppingSearch {
+            min_accuracy: 1.0,
+            max_rounds: 2,
+            ..Default::default()
+        };
+        let all = out_of_reach.rank(&m, &t, &n, 4, secs).unwrap();
+        assert!(all.iter().all(|e| e.accuracy <= all[0].accuracy));
     }
 
     #[test]

@@ -129,6 +129,10 @@ pub struct SessionOptions {
     /// The most rounds --optimise-stopping may choose.
     #[arg(long, default_value_t = 12, value_name = "N")]
     pub round_limit: usize,
+    /// With --optimise-stopping: only rules expected (from the calibration) to be right at
+    /// least this often compete on bits/min; the most accurate wins when none is.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub min_accuracy: f64,
 }
 
 /// The panel's timing: a named preset and changes to it.
@@ -190,7 +194,9 @@ impl SessionOptions {
             .context("checking --threshold/--max-rounds")?;
         if self.optimise_stopping {
             let search = self.stopping_search();
-            search.validate().context("checking --round-limit")?;
+            search
+                .validate()
+                .context("checking --round-limit/--min-accuracy")?;
             // Replaced by the rule calibration chooses.
             return Ok((fixed, DecisionRule::dynamic(search.max_rounds)));
         }
@@ -258,6 +264,7 @@ impl SessionOptions {
     pub fn stopping_search(&self) -> oddball_decode::stopping::StoppingSearch {
         oddball_decode::stopping::StoppingSearch {
             max_rounds: self.round_limit,
+            min_accuracy: self.min_accuracy,
             seed: self.seed,
             ..Default::default()
         }
