@@ -25,13 +25,14 @@ pub fn choose_stopping(
     paradigm: &FourBulbParams,
     preprocess: &Preprocess,
 ) -> Result<Expected, SessionError> {
-    let (target, nontarget): (Vec<(f64, bool)>, Vec<(f64, bool)>) = oof
-        .iter()
-        .copied()
-        .zip(y.iter().copied())
-        .partition(|p| p.1);
-    let target: Vec<f64> = target.into_iter().map(|p| p.0).collect();
-    let nontarget: Vec<f64> = nontarget.into_iter().map(|p| p.0).collect();
+    let of_class = |class: bool| -> Vec<f64> {
+        oof.iter()
+            .zip(y)
+            .filter(|(_, &t)| t == class)
+            .map(|(&s, _)| s)
+            .collect()
+    };
+    let (target, nontarget) = (of_class(true), of_class(false));
     Ok(search.choose(scores, &target, &nontarget, 4, |rounds| {
         paradigm.time_split(rounds, preprocess.tmax).total_s()
     })?)

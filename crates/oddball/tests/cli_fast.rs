@@ -17,7 +17,7 @@ fn summary(dir: &Path) -> serde_json::Value {
 
 /// The letter G seven times: 42 decisions.
 fn seven_gs() -> String {
-    vec!["up,left,down,right,up,left"; 7].join(",")
+    ["up,left,down,right,up,left"; 7].join(",")
 }
 
 #[test]
