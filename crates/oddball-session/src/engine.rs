@@ -696,26 +696,7 @@ impl<S: Subject> Session<S> {
 /// Fits the preset on labelled epochs `x` and its score model on out-of-fold scores: fold `g % k`
 /// holds the epochs of group `g` (a trial or a spelled character), so overlapping epochs of one
 /// group never straddle a split. Returns the model with its decision rule, the cross-validated
-/// AUC and the scores' d′.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn fit_session_model(
-    pipeline: &str,
-    preprocess: oddball_decode::pipeline::Preprocess,
-    rule: DecisionRule,
-    folds: usize,
-    sfreq: f64,
-    ch_names: &[String],
-    x: &Array3<f64>,
-    y: &[bool],
-    groups: &[usize],
-) -> Result<(Model, f64, f64), SessionError> {
-    let (model, auc, d, _) = fit_session_model_oof(
-        pipeline, preprocess, rule, folds, sfreq, ch_names, x, y, groups,
-    )?;
-    Ok((model, auc, d))
-}
-
-/// [`fit_session_model`], also returning the out-of-fold scores.
+/// AUC, the scores' d′ and the out-of-fold scores themselves (what stopping is chosen from).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fit_session_model_oof(
     pipeline: &str,

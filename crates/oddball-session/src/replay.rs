@@ -26,10 +26,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{fit_session_model, CalibrationReport, TrialOutcome};
+use crate::engine::{fit_session_model_oof, CalibrationReport, TrialOutcome};
 use crate::online::{Marker, OnlineEpocher, ReadyEpoch};
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
+use oddball_decode::stopping::{Expected, StoppingSearch};
 
 /// Settings of a replayed session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -45,6 +46,10 @@ pub struct ReplayParams {
     pub chunk: usize,
     /// Seed of the non-target choice and the bulb assignment.
     pub seed: u64,
+    /// Choose the stopping rule from the calibration recording for the most expected bits per
+    /// minute at `paradigm`'s timing ([`calibrate_for_bit_rate`]); `None` keeps `rule`.
+    #[serde(default)]
+    pub stopping: Option<StoppingSearch>,
 }
 
 impl ReplayParams {
@@ -68,6 +73,7 @@ impl ReplayParams {
             cv_folds: 4,
             chunk: 20,
             seed: 0,
+            stopping: None,
         }
     }
 }
@@ -163,6 +169,16 @@ pub fn calibrate(
     rec: &Recording,
     params: &ReplayParams,
 ) -> Result<(Model, CalibrationReport), SessionError> {
+    let (model, report, _) = calibrate_for_bit_rate(rec, params)?;
+    Ok((model, report))
+}
+
+/// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
+/// cross-validated calibration scores (set in the model's decision model) with what it expects.
+pub fn calibrate_for_bit_rate(
+    rec: &Recording,
+    params: &ReplayParams,
+) -> Result<(Model, CalibrationReport, Option<Expected>), SessionError> {
     let t0 = std::time::Instant::now();
     let chars = character_of_events(rec)?;
     let epochs = stream_epochs(rec, &params.preprocess, params.chunk)?;
@@ -196,7 +212,7 @@ pub fn calibrate(
     }
     let y: Vec<bool> = kept.iter().map(|&(_, t)| t).collect();
     let groups: Vec<usize> = kept.iter().map(|&(i, _)| chars[i]).collect();
-    let (model, cv_auc, d_prime) = fit_session_model(
+    let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
         &params.pipeline,
         params.preprocess,
         params.rule,
@@ -207,6 +223,19 @@ pub fn calibrate(
         &y,
         &groups,
     )?;
+    let mut chosen = None;
+    if let (Some(search), Some(decision)) = (&params.stopping, &mut model.decision) {
+        let e = crate::timing::choose_stopping(
+            search,
+            &decision.scores,
+            &oof,
+            &y,
+            &params.paradigm,
+            &params.preprocess,
+        )?;
+        decision.rule = e.rule;
+        chosen = Some(e);
+    }
     Ok((
         model,
         CalibrationReport {
@@ -218,6 +247,7 @@ pub fn calibrate(
             d_prime,
             fit_seconds: t0.elapsed().as_secs_f64(),
         },
+        chosen,
     ))
 }
 

@@ -312,7 +312,8 @@ impl SessionOptions {
         params.seed = self.seed;
         params.rule = rule;
         params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
-        let (model, calibration) = replay::calibrate(&cal, &params)
+        params.stopping = self.optimise_stopping.then(|| self.stopping_search());
+        let (model, calibration, chosen) = replay::calibrate_for_bit_rate(&cal, &params)
             .with_context(|| format!("calibrating on {}", cal_file.display()))?;
         println!(
             "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
@@ -324,6 +325,10 @@ impl SessionOptions {
             calibration.cv_auc,
             calibration.d_prime
         );
+        if let Some(e) = &chosen {
+            params.rule = e.rule;
+            println!("{}", oddball_session::timing::stopping_text(e));
+        }
         Ok(Replayed {
             calibration_recording: cal,
             test,

@@ -129,7 +129,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             }
         }
     }
+    let mut replay_rule = None;
     let mut prep = prepare(opts, &args.source, rule, opts.realtime, |r, _| {
+        replay_rule = Some(r.params.rule);
         if rule != fixed {
             let mut p = r.params.clone();
             p.rule = fixed;
@@ -146,7 +148,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     // The rule calibration chose (--optimise-stopping), else the one given.
     let (rule, stopping) = match &prep.pilot {
         AnyPilot::Live(s) => (s.params().rule, s.stopping().copied()),
-        AnyPilot::Replay(_) => (rule, None),
+        AnyPilot::Replay(_) => (replay_rule.unwrap_or(rule), None),
     };
     let paradigm = opts.paradigm();
     println!("panel timing: {}", paradigm.describe());
