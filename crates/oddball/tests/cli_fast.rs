@@ -112,6 +112,43 @@ fn hard_subject_with_an_accuracy_floor_is_right_90_percent_of_the_time() {
 }
 
 #[test]
+fn real_speller_eeg_replayed_at_the_fast_timing_with_optimised_stopping() {
+    let Some(data) = common::data_dir() else {
+        return;
+    };
+    let file = data.join("bci2000-samplefiles-p300/eeg3_2.dat");
+    let dir = tmp("replay");
+    let subject = format!("replay:{}", file.display());
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--subject",
+        &subject,
+        "--paradigm",
+        "fast",
+        "--optimise-stopping",
+        "--round-limit",
+        "5",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("stopping chosen from calibration"), "{out}");
+    let s = summary(&dir);
+    let r = &s["result"];
+    // eeg3_2 calibrated on eeg3_1: 24 four-choice decisions (4 characters, rows and columns,
+    // 3 slots of 5 sequences each), seconds on the fast panel's time axis (the recording's own
+    // 175 ms flash rate, 4 flashes a round instead of its 12). Measured 23/24 right (one
+    // abstention), 33.4 bits/min.
+    assert_eq!(r["decisions"].as_u64(), Some(24));
+    assert!(r["accuracy"].as_f64().unwrap() >= 0.95, "{out}");
+    assert!(
+        r["itr"]["bits_per_minute"].as_f64().unwrap() >= 25.0,
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn bad_timing_and_stopping_options_are_refused_before_any_work() {
     let dir = tmp("bad");
     for (args, needle) in [
