@@ -11,6 +11,8 @@
 //! 2. **Training**: the chosen preset is fitted on the accepted calibration epochs. Its scores
 //!    are turned into log-likelihood ratios by a [`ScoreModelParams`] fitted on
 //!    *cross-validated* scores (folds by decision), so the evidence is not over-confident.
+//!    With [`SessionParams::stopping`] the stopping rule is then chosen from those same
+//!    cross-validated scores for the most expected bits per minute ([`crate::timing`]).
 //! 3. **Online**: per decision, a countdown, then rounds of four flashes. Flashes are shown (to
 //!    the subject and the epocher) when the stream reaches their onset; each epoch is scored as
 //!    soon as its last sample (600 ms after onset) has arrived; after each complete round the

@@ -12,9 +12,12 @@
 //! Calibration fits the preset on every flash of the calibration recording (targets flagged),
 //! with the score model fitted on cross-validated scores (folds by character).
 //!
-//! The timing of the four-bulb panel (countdown, rounds of 1 s) is used for the information
-//! transfer rate, as if the same flashes had been shown on the panel; the speller's own flashes
-//! came faster (a 12-flash sequence every 2.1 s).
+//! The timing of the four-bulb panel ([`ReplayParams::paradigm`]: the paper's countdown and
+//! rounds of 1 s, or the `fast` preset's flash every 175 ms, which is the recording's own flash
+//! rate) is used for the information transfer rate, as if the same flashes had been shown on
+//! the panel; the speller showed each round's four flashes among eight others (a 12-flash
+//! sequence every 2.1 s), so its targets came further apart than on a fast four-bulb panel and
+//! their P300s were not shrunk by a short target-to-target interval as the panel's would be.
 
 use ndarray::{Array3, Axis};
 use oddball_arm::Command;
