@@ -59,6 +59,9 @@ pub struct OnlineArgs {
 
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
+    if args.session.optimise_stopping && args.model.is_some() {
+        bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+    }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");

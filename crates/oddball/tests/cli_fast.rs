@@ -177,4 +177,22 @@ fn bad_timing_and_stopping_options_are_refused_before_any_work() {
         assert!(err.contains(needle), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?}: work started");
     }
+    // online: the timing is checked as for demo, and optimised stopping needs a calibration.
+    let model = dir.join("model.json");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(&model, "{}").unwrap();
+    let out = dir.join("online");
+    for (args, needle) in [
+        (vec!["--calibrate", "--gap-ms", "400"], "round_s"),
+        (
+            vec!["--model", model.to_str().unwrap(), "--optimise-stopping"],
+            "not --model",
+        ),
+    ] {
+        let mut all = vec!["online", "--out", out.to_str().unwrap()];
+        all.extend(args.iter().copied());
+        let (ok, _, err) = common::oddball(&all);
+        assert!(!ok && err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?}: work started");
+    }
 }
