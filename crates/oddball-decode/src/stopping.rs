@@ -59,11 +59,13 @@ pub struct StoppingSearch {
 }
 
 impl Default for StoppingSearch {
-    /// Thresholds 0.70–0.99, 1..=12 rounds, abstain below 0.5, no-control prior 0.2 (the
+    /// Thresholds 0.70–0.999, 1..=12 rounds, abstain below 0.5, no-control prior 0.2 (the
     /// defaults of [`DecisionRule::dynamic`]), Wolpaw, 4000 decisions.
     fn default() -> Self {
         Self {
-            thresholds: vec![0.7, 0.8, 0.85, 0.9, 0.925, 0.95, 0.97, 0.98, 0.99],
+            thresholds: vec![
+                0.7, 0.8, 0.85, 0.9, 0.925, 0.95, 0.97, 0.98, 0.99, 0.995, 0.999,
+            ],
             max_rounds: 12,
             credible: 0.5,
             p_no_control: 0.2,
