@@ -69,6 +69,9 @@ fn typical_subject_fast_with_optimised_stopping_reaches_30_bits_per_minute_at_95
     let s = summary(&dir);
     let r = &s["result"];
     assert_eq!(r["decisions"].as_u64(), Some(42));
+    // Seed 1 measured 41/42 right, 33.6 bits/min (paper timing, 5 fixed rounds: 11.6). Seeds
+    // 2–5 gave 95.2 % / 35.1, 100 % / 36.1, 95.2 % / 35.9 and 88.1 % / 28.6: the aim is met on
+    // four seeds of five, not on every one.
     let accuracy = r["accuracy"].as_f64().unwrap();
     let bits = r["itr"]["bits_per_minute"].as_f64().unwrap();
     assert!(accuracy >= 0.95, "{out}");
@@ -103,6 +106,9 @@ fn hard_subject_with_an_accuracy_floor_is_right_90_percent_of_the_time() {
     let s = summary(&dir);
     let r = &s["result"];
     assert_eq!(r["decisions"].as_u64(), Some(42));
+    // Seed 1 measured 40/42 (one abstention), 8.5 bits/min; 5 fixed rounds 32/42, 4.8. Over
+    // seeds 1–5 this setting gave 95.2, 83.3, 88.1, 78.6 and 88.1 % (--round-limit 20: 88.1,
+    // 92.9, 97.6, 88.1, 90.5 %): >= 90 % is not reached on every seed.
     assert!(r["accuracy"].as_f64().unwrap() >= 0.9, "{out}");
     // More than 5 rounds allowed, and used on average.
     assert!(r["mean_rounds"].as_f64().unwrap() > 5.0, "{out}");
