@@ -16,10 +16,11 @@
 //! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
 //! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
 //! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
-//! [`metrics`] measures them; [`dataset`] turns recordings into labelled epochs, [`evaluate`]
-//! scores presets on them, [`benchmark`] runs presets over data sets and subjects, and
-//! [`unsupervised`] decodes without labels (EM over the paradigm's constraint). The modules
-//! keep their former paths too (`oddball_decode::svm`,
+//! [`metrics`] measures them, [`stopping`] picks the stopping rule that maximises the bit rate;
+//! [`dataset`] turns recordings into labelled epochs, [`evaluate`] scores presets on them,
+//! [`benchmark`] runs presets over data sets and subjects, and [`unsupervised`] decodes without
+//! labels (EM over the paradigm's constraint). The modules keep their former paths too
+//! (`oddball_decode::svm`,
 //! `oddball_decode::tuning`, …).
 //!
 //! # Example
@@ -52,6 +53,7 @@ pub mod preprocess;
 pub mod preset;
 pub mod riemann;
 pub mod stats;
+pub mod stopping;
 #[cfg(test)]
 mod testutil;
 pub mod traits;

@@ -11,6 +11,8 @@
 //! 2. **Training**: the chosen preset is fitted on the accepted calibration epochs. Its scores
 //!    are turned into log-likelihood ratios by a [`ScoreModelParams`] fitted on
 //!    *cross-validated* scores (folds by decision), so the evidence is not over-confident.
+//!    With [`SessionParams::stopping`] the stopping rule is then chosen from those same
+//!    cross-validated scores for the most expected bits per minute ([`crate::timing`]).
 //! 3. **Online**: per decision, a countdown, then rounds of four flashes. Flashes are shown (to
 //!    the subject and the epocher) when the stream reaches their onset; each epoch is scored as
 //!    soon as its last sample (600 ms after onset) has arrived; after each complete round the
@@ -27,6 +29,7 @@ use oddball_decode::classifiers::Classifier;
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::stopping::{Expected, StoppingSearch};
 use oddball_decode::unsupervised::{Constraint, Unsupervised, UnsupervisedParams};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -63,6 +66,10 @@ pub struct SessionParams {
     pub cv_folds: usize,
     /// Seed of the flash orders and the calibration order.
     pub seed: u64,
+    /// Choose the stopping rule from the calibration to maximise the expected bit rate
+    /// (replacing `rule`); `None` keeps `rule`.
+    #[serde(default)]
+    pub stopping: Option<StoppingSearch>,
 }
 
 impl SessionParams {
@@ -81,12 +88,16 @@ impl SessionParams {
             chunk: 20,
             cv_folds: 5,
             seed: 0,
+            stopping: None,
         }
     }
 
     pub fn validate(&self) -> Result<(), SessionError> {
         self.paradigm.validate()?;
         self.rule.validate()?;
+        if let Some(s) = &self.stopping {
+            s.validate()?;
+        }
         let bad = |name: &'static str, value: usize, reason: &str| {
             Err(SessionError::InvalidParameter {
                 name,
@@ -275,6 +286,8 @@ pub struct Session<S: Subject> {
     unlabelled: Option<Unlabelled>,
     /// Online adaptation after a labelled calibration ([`Session::start_adaptation`]).
     adaptation: Option<Adaptation>,
+    /// The stopping rule chosen from the calibration, with its expected performance.
+    stopping: Option<Expected>,
 }
 
 /// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
@@ -368,6 +381,7 @@ impl<S: Subject> Session<S> {
             refused_onsets: 0,
             unlabelled: None,
             adaptation: None,
+            stopping: None,
         })
     }
 
@@ -530,6 +544,11 @@ impl<S: Subject> Session<S> {
         &self.params
     }
 
+    /// The stopping rule calibration chose ([`SessionParams::stopping`]) and what it expects.
+    pub fn stopping(&self) -> Option<&Expected> {
+        self.stopping.as_ref()
+    }
+
     pub fn model(&self) -> Option<&Model> {
         self.model.as_ref()
     }
@@ -667,7 +686,7 @@ impl<S: Subject> Session<S> {
         let y = &cal.labels;
         let sfreq = self.subject.sfreq();
         let groups: Vec<usize> = cal.trials.iter().map(|&t| t - first_trial).collect();
-        let (model, cv_auc, d_prime) = fit_session_model(
+        let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
             &self.params.pipeline,
             self.params.preprocess,
             self.params.rule,
@@ -678,6 +697,19 @@ impl<S: Subject> Session<S> {
             y,
             &groups,
         )?;
+        if let (Some(search), Some(decision)) = (&self.params.stopping, &mut model.decision) {
+            let chosen = crate::timing::choose_stopping(
+                search,
+                &decision.scores,
+                &oof,
+                y,
+                &self.params.paradigm,
+                &self.params.preprocess,
+            )?;
+            decision.rule = chosen.rule;
+            self.params.rule = chosen.rule;
+            self.stopping = Some(chosen);
+        }
         self.model = Some(model);
         Ok(CalibrationReport {
             n_trials: self.trials.len() - first_trial,
@@ -1042,9 +1074,9 @@ impl<S: Subject> Session<S> {
 /// Fits the preset on labelled epochs `x` and its score model on out-of-fold scores: fold `g % k`
 /// holds the epochs of group `g` (a trial or a spelled character), so overlapping epochs of one
 /// group never straddle a split. Returns the model with its decision rule, the cross-validated
-/// AUC and the scores' d′.
+/// AUC, the scores' d′ and the out-of-fold scores themselves (what stopping is chosen from).
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn fit_session_model(
+pub(crate) fn fit_session_model_oof(
     pipeline: &str,
     preprocess: oddball_decode::pipeline::Preprocess,
     rule: DecisionRule,
@@ -1054,7 +1086,7 @@ pub(crate) fn fit_session_model(
     x: &Array3<f64>,
     y: &[bool],
     groups: &[usize],
-) -> Result<(Model, f64, f64), SessionError> {
+) -> Result<(Model, f64, f64, Vec<f64>), SessionError> {
     let params = PipelineParams::preset(pipeline, sfreq)?;
     let k = folds.max(2);
     let mut oof = vec![0.0; y.len()];
@@ -1081,7 +1113,7 @@ pub(crate) fn fit_session_model(
         params.fit_grouped(x.view(), y, Some(groups))?,
     );
     model.decision = Some(DecisionModel { scores, rule });
-    Ok((model, cv_auc, scores.d_prime()))
+    Ok((model, cv_auc, scores.d_prime(), oof))
 }
 
 /// The scores of a trial's complete rounds, in order, stopping at the first incomplete one:

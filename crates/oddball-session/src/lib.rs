@@ -10,6 +10,8 @@
 //!   presenter, the observer (a [`roles::Subject`] is all three).
 //! * [`engine`]: the session: calibration, training, online decisions driving the arm.
 //! * [`task`]: tasks people do with a pilot (copy, tracking, drawing).
+//! * [`timing`]: the paradigm's timing meeting the bit rate: the stopping rule chosen from the
+//!   calibration for the most bits per minute, and where a decision's time went.
 //! * [`report`]: what a copy task's run reports: decision rows, accuracy and ITR, the pen's
 //!   corners, and their text.
 //!
@@ -36,6 +38,7 @@ pub mod report;
 pub mod roles;
 pub mod subject;
 pub mod task;
+pub mod timing;
 
 pub use error::SessionError;
 pub use subject::{SimulatedSubject, SubjectParams, SubjectPreset};

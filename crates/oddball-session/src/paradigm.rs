@@ -6,6 +6,12 @@
 //!   of all four in random order is padded to `round_s` = 1 s, `n_rounds` = 5 rounds make one
 //!   decision, after a `countdown_s` = 5 s countdown. No bulb flashes twice in a row, also across
 //!   a round boundary.
+//! * [`ParadigmPreset`]: the four-bulb panel's named timings, `paper` (above) and `fast`
+//!   (100 ms on, 75 ms off, rounds not padded, so every flash comes 175 ms after the one before
+//!   as in the BCI2000 speller, and a 1 s cue instead of the 5 s countdown); any field can be set
+//!   from the command line ([`TimingOverrides`]). The schedule ([`FourBulbParams::trial`]) is the
+//!   one home of the timing: the panel draws it, the simulated subject sees it, replay and the
+//!   bit rate ([`FourBulbParams::time_split`]) count its seconds.
 //! * [`SpellerParams`]: the 6 × 6 row/column speller of the BCI2000 sample files: rows are codes
 //!   1–6, columns 7–12, each sequence flashes all twelve in random order.
 //!
@@ -80,7 +86,167 @@ pub fn check_bulbs(bulbs: &[Command; 4]) -> Result<(), SessionError> {
     Ok(())
 }
 
+/// The four-bulb panel's named timings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ParadigmPreset {
+    /// The paper's: 100 ms on, 150 ms gap, rounds padded to 1 s, 5 s countdown.
+    Paper,
+    /// 100 ms on, 75 ms off (a flash every 175 ms, the BCI2000 speller's rate), no padding of
+    /// rounds, a 1 s cue between decisions.
+    Fast,
+}
+
+impl ParadigmPreset {
+    pub const ALL: [ParadigmPreset; 2] = [ParadigmPreset::Paper, ParadigmPreset::Fast];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ParadigmPreset::Paper => "paper",
+            ParadigmPreset::Fast => "fast",
+        }
+    }
+}
+
+impl std::fmt::Display for ParadigmPreset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for ParadigmPreset {
+    type Err = SessionError;
+    fn from_str(s: &str) -> Result<Self, SessionError> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| SessionError::InvalidParameter {
+                name: "paradigm",
+                value: s.to_string(),
+                reason: "expected paper or fast".into(),
+            })
+    }
+}
+
+/// Changes to a preset's timing, in milliseconds (`None`: keep the preset's).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct TimingOverrides {
+    /// Time a bulb stays lit.
+    pub flash_ms: Option<f64>,
+    /// Dark time between one flash going off and the next coming on.
+    pub gap_ms: Option<f64>,
+    /// The cue (countdown) before the first flash of a decision.
+    pub cue_ms: Option<f64>,
+    /// Length a round of four flashes is padded to; 0 pads nothing (a round is four flashes
+    /// with their gaps). When not given, a padded preset keeps its round length and an unpadded
+    /// one stays unpadded.
+    pub round_ms: Option<f64>,
+}
+
+/// Where one decision's seconds go.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeSplit {
+    /// The cue (countdown) before the first flash.
+    pub cue_s: f64,
+    /// From the first flash's onset to the last flash's onset plus one flash period.
+    pub flashing_s: f64,
+    /// From then until the last flash's epoch is complete and the decision is made.
+    pub decoding_s: f64,
+}
+
+impl TimeSplit {
+    pub fn total_s(&self) -> f64 {
+        self.cue_s + self.flashing_s + self.decoding_s
+    }
+}
+
 impl FourBulbParams {
+    /// A named timing.
+    pub fn preset(preset: ParadigmPreset) -> Self {
+        match preset {
+            ParadigmPreset::Paper => Self::paper(),
+            ParadigmPreset::Fast => Self::fast(),
+        }
+    }
+
+    /// The fast timing: 100 ms on, 75 ms off, rounds of 700 ms (not padded), 1 s cue.
+    pub fn fast() -> Self {
+        Self {
+            flash_s: 0.1,
+            gap_s: 0.075,
+            round_s: 0.7,
+            countdown_s: 1.0,
+            ..Self::paper()
+        }
+    }
+
+    /// Onset to onset of successive flashes within a round, seconds.
+    pub fn flash_period_s(&self) -> f64 {
+        self.flash_s + self.gap_s
+    }
+
+    /// Rounds are not padded: a round is four flash periods.
+    pub fn unpadded(&self) -> bool {
+        (self.round_s - 4.0 * self.flash_period_s()).abs() < 1e-9
+    }
+
+    /// The timing of `preset` with `o` applied, validated. Without `round_ms`, `paper` pads
+    /// its rounds to 1 s and `fast` pads nothing.
+    pub fn timed(preset: ParadigmPreset, o: &TimingOverrides) -> Result<Self, SessionError> {
+        let mut p = Self::preset(preset);
+        let seconds = |name: &'static str, ms: f64| {
+            if ms.is_finite() && ms >= 0.0 {
+                Ok(ms / 1000.0)
+            } else {
+                Err(SessionError::InvalidParameter {
+                    name,
+                    value: ms.to_string(),
+                    reason: "must be a non-negative number of milliseconds".into(),
+                })
+            }
+        };
+        if let Some(ms) = o.flash_ms {
+            p.flash_s = seconds("flash_ms", ms)?;
+        }
+        if let Some(ms) = o.gap_ms {
+            p.gap_s = seconds("gap_ms", ms)?;
+        }
+        if let Some(ms) = o.cue_ms {
+            p.countdown_s = seconds("cue_ms", ms)?;
+        }
+        p.round_s = match (o.round_ms, preset) {
+            (Some(ms), _) if seconds("round_ms", ms)? > 0.0 => ms / 1000.0,
+            (None, ParadigmPreset::Paper) => p.round_s,
+            _ => 4.0 * p.flash_period_s(),
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// The timing in words: `100 ms on, 75 ms off, rounds of 700 ms, 1.0 s cue`.
+    pub fn describe(&self) -> String {
+        format!(
+            "{:.0} ms on, {:.0} ms off, rounds of {:.0} ms{}, {:.1} s cue",
+            self.flash_s * 1e3,
+            self.gap_s * 1e3,
+            self.round_s * 1e3,
+            if self.unpadded() { "" } else { " (padded)" },
+            self.countdown_s
+        )
+    }
+
+    /// Where the seconds of a decision that used `rounds` rounds go, when each epoch ends
+    /// `epoch_tmax_s` after its flash's onset and the decision waits for the last one.
+    pub fn time_split(&self, rounds: usize, epoch_tmax_s: f64) -> TimeSplit {
+        let last_onset = rounds.saturating_sub(1) as f64 * self.round_s + self.onset_in_round(3);
+        let flashing_s = last_onset + self.flash_period_s();
+        TimeSplit {
+            cue_s: self.countdown_s,
+            flashing_s,
+            decoding_s: (last_onset + epoch_tmax_s - flashing_s).max(0.0),
+        }
+    }
+
     /// The paper's timing: bulbs up, right, down, left; 100 ms on, 150 ms gap, rounds of 1 s, 5
     /// rounds, 5 s countdown.
     pub fn paper() -> Self {
@@ -322,6 +488,90 @@ mod tests {
         let mut q = p;
         q.flash_s = f64::NAN;
         assert!(q.validate().is_err());
+    }
+
+    #[test]
+    fn presets_parse_and_the_fast_one_is_unpadded() {
+        for p in ParadigmPreset::ALL {
+            assert_eq!(p.to_string().parse::<ParadigmPreset>().unwrap(), p);
+            FourBulbParams::preset(p).validate().unwrap();
+        }
+        assert!("Fast".parse::<ParadigmPreset>().is_err());
+        assert_eq!(
+            FourBulbParams::preset(ParadigmPreset::Paper),
+            FourBulbParams::paper()
+        );
+        let p = FourBulbParams::fast();
+        assert!(p.unpadded());
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let t = p.trial(&mut rng, 3);
+        assert!((t.flashes[0].onset_s - 1.0).abs() < 1e-12);
+        // Every flash 175 ms after the one before, across rounds too.
+        for w in t.flashes.windows(2) {
+            assert!((w[1].onset_s - w[0].onset_s - 0.175).abs() < 1e-9);
+            assert_ne!(w[0].code, w[1].code);
+        }
+        assert!((t.duration_s - (1.0 + 3.0 * 0.7)).abs() < 1e-12);
+        assert_eq!(
+            p.describe(),
+            "100 ms on, 75 ms off, rounds of 700 ms, 1.0 s cue"
+        );
+    }
+
+    #[test]
+    fn overrides_change_the_timing_and_are_checked() {
+        let o = |flash, gap, cue, round| TimingOverrides {
+            flash_ms: flash,
+            gap_ms: gap,
+            cue_ms: cue,
+            round_ms: round,
+        };
+        let fast = |o| FourBulbParams::timed(ParadigmPreset::Fast, &o);
+        let paper = |o| FourBulbParams::timed(ParadigmPreset::Paper, &o);
+        assert_eq!(
+            fast(o(None, None, None, None)).unwrap(),
+            FourBulbParams::fast()
+        );
+        // The fast preset stays unpadded.
+        let p = fast(o(Some(80.0), Some(45.0), Some(500.0), None)).unwrap();
+        assert!((p.round_s - 0.5).abs() < 1e-12 && p.unpadded());
+        assert!((p.countdown_s - 0.5).abs() < 1e-12);
+        // A padded one keeps its round unless told; round 0 means no padding.
+        let p = paper(o(None, Some(100.0), None, None)).unwrap();
+        assert_eq!(p.round_s, 1.0);
+        assert!(!p.unpadded());
+        let p = paper(o(None, Some(50.0), None, Some(0.0))).unwrap();
+        assert!((p.round_s - 0.6).abs() < 1e-12 && p.unpadded());
+        let p = fast(o(None, None, None, Some(900.0))).unwrap();
+        assert!((p.round_s - 0.9).abs() < 1e-12);
+        // Four flashes that do not fit the round, a zero flash, NaN: refused by name.
+        for (bad, name) in [
+            (o(None, Some(300.0), None, None), "round_s"),
+            (o(Some(0.0), None, None, None), "flash_s"),
+            (o(None, None, Some(f64::NAN), None), "cue_ms"),
+            (o(None, Some(-5.0), None, None), "gap_ms"),
+        ] {
+            match paper(bad) {
+                Err(SessionError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                other => panic!("{bad:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn a_decision_splits_into_cue_flashing_and_decoding() {
+        // Paper, 5 rounds, 600 ms epochs: 5 s cue; last onset at 4.75 s, flashing to 5.0 s;
+        // its epoch ends at 5.35 s.
+        let s = FourBulbParams::paper().time_split(5, 0.6);
+        assert!((s.cue_s - 5.0).abs() < 1e-12);
+        assert!((s.flashing_s - 5.0).abs() < 1e-12);
+        assert!((s.decoding_s - 0.35).abs() < 1e-12);
+        assert!((s.total_s() - 10.35).abs() < 1e-12);
+        // Fast, 2 rounds: last onset 0.7 + 0.525 = 1.225 s.
+        let s = FourBulbParams::fast().time_split(2, 0.6);
+        assert!((s.cue_s - 1.0).abs() < 1e-12);
+        assert!((s.flashing_s - 1.4).abs() < 1e-12);
+        assert!((s.decoding_s - 0.425).abs() < 1e-12);
     }
 
     #[test]

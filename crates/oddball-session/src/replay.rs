@@ -12,9 +12,12 @@
 //! Calibration fits the preset on every flash of the calibration recording (targets flagged),
 //! with the score model fitted on cross-validated scores (folds by character).
 //!
-//! The timing of the four-bulb panel (countdown, rounds of 1 s) is used for the information
-//! transfer rate, as if the same flashes had been shown on the panel; the speller's own flashes
-//! came faster (a 12-flash sequence every 2.1 s).
+//! The timing of the four-bulb panel ([`ReplayParams::paradigm`]: the paper's countdown and
+//! rounds of 1 s, or the `fast` preset's flash every 175 ms, which is the recording's own flash
+//! rate) is used for the information transfer rate, as if the same flashes had been shown on
+//! the panel; the speller showed each round's four flashes among eight others (a 12-flash
+//! sequence every 2.1 s), so its targets came further apart than on a fast four-bulb panel and
+//! their P300s were not shrunk by a short target-to-target interval as the panel's would be.
 
 use ndarray::{Array3, Axis};
 use oddball_arm::Command;
@@ -26,10 +29,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{fit_session_model, CalibrationReport, TrialOutcome};
+use crate::engine::{fit_session_model_oof, CalibrationReport, TrialOutcome};
 use crate::online::{Marker, OnlineEpocher, ReadyEpoch};
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
+use oddball_decode::stopping::{Expected, StoppingSearch};
 
 /// Settings of a replayed session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -45,6 +49,10 @@ pub struct ReplayParams {
     pub chunk: usize,
     /// Seed of the non-target choice and the bulb assignment.
     pub seed: u64,
+    /// Choose the stopping rule from the calibration recording for the most expected bits per
+    /// minute at `paradigm`'s timing ([`calibrate_for_bit_rate`]); `None` keeps `rule`.
+    #[serde(default)]
+    pub stopping: Option<StoppingSearch>,
 }
 
 impl ReplayParams {
@@ -68,6 +76,7 @@ impl ReplayParams {
             cv_folds: 4,
             chunk: 20,
             seed: 0,
+            stopping: None,
         }
     }
 }
@@ -163,6 +172,16 @@ pub fn calibrate(
     rec: &Recording,
     params: &ReplayParams,
 ) -> Result<(Model, CalibrationReport), SessionError> {
+    let (model, report, _) = calibrate_for_bit_rate(rec, params)?;
+    Ok((model, report))
+}
+
+/// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
+/// cross-validated calibration scores (set in the model's decision model) with what it expects.
+pub fn calibrate_for_bit_rate(
+    rec: &Recording,
+    params: &ReplayParams,
+) -> Result<(Model, CalibrationReport, Option<Expected>), SessionError> {
     let t0 = std::time::Instant::now();
     let chars = character_of_events(rec)?;
     let epochs = stream_epochs(rec, &params.preprocess, params.chunk)?;
@@ -196,7 +215,7 @@ pub fn calibrate(
     }
     let y: Vec<bool> = kept.iter().map(|&(_, t)| t).collect();
     let groups: Vec<usize> = kept.iter().map(|&(i, _)| chars[i]).collect();
-    let (model, cv_auc, d_prime) = fit_session_model(
+    let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
         &params.pipeline,
         params.preprocess,
         params.rule,
@@ -207,6 +226,19 @@ pub fn calibrate(
         &y,
         &groups,
     )?;
+    let mut chosen = None;
+    if let (Some(search), Some(decision)) = (&params.stopping, &mut model.decision) {
+        let e = crate::timing::choose_stopping(
+            search,
+            &decision.scores,
+            &oof,
+            &y,
+            &params.paradigm,
+            &params.preprocess,
+        )?;
+        decision.rule = e.rule;
+        chosen = Some(e);
+    }
     Ok((
         model,
         CalibrationReport {
@@ -218,6 +250,7 @@ pub fn calibrate(
             d_prime,
             fit_seconds: t0.elapsed().as_secs_f64(),
         },
+        chosen,
     ))
 }
 
@@ -265,7 +298,7 @@ impl ReplayDecision {
 /// Seconds a decision of `rounds` rounds takes on the four-bulb panel: countdown, the rounds,
 /// and the last flash's epoch (the decision comes when its last sample has arrived).
 pub fn panel_seconds(p: &FourBulbParams, pre: &Preprocess, rounds: usize) -> f64 {
-    p.countdown_s + rounds.saturating_sub(1) as f64 * p.round_s + p.onset_in_round(3) + pre.tmax
+    p.time_split(rounds, pre.tmax).total_s()
 }
 
 /// One decision's worth of real flashes: a character's rows (or columns) over

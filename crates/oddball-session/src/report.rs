@@ -75,6 +75,9 @@ pub struct Scores {
     pub accuracy: f64,
     pub mean_rounds: f64,
     pub itr: Itr,
+    /// Utility bit rate (Dal Seno et al. 2010): (correct − wrong) · log2 3 bits per minute of
+    /// decisions (abstentions cost time only); 0 when errors are as many as hits.
+    pub utility_bits_per_min: f64,
 }
 
 /// Accuracy, mean rounds and ITR (Wolpaw, 4 choices) of `rows` under `rule`.
@@ -86,6 +89,11 @@ pub fn scores(rows: &[DecisionRow], rule: &DecisionRule) -> Scores {
         .count();
     let accuracy = correct as f64 / n;
     let seconds = rows.iter().map(|r| r.seconds).sum::<f64>() / n;
+    let wrong = rows
+        .iter()
+        .filter(|r| r.decided.is_some() && r.decided != r.intended)
+        .count();
+    let utility = oddball_decode::stopping::utility_bits(4, accuracy, wrong as f64 / n);
     Scores {
         rule: rule_name(rule),
         decisions: rows.len(),
@@ -94,6 +102,11 @@ pub fn scores(rows: &[DecisionRow], rule: &DecisionRule) -> Scores {
         accuracy,
         mean_rounds: rows.iter().map(|r| r.rounds as f64).sum::<f64>() / n,
         itr: Itr::new(4, accuracy, seconds),
+        utility_bits_per_min: if seconds > 0.0 {
+            utility * 60.0 / seconds
+        } else {
+            0.0
+        },
     }
 }
 
@@ -269,7 +282,7 @@ pub fn report_text(
     let line = |s: &mut String, sc: &Scores| {
         let _ = writeln!(
             s,
-            "  {:<48} accuracy {:>5.1} % ({}/{}, {} abstained)  mean rounds {:.2}  {:.2} s/decision  ITR {:.2} bits/decision, {:.2} bits/min",
+            "  {:<48} accuracy {:>5.1} % ({}/{}, {} abstained)  mean rounds {:.2}  {:.2} s/decision  ITR {:.2} bits/decision, {:.2} bits/min, utility {:.2} bits/min",
             sc.rule,
             100.0 * sc.accuracy,
             sc.correct,
@@ -278,7 +291,8 @@ pub fn report_text(
             sc.mean_rounds,
             sc.itr.seconds_per_selection,
             sc.itr.bits_per_selection,
-            sc.itr.bits_per_minute
+            sc.itr.bits_per_minute,
+            sc.utility_bits_per_min
         );
     };
     let _ = writeln!(
@@ -439,6 +453,8 @@ mod tests {
         assert_eq!(s.accuracy, 0.5);
         assert_eq!(s.mean_rounds, 4.0);
         assert_eq!(s.itr, Itr::new(4, 0.5, 2.0));
+        // (2 right − 1 wrong) / 4 decisions · log2 3 bits per 2 s.
+        assert!((s.utility_bits_per_min - 0.25 * 3f64.log2() * 30.0).abs() < 1e-12);
     }
 
     #[test]

@@ -17,7 +17,7 @@ use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
 use oddball_session::engine::{
     CalibrationReport, Session, SessionParams, Subject, UncalibratedParams,
 };
-use oddball_session::paradigm::FourBulbParams;
+use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides};
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
 
@@ -162,6 +162,61 @@ pub struct SessionOptions {
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]
     pub calibration_per_bulb: usize,
+    #[command(flatten)]
+    pub timing: TimingArgs,
+    /// Choose the dynamic-stopping threshold and round limit from the calibration (its
+    /// cross-validated scores) for the most expected bits per minute (Wolpaw) at this timing;
+    /// abstains as dynamic stopping does.
+    #[arg(long, conflicts_with_all = ["dynamic_stopping", "threshold", "max_rounds"])]
+    pub optimise_stopping: bool,
+    /// The most rounds --optimise-stopping may choose.
+    #[arg(long, default_value_t = 12, value_name = "N")]
+    pub round_limit: usize,
+    /// With --optimise-stopping: only rules expected (from the calibration) to be right at
+    /// least this often compete on bits/min; the most accurate wins when none is.
+    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    pub min_accuracy: f64,
+}
+
+/// The panel's timing: a named preset and changes to it.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TimingArgs {
+    /// Timing of the four-bulb panel: paper (100 ms on, 150 ms gap, rounds of 1 s, 5 s
+    /// countdown) or fast (100 ms on, 75 ms off, rounds not padded, 1 s cue).
+    #[arg(long, default_value = "paper", value_parser = paradigm_preset)]
+    pub paradigm: ParadigmPreset,
+    /// Time a bulb stays lit, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub flash_ms: Option<f64>,
+    /// Dark time between flashes, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub gap_ms: Option<f64>,
+    /// The cue (countdown) before each decision, ms [default: the preset's].
+    #[arg(long, value_name = "MS")]
+    pub cue_ms: Option<f64>,
+    /// Pad each round of four flashes to this length, ms; 0 pads nothing [default: 1000 for
+    /// paper, none for fast].
+    #[arg(long, value_name = "MS")]
+    pub round_ms: Option<f64>,
+}
+
+fn paradigm_preset(s: &str) -> Result<ParadigmPreset, String> {
+    s.parse()
+        .map_err(|e: oddball_session::SessionError| e.to_string())
+}
+
+impl TimingArgs {
+    /// The panel's timing, checked.
+    pub fn paradigm(&self) -> Result<FourBulbParams> {
+        let o = TimingOverrides {
+            flash_ms: self.flash_ms,
+            gap_ms: self.gap_ms,
+            cue_ms: self.cue_ms,
+            round_ms: self.round_ms,
+        };
+        FourBulbParams::timed(self.paradigm, &o)
+            .context("checking --paradigm/--flash-ms/--gap-ms/--cue-ms/--round-ms")
+    }
 }
 
 impl SessionOptions {
@@ -169,7 +224,7 @@ impl SessionOptions {
     pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
         self.check()?;
         let fixed = DecisionRule::Fixed {
-            rounds: FourBulbParams::paper().n_rounds,
+            rounds: self.timing.paradigm()?.n_rounds,
         };
         let dynamic = DecisionRule::Dynamic {
             threshold: self.threshold,
@@ -181,6 +236,14 @@ impl SessionOptions {
         dynamic
             .validate()
             .context("checking --threshold/--max-rounds")?;
+        if self.optimise_stopping {
+            let search = self.stopping_search();
+            search
+                .validate()
+                .context("checking --round-limit/--min-accuracy")?;
+            // Replaced by the rule calibration chooses.
+            return Ok((fixed, DecisionRule::dynamic(search.max_rounds)));
+        }
         Ok((
             fixed,
             if self.dynamic_stopping {
@@ -189,6 +252,12 @@ impl SessionOptions {
                 fixed
             },
         ))
+    }
+
+    /// The panel's timing (checked by [`Self::rules`], which every command calls first; the
+    /// paper's should it be invalid).
+    pub fn paradigm(&self) -> FourBulbParams {
+        self.timing.paradigm().unwrap_or_default()
     }
 
     /// The simulated preset (the subject of a `sim` source, and the montage of a NIC stream).
@@ -230,10 +299,24 @@ impl SessionOptions {
     /// The session's settings under `rule`.
     pub fn params(&self, rule: DecisionRule) -> SessionParams {
         let mut params = SessionParams::paper(&self.pipeline);
+        params.paradigm = self.paradigm();
         params.seed = self.seed;
         params.rule = rule;
         params.calibration_per_bulb = self.calibration_per_bulb;
+        // Only for the rule in effect (a fixed-rounds comparison keeps its rounds).
+        params.stopping = (self.optimise_stopping && !matches!(rule, DecisionRule::Fixed { .. }))
+            .then(|| self.stopping_search());
         params
+    }
+
+    /// What --optimise-stopping searches.
+    pub fn stopping_search(&self) -> oddball_decode::stopping::StoppingSearch {
+        oddball_decode::stopping::StoppingSearch {
+            max_rounds: self.round_limit,
+            min_accuracy: self.min_accuracy,
+            seed: self.seed,
+            ..Default::default()
+        }
     }
 
     /// A session with any subject, driving a recording arm, calibrated; the pen's start.
@@ -326,10 +409,12 @@ impl SessionOptions {
             .with_context(|| format!("reading {}", cal_file.display()))?;
         let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
         let mut params = ReplayParams::paper(&self.pipeline);
+        params.paradigm = self.paradigm();
         params.seed = self.seed;
         params.rule = rule;
-        params.rounds_per_decision = rule.max_rounds().max(FourBulbParams::paper().n_rounds);
-        let (model, calibration) = replay::calibrate(&cal, &params)
+        params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
+        params.stopping = self.optimise_stopping.then(|| self.stopping_search());
+        let (model, calibration, chosen) = replay::calibrate_for_bit_rate(&cal, &params)
             .with_context(|| format!("calibrating on {}", cal_file.display()))?;
         println!(
             "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
@@ -341,6 +426,10 @@ impl SessionOptions {
             calibration.cv_auc,
             calibration.d_prime
         );
+        if let Some(e) = &chosen {
+            params.rule = e.rule;
+            println!("{}", oddball_session::timing::stopping_text(e));
+        }
         Ok(Replayed {
             calibration_recording: cal,
             test,

@@ -16,18 +16,21 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use oddball_arm::{Command, Vector2};
+use oddball_decode::stopping::Expected;
 use oddball_live::clock::Clock;
 use oddball_live::source::SourceSpec;
+use oddball_session::paradigm::FourBulbParams;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
     accuracy_over_time, accuracy_over_time_text, pen_report, report_text, row_text, rule_name,
     scores, CalibrationSummary, DecisionRow, PenReport, Scores, Stretch,
 };
 use oddball_session::task::{run_copy, Pilot};
+use oddball_session::timing::{stopping_text, time_report, time_text, TimeReport};
 use serde::Serialize;
 
 use crate::args::{commands_arg, SessionOptions, SourceArgs, LETTER_G};
-use crate::pilot::{live_subject, prepare, write_decisions_csv};
+use crate::pilot::{live_subject, prepare, write_decisions_csv, AnyPilot};
 
 /// Options of `oddball demo`.
 #[derive(Debug, clap::Args)]
@@ -65,6 +68,10 @@ struct Summary<'a> {
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     note: Option<String>,
+    paradigm: FourBulbParams,
+    time_per_decision: TimeReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stopping_chosen: Option<Expected>,
 }
 
 pub fn run(args: &DemoArgs) -> Result<()> {
@@ -77,6 +84,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
 
     let mut comparison = None;
     let mut note = None;
+    let rule_label = if opts.optimise_stopping {
+        format!(
+            "stopping chosen from calibration for bits/min (at most {} rounds)",
+            opts.round_limit
+        )
+    } else {
+        rule_name(&rule)
+    };
     match (&replay_files, opts.preset()) {
         (Some((file, cal)), _) => {
             println!(
@@ -84,7 +99,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 file.display(),
                 cal.display(),
                 opts.pipeline,
-                rule_name(&rule)
+                rule_label
             );
             note = Some(REPLAY_NOTE.to_string());
         }
@@ -94,7 +109,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 preset.expect("a simulated preset when not replaying"),
                 opts.seed,
                 opts.pipeline,
-                rule_name(&rule),
+                rule_label,
                 opts.calibration_per_bulb
             );
             if let SourceSpec::Nic(addr) = &args.source.source {
@@ -103,7 +118,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                     args.source.nic.nic_mode.name(),
                     args.source.nic.nic_channels
                 );
-            } else if opts.dynamic_stopping && args.source.source == SourceSpec::Sim {
+            } else if (opts.dynamic_stopping || opts.optimise_stopping)
+                && args.source.source == SourceSpec::Sim
+            {
                 // The same subject and calibration (same seed), online with fixed rounds.
                 let subject = live_subject(opts, &args.source, false, Clock::new())?;
                 let (mut quiet, _, _) = opts.calibrated(subject, fixed, false)?;
@@ -117,7 +134,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             }
         }
     }
+    let mut replay_rule = None;
     let mut prep = prepare(opts, &args.source, rule, opts.realtime, |r, _| {
+        replay_rule = Some(r.params.rule);
         if rule != fixed {
             let mut p = r.params.clone();
             p.rule = fixed;
@@ -131,6 +150,16 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         }
         Ok(())
     })?;
+    // The rule calibration chose (--optimise-stopping), else the one given.
+    let (rule, stopping) = match &prep.pilot {
+        AnyPilot::Live(s) => (s.params().rule, s.stopping().copied()),
+        AnyPilot::Replay(_) => (replay_rule.unwrap_or(rule), None),
+    };
+    let paradigm = opts.paradigm();
+    println!("panel timing: {}", paradigm.describe());
+    if let Some(e) = &stopping {
+        println!("{}", stopping_text(e));
+    }
     // A replayed recording cycles the commands until its decisions are used up.
     let cycle = replay_files.is_some();
     let steps = run_copy(
@@ -162,6 +191,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     let simulated_seconds = prep.pilot.time_s();
     let result = scores(&rows, &rule);
+    let time = time_report(&rows, &paradigm);
     let arm = prep.pilot.arm().clone();
     let pen = pen_report(&arm, prep.pen_start, &rows);
     let over_time = accuracy_over_time(&rows, 10);
@@ -218,6 +248,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         posthoc_correct: posthoc.map(|(r, n)| [r, n]),
         files,
         note,
+        paradigm,
+        time_per_decision: time,
+        stopping_chosen: stopping,
     };
     let json = serde_json::to_string_pretty(&summary)?;
     oddball_io::write_atomic(args.out.join("summary.json"), json + "\n")
@@ -237,6 +270,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if let Some((right, n)) = posthoc {
         println!("post hoc: the last unsupervised fit re-decides {right}/{n} decisions right");
     }
+    println!("{}", time_text(&time, &paradigm));
     println!("report in {}", args.out.display());
     // Wall-clock time goes to stderr: stdout, like every file, depends only on the options.
     eprintln!(

@@ -21,7 +21,6 @@ use oddball_live::panel::PanelConfig;
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
 use oddball_session::engine::{Session, UncalibratedParams};
-use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
 
@@ -76,6 +75,9 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         }
         _ => {}
     }
+    if args.session.optimise_stopping && args.model.is_some() {
+        bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+    }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
@@ -111,7 +113,7 @@ fn run_with(
     commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let paradigm = FourBulbParams::paper();
+    let paradigm = args.session.paradigm();
     let arm = recording_arm()?;
     let model = match &args.model {
         Some(path) => {

@@ -10,7 +10,6 @@ use oddball_live::live::LiveSubject;
 use oddball_live::pilot::decisions_csv;
 pub use oddball_live::pilot::{AnyPilot, Prepared};
 use oddball_live::source::{AnySource, SourceSpec};
-use oddball_session::paradigm::FourBulbParams;
 use oddball_session::replay::{accepted_epochs, ReplaySource};
 use oddball_session::task::{ReplayPilot, Step};
 
@@ -29,7 +28,7 @@ pub fn live_subject(
         .source
         .open(source.open_options(sim, paced)?, clock)
         .with_context(|| format!("--source {}", source.source))?;
-    let mut subject = LiveSubject::new(eeg, FourBulbParams::paper(), clock);
+    let mut subject = LiveSubject::new(eeg, opts.paradigm(), clock);
     if let Some(m) = markers {
         subject = subject.with_markers(m);
     }
@@ -67,7 +66,7 @@ pub fn prepare(
             r.params.chunk,
         )?;
         return Ok(Prepared {
-            pilot: AnyPilot::Replay(ReplayPilot::new(replay, arm, FourBulbParams::paper())),
+            pilot: AnyPilot::Replay(ReplayPilot::new(replay, arm, r.params.paradigm)),
             calibration: r.calibration,
             erp,
             model_json: r.model.to_json(),

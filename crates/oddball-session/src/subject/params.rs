@@ -69,6 +69,12 @@ impl FromStr for SubjectPreset {
     }
 }
 
+/// Time constant of the P300's recovery with the target-to-target interval, s (module doc).
+pub const P300_RECOVERY_S: f64 = 2.0;
+/// The target-to-target interval the presets' P300 amplitudes hold at: the mean of the paper's
+/// timing (a target once per 1 s round), s.
+pub const P300_REFERENCE_TTI_S: f64 = 1.0;
+
 /// Settings of a simulated subject (amplitudes µV, times s, frequencies Hz).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SubjectParams {
@@ -87,6 +93,15 @@ pub struct SubjectParams {
     pub p300_variability: f64,
     /// P300 gain per channel.
     pub p300_topography: Vec<f64>,
+    /// Time constant of the P300's recovery after the previous attended flash, s: a target
+    /// `TTI` s after the last one evokes `(1 − e^(−TTI/τ)) / (1 − e^(−ref/τ))` of
+    /// `p300_amplitude` (ref = `p300_reference_tti`). 0 switches the effect off (and is what a
+    /// file written before it existed reads as). See the module doc for the sources.
+    #[serde(default)]
+    pub p300_recovery: f64,
+    /// Target-to-target interval at which the P300 has `p300_amplitude`, s.
+    #[serde(default)]
+    pub p300_reference_tti: f64,
     /// Visual N1 amplitude (P2 is 0.8 of it) to every flash at gain 1, µV.
     pub vep_amplitude: f64,
     /// Visual evoked response gain per channel.
@@ -125,6 +140,18 @@ impl Default for SubjectParams {
 }
 
 impl SubjectParams {
+    /// The P300's amplitude factor for a target `tti` s after the previous attended flash
+    /// (`None`: no attended flash before): 1 at `p300_reference_tti`, growing towards
+    /// `1 / (1 − e^(−ref/τ))` for long intervals, towards 0 for short ones.
+    pub fn tti_factor(&self, tti: Option<f64>) -> f64 {
+        let tau = self.p300_recovery;
+        if tau <= 0.0 {
+            return 1.0;
+        }
+        let recovered = |t: f64| 1.0 - (-t.max(0.0) / tau).exp();
+        tti.map_or(1.0, recovered) / recovered(self.p300_reference_tti)
+    }
+
     /// The preset's settings for [`STARSTIM_CHANNELS`] at [`STARSTIM_SFREQ`], seed 0.
     pub fn preset(preset: SubjectPreset) -> Self {
         let typical = Self {
@@ -136,6 +163,8 @@ impl SubjectParams {
             p300_jitter: 0.03,
             p300_variability: 0.3,
             p300_topography: P300_GAINS.to_vec(),
+            p300_recovery: P300_RECOVERY_S,
+            p300_reference_tti: P300_REFERENCE_TTI_S,
             vep_amplitude: 3.0,
             vep_topography: VEP_GAINS.to_vec(),
             pink_rms: 6.0,
@@ -243,6 +272,7 @@ impl SubjectParams {
             ("p300_latency", self.p300_latency),
             ("p300_jitter", self.p300_jitter),
             ("p300_variability", self.p300_variability),
+            ("p300_recovery", self.p300_recovery),
             ("vep_amplitude", self.vep_amplitude),
             ("pink_rms", self.pink_rms),
             ("alpha_rms", self.alpha_rms),
@@ -254,6 +284,15 @@ impl SubjectParams {
             if !(v.is_finite() && v >= 0.0) {
                 return bad(name, v.to_string(), "must be finite and >= 0");
             }
+        }
+        if self.p300_recovery > 0.0
+            && !(self.p300_reference_tti.is_finite() && self.p300_reference_tti > 0.0)
+        {
+            return bad(
+                "p300_reference_tti",
+                self.p300_reference_tti.to_string(),
+                "must be > 0 when p300_recovery is",
+            );
         }
         if !(self.p300_width.is_finite() && self.p300_width > 0.0) {
             return bad(
