@@ -168,19 +168,28 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
     Ok(rec)
 }
 
-/// The epochs of a labelled recording, cut by `pre` (the one preprocessing path).
+/// The epochs of a labelled recording, cut by `pre` (the one preprocessing path, filtering the
+/// recording in place); a recording whose every epoch is dropped is an error naming the cause
+/// (not, later, "0 targets and 0 non-targets").
 pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording, DatasetError> {
-    let (epochs, _dropped) =
-        pre.params()
-            .epochs(&rec.raw)
-            .map_err(|source| DatasetError::Epoch {
-                path: rec.path.clone(),
-                source,
-            })?;
+    let n_events = rec.raw.events().len();
+    let path = rec.path;
+    let speller = rec.speller;
+    let (epochs, dropped) = match pre.params().epochs_owned(rec.raw) {
+        Ok(e) => e,
+        Err(source) => return Err(DatasetError::Epoch { path, source }),
+    };
+    if epochs.is_empty() && !dropped.is_empty() {
+        return Err(DatasetError::AllDropped {
+            path,
+            n_epochs: dropped.len(),
+            why: dropped.summary(),
+        });
+    }
     Ok(EpochedRecording {
-        name: rec.path.display().to_string(),
-        n_events: rec.raw.events().len(),
-        speller: rec.speller,
+        name: path.display().to_string(),
+        n_events,
+        speller,
         epochs,
     })
 }
