@@ -10,7 +10,7 @@ use oddball_io::Manifest;
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
         if let Ok(m) = Manifest::parse(text, Path::new("/nonexistent/fuzz.toml")) {
-            let _ = m.runs().count();
+            let _ = m.subjects.iter().map(|s| s.runs().count()).sum::<usize>();
         }
     }
 });

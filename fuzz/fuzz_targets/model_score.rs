@@ -26,5 +26,7 @@ fuzz_target!(|data: &[u8]| {
         // finding.
         let _ = scores.iter().all(|s| s.is_finite());
     }
-    let _ = model.pipeline.score_epoch(x.index_axis(ndarray::Axis(0), 0));
+    let _ = model
+        .pipeline
+        .score_epoch(x.index_axis(ndarray::Axis(0), 0));
 });

@@ -23,12 +23,7 @@ fuzz_target!(|data: &[u8]| {
         0 => parse_bci2000(bytes, Path::new("f.dat"), &Bci2000Options::default()),
         1 => {
             let text = String::from_utf8_lossy(bytes);
-            let header: Vec<&str> = text
-                .lines()
-                .next()
-                .unwrap_or("")
-                .split(',')
-                .collect();
+            let header: Vec<&str> = text.lines().next().unwrap_or("").split(',').collect();
             parse_csv(bytes, Path::new("f.csv"), &CsvOptions::detect(&header))
         }
         2 => parse_edf(bytes, Path::new("f.edf"), &EdfOptions::default()),

@@ -17,7 +17,12 @@ fn presets_learn_a_separable_p300_and_round_trip_through_json() {
         let scores = m.decision_function(xte.view()).unwrap();
         let auc = crate::metrics::roc_auc(scores.as_slice().unwrap(), &yte).unwrap();
         assert!(auc > 0.9, "{name}: AUC {auc}");
-        let model = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], m);
+        let model = Model::new(
+            Preprocess::peer(),
+            64.0,
+            ["a", "b", "c", "d"].map(String::from).to_vec(),
+            m,
+        );
         let back = Model::from_json(&model.to_json()).unwrap();
         let again = back.pipeline.decision_function(xte.view()).unwrap();
         assert_eq!(again, scores, "{name}: a loaded model scores the same");
@@ -63,16 +68,27 @@ fn a_score_fusion_adds_its_members_scores_in_units_of_their_training_spread() {
         .unwrap()
         .fit(xtr.view(), &ytr)
         .unwrap();
-    let v1 = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], single)
-        .to_json()
-        .replace(
-            &format!("\"format_version\":{MODEL_FORMAT_VERSION}"),
-            "\"format_version\":1",
-        );
+    let v1 = Model::new(
+        Preprocess::peer(),
+        64.0,
+        ["a", "b", "c", "d"].map(String::from).to_vec(),
+        single,
+    )
+    .to_json()
+    .replace(
+        &format!("\"format_version\":{MODEL_FORMAT_VERSION}"),
+        "\"format_version\":1",
+    );
     assert!(v1.contains("\"format_version\":1"));
     assert!(Model::from_json(&v1).is_ok());
     // A fused model whose score scale is not a positive number is refused at load.
-    let text = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], fused).to_json();
+    let text = Model::new(
+        Preprocess::peer(),
+        64.0,
+        ["a", "b", "c", "d"].map(String::from).to_vec(),
+        fused,
+    )
+    .to_json();
     assert!(Model::from_json(&text).is_ok());
     // A fused pipeline that fuses again is refused: fusions do not nest (nor their settings).
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
@@ -157,7 +173,13 @@ fn a_stacked_fusion_is_a_logistic_regression_on_out_of_fold_scores() {
         assert!((g - e).abs() < 1e-9 * e.abs().max(1.0), "{g} vs {e}");
     }
     // The learned combination survives saving; a non-finite weight is refused at load.
-    let text = Model::new(Preprocess::peer(), 64.0, vec!["a".into(); 4], fused).to_json();
+    let text = Model::new(
+        Preprocess::peer(),
+        64.0,
+        ["a", "b", "c", "d"].map(String::from).to_vec(),
+        fused,
+    )
+    .to_json();
     let back = Model::from_json(&text).unwrap();
     assert_eq!(back.pipeline.decision_function(xte.view()).unwrap(), got);
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
