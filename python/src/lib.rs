@@ -295,7 +295,6 @@ methods_with_json!(Mdm, oddball_decode::riemann::Mdm, {
         Ok(out.into_pyarray(py))
     }
 
-    /// The class means `(2, c, c)`: non-target, target.
     /// P(target) per matrix.
     fn predict_proba<'py>(
         &self,
@@ -309,6 +308,7 @@ methods_with_json!(Mdm, oddball_decode::riemann::Mdm, {
         Ok(out.into_pyarray(py))
     }
 
+    /// The class means `(2, c, c)`: non-target, target.
     #[getter]
     fn covmeans<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let both = ndarray::stack(
