@@ -55,8 +55,6 @@ pub enum DatasetError {
     },
     #[error("{}: the speller geometry does not fit: {what}", path.display())]
     Speller { path: PathBuf, what: String },
-    #[error("{given} spelled texts for {files} files (one per file)")]
-    TextCount { given: usize, files: usize },
     #[error("{}: every one of its {n_epochs} epochs was dropped: {why}", path.display())]
     AllDropped {
         path: PathBuf,
@@ -111,16 +109,13 @@ pub fn speller_of(spec: &SpellerSpec) -> Result<Speller, String> {
 
 /// Reads and labels a recording (see [`Labelling`]); not yet epoched.
 pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, DatasetError> {
-    let read = |p: &Path| match how.read {
-        Some(o) => oddball_io::read_with(p, o),
-        None => oddball_io::read(p),
-    };
-    let mut rec = read(path).map_err(|source| DatasetError::Read {
+    let options = how.read.cloned().unwrap_or_default();
+    let mut rec = oddball_io::read_with(path, &options).map_err(|source| DatasetError::Read {
         path: path.to_path_buf(),
         source: Box::new(source),
     })?;
     if let Some(spec) = how.speller {
-        let mut speller = speller_of(spec).map_err(|what| DatasetError::Speller {
+        let speller = speller_of(spec).map_err(|what| DatasetError::Speller {
             path: path.to_path_buf(),
             what,
         })?;
@@ -137,10 +132,7 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
                 })
             }
             Some(_) => {}
-            None => {
-                speller.text_to_spell = None;
-                rec.speller = Some(speller);
-            }
+            None => rec.speller = Some(speller),
         }
     }
     if let Some(m) = how.mapping {
@@ -192,33 +184,6 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording, Datas
         speller,
         epochs,
     })
-}
-
-/// Reads, labels and epochs each recording the same way (`how.text` is ignored: `texts` is
-/// empty or one spelled text per file).
-pub fn load_epochs(
-    paths: &[PathBuf],
-    pre: &Preprocess,
-    how: Labelling<'_>,
-    texts: &[String],
-) -> Result<Vec<EpochedRecording>, DatasetError> {
-    if !texts.is_empty() && texts.len() != paths.len() {
-        return Err(DatasetError::TextCount {
-            given: texts.len(),
-            files: paths.len(),
-        });
-    }
-    paths
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let how = Labelling {
-                text: texts.get(i).map(String::as_str),
-                ..how
-            };
-            epoch(read_labelled(p, how)?, pre)
-        })
-        .collect()
 }
 
 #[cfg(test)]
