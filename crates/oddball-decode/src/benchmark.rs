@@ -23,6 +23,7 @@
 //! one-sided Wilcoxon signed-rank tests of every ordered pair of presets over the subjects both
 //! scored, as MOABB's `compute_dataset_statistics` reports them ([`crate::stats::wilcoxon`]).
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -419,18 +420,23 @@ fn run_unit(
     let m = &manifests[u.dataset];
     let subj = &m.subjects[u.subject];
     let recs = &loaded[&(u.dataset, u.subject)];
-    let (train, test): (Vec<EpochedRecording>, Vec<EpochedRecording>) = match u.protocol {
-        Protocol::TrainTest => (
-            pick(m, u.subject, recs, &subj.train),
-            pick(m, u.subject, recs, &subj.test),
-        ),
+    // The subject's runs are loaded train runs first, so train → test borrows them.
+    type Runs<'r> = Cow<'r, [EpochedRecording]>;
+    let (train, test): (Runs<'_>, Runs<'_>) = match u.protocol {
+        Protocol::TrainTest => {
+            let (train, test) = recs.split_at(subj.train.len());
+            (Cow::Borrowed(train), Cow::Borrowed(test))
+        }
         Protocol::WithinSession => {
             let runs = &u
                 .session
                 .as_ref()
                 .expect("within-session units name a session")
                 .1;
-            (pick(m, u.subject, recs, runs), Vec::new())
+            (
+                Cow::Owned(pick(m, u.subject, recs, runs)),
+                Cow::Owned(Vec::new()),
+            )
         }
         Protocol::CrossSubject => {
             let mut train = Vec::new();
@@ -444,7 +450,7 @@ fn run_unit(
                 check_layout(m, &subj.id, &recs[0], &other.id, &theirs[0])?;
                 train.extend(theirs.iter().cloned());
             }
-            (train, recs.clone())
+            (Cow::Owned(train), Cow::Borrowed(&recs[..]))
         }
     };
     let eval = EvaluateParams {
