@@ -404,8 +404,8 @@ pub fn score_speller(
         .collect();
     // Character blocks are consecutive runs of epochs: cut the flashes the same way.
     let mut rest = flashes.as_slice();
-    let blocks: Vec<Vec<ScoredFlash>> = speller
-        .character_blocks(&events)
+    let char_events = speller.character_blocks(&events);
+    let blocks: Vec<Vec<ScoredFlash>> = char_events
         .iter()
         .map(|b| {
             let (head, tail) = rest.split_at(b.len());
@@ -439,8 +439,7 @@ pub fn score_speller(
     let soa_samples = gaps.get(gaps.len() / 2).copied().unwrap_or(0);
     let soa = soa_samples as f64 / ep.sfreq();
     // The pause: from each character's last flash to the next one's first, less one SOA.
-    let mut pauses: Vec<usize> = speller
-        .character_blocks(&events)
+    let mut pauses: Vec<usize> = char_events
         .windows(2)
         .filter_map(|b| {
             let last = b[0].last()?.onset;

@@ -123,8 +123,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             bar.set_length((subjects + units) as u64);
             bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
         }
-        Progress::Loaded { .. } => bar.inc(1),
-        Progress::Done { .. } => bar.inc(1),
+        Progress::Loaded { .. } | Progress::Done { .. } => bar.inc(1),
     };
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();
