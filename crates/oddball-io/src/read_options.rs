@@ -62,6 +62,7 @@ pub fn read_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Record
     if let Err(why) = options.check() {
         return Err(unsupported(&why));
     }
+    crate::check_file(path)?;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

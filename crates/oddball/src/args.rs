@@ -21,6 +21,63 @@ use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides}
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
 
+/// An output file (`-o`, `--json`, `--csv`): checked when the arguments are parsed, before any
+/// work, so a mistyped folder fails at once instead of after training. Its folder must exist
+/// and the path must not be a folder.
+pub fn output_file(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() {
+        return Err("an empty path".into());
+    }
+    if path.is_dir() {
+        return Err(format!("{s} is a folder: give a file name inside it"));
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(path),
+    };
+    if !parent.is_dir() {
+        return Err(if parent.exists() {
+            format!("{} is not a folder", parent.display())
+        } else {
+            format!(
+                "the folder {} does not exist (create it first, e.g. mkdir -p {})",
+                parent.display(),
+                parent.display()
+            )
+        });
+    }
+    Ok(path)
+}
+
+/// A picture to write (`--plot`): an [`output_file`] ending in .png or .svg.
+pub fn plot_file(s: &str) -> Result<PathBuf, String> {
+    let path = output_file(s)?;
+    oddball_plot::PlotFormat::from_path(&path).map_err(|e| e.to_string())?;
+    Ok(path)
+}
+
+/// A report folder (`--out DIR`): created when the command starts; refused at once when a file
+/// of that name is in the way (or in the way of one of its parents).
+pub fn output_dir(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() {
+        return Err("an empty path".into());
+    }
+    for p in path.ancestors().filter(|p| !p.as_os_str().is_empty()) {
+        if p.exists() {
+            if !p.is_dir() {
+                return Err(format!(
+                    "{} is a file, not a folder: give another --out",
+                    p.display()
+                ));
+            }
+            break;
+        }
+    }
+    Ok(path)
+}
+
 /// The letter G of the paper, as `--commands` spells it.
 pub const LETTER_G: &str = "up,left,down,right,up,left";
 
@@ -150,10 +207,15 @@ pub struct SessionOptions {
     #[arg(long)]
     pub dynamic_stopping: bool,
     /// Posterior at which dynamic stopping decides.
-    #[arg(long, default_value_t = 0.95, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.95,
+        value_name = "P",
+        requires = "dynamic_stopping"
+    )]
     pub threshold: f64,
     /// Most rounds per decision with dynamic stopping.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, requires = "dynamic_stopping")]
     pub max_rounds: usize,
     /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
     /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
@@ -170,12 +232,26 @@ pub struct SessionOptions {
     #[arg(long, conflicts_with_all = ["dynamic_stopping", "threshold", "max_rounds"])]
     pub optimise_stopping: bool,
     /// The most rounds --optimise-stopping may choose.
-    #[arg(long, default_value_t = 12, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 12,
+        value_name = "N",
+        requires = "optimise_stopping"
+    )]
     pub round_limit: usize,
     /// With --optimise-stopping: only rules expected (from the calibration) to be right at
     /// least this often compete on bits/min; the most accurate wins when none is.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "P",
+        requires = "optimise_stopping"
+    )]
     pub min_accuracy: f64,
+    /// The step h one command moves the pen, metres (e.g. --step 0.01 for text that does not
+    /// fit the board at the default) [default: the arm's, 0.02].
+    #[arg(long, value_name = "METRES")]
+    pub step: Option<f64>,
 }
 
 /// The panel's timing: a named preset and changes to it.
@@ -284,6 +360,8 @@ impl SessionOptions {
         let SubjectSpec::Replay(file) = &self.subject else {
             return Ok(None);
         };
+        // The replayed file first: a missing one is not its calibration file's fault.
+        oddball_io::check_file(file).context("--subject replay:FILE")?;
         let cal = match &self.calibration {
             CalibrationSpec::File(c) => c.clone(),
             CalibrationSpec::Labelled => sibling_calibration(file)?,
@@ -293,6 +371,7 @@ impl SessionOptions {
                  --unsupervised` to replay a recording without labels)"
             ),
         };
+        oddball_io::check_file(&cal).context("the calibration recording")?;
         Ok(Some((file.clone(), cal)))
     }
 
@@ -326,7 +405,7 @@ impl SessionOptions {
         rule: DecisionRule,
         verbose: bool,
     ) -> Result<(Session<S>, CalibrationReport, Vector2<f64>)> {
-        let arm = recording_arm()?;
+        let arm = self.arm()?;
         let pen_start = arm.pen();
         let mut session = Session::new(self.params(rule), subject, Some(arm))
             .context("setting up the session")?;
@@ -384,8 +463,22 @@ impl SessionOptions {
         Ok(())
     }
 
+    /// The arm the session drives (recording its trace), with `--step`.
+    pub fn arm(&self) -> Result<ArmSim> {
+        recording_arm(self.step)
+    }
+
+    /// Checks, before any EEG work, that the intended commands keep the pen on the board.
+    pub fn check_commands(&self, commands: &[Command]) -> Result<()> {
+        oddball_session::task::check_path(&self.arm()?, commands, "the commands")
+            .map(|_| ())
+            .map_err(|e| with_step_hint(e.into()))
+            .context("checking --commands")
+    }
+
     /// Checks option combinations before any session starts.
     pub fn check(&self) -> Result<()> {
+        self.arm()?;
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");
         }
@@ -441,10 +534,29 @@ impl SessionOptions {
 }
 
 /// The arm every session drives, recording its trace.
-pub fn recording_arm() -> Result<ArmSim> {
-    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
+fn recording_arm(step_m: Option<f64>) -> Result<ArmSim> {
+    let mut config = ArmConfig::default();
+    if let Some(step) = step_m {
+        config.reference.step_m = step;
+    }
+    let mut arm = ArmSim::from_config(&config).context("checking --step")?;
     arm.set_recording(true);
     Ok(arm)
+}
+
+/// Adds which option fixes a path that leaves the board: `--step` with the largest step that fits.
+pub fn with_step_hint(e: anyhow::Error) -> anyhow::Error {
+    let hint = match e.downcast_ref::<oddball_session::SessionError>() {
+        Some(oddball_session::SessionError::PathOffBoard {
+            max_step_m: Some(m),
+            ..
+        }) => format!("use --step {} (metres) or less, or draw less", m),
+        Some(oddball_session::SessionError::PathOffBoard { .. }) => {
+            "draw less: no step fits from the pen's start".to_string()
+        }
+        _ => return e,
+    };
+    e.context(hint)
 }
 
 /// A replayed subject: the calibration recording read and trained on, the test recording read.

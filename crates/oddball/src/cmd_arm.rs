@@ -25,10 +25,10 @@ pub struct ArmArgs {
     #[arg(long, value_name = "METRES")]
     pub step: Option<f64>,
     /// Output directory for trajectory.csv and the plot.
-    #[arg(long, value_name = "DIR", default_value = "out/arm")]
+    #[arg(long, value_name = "DIR", default_value = "out/arm", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
     /// Plot file, .png or .svg [default: <out>/arm.png].
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
     /// Integration step and control period in seconds [default: from the config, 0.001 s].
     #[arg(long, value_name = "SECONDS")]

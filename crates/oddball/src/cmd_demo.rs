@@ -43,7 +43,7 @@ pub struct DemoArgs {
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/demo")]
+    #[arg(long, value_name = "DIR", default_value = "out/demo", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
 }
 
@@ -78,6 +78,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let wall = Instant::now();
     let commands = &args.commands;
     let (fixed, rule) = args.session.rules()?;
+    args.session.check_commands(&args.commands)?;
     let opts = &args.session;
     let replay_files = opts.replay_files()?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;

@@ -25,8 +25,7 @@ use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
 
 use crate::args::{
-    commands_arg, recording_arm, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs,
-    LETTER_G,
+    commands_arg, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
 };
 
 /// Options of `oddball online`.
@@ -56,12 +55,13 @@ pub struct OnlineArgs {
     pub session: SessionOptions,
     /// Report folder: session.xdf (written as the session runs; an existing one is kept and the
     /// new one numbered) and summary.json.
-    #[arg(long, value_name = "DIR", default_value = "out/online")]
+    #[arg(long, value_name = "DIR", default_value = "out/online", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
 }
 
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
+    args.session.check_commands(&args.commands)?;
     let uncalibrated = args.session.calibration == CalibrationSpec::None;
     match (&args.model, args.calibrate, uncalibrated) {
         (None, false, false) => {
@@ -114,7 +114,7 @@ fn run_with(
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = args.session.paradigm();
-    let arm = recording_arm()?;
+    let arm = args.session.arm()?;
     let model = match &args.model {
         Some(path) => {
             let text =

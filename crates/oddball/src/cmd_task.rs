@@ -18,7 +18,7 @@ use oddball_session::report::{
     accuracy_over_time, accuracy_over_time_text, draw_text, DecisionRow,
 };
 use oddball_session::task::{
-    drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
+    check_drawing, drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
 use serde::Serialize;
 
@@ -58,7 +58,7 @@ pub struct TrackArgs {
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/track")]
+    #[arg(long, value_name = "DIR", default_value = "out/track", value_parser = crate::args::output_dir)]
     pub out: std::path::PathBuf,
 }
 
@@ -74,7 +74,7 @@ pub struct DrawArgs {
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/draw")]
+    #[arg(long, value_name = "DIR", default_value = "out/draw", value_parser = crate::args::output_dir)]
     pub out: std::path::PathBuf,
 }
 
@@ -189,8 +189,9 @@ fn run_track(args: &TrackArgs) -> Result<()> {
     };
     // Before calibrating: the targets, tolerance and count (TrackParams::check).
     params
-        .check(&crate::args::recording_arm()?)
+        .check(&args.session.arm()?)
         .context("checking --target/--targets/--tolerance-mm")?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut prep = prepare_task(&args.session, &args.source, "track", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: task_targets(arm, &params)
@@ -200,7 +201,6 @@ fn run_track(args: &TrackArgs) -> Result<()> {
             plan_m: Vec::new(),
         })
     })?;
-    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_tracking(&mut prep.pilot, &params)?;
     print!("{report}");
     let expected: Vec<Vector2<f64>> = std::iter::once(prep.pen_start)
@@ -220,6 +220,12 @@ fn run_track(args: &TrackArgs) -> Result<()> {
 
 fn run_draw(args: &DrawArgs) -> Result<()> {
     let wall = Instant::now();
+    // Before calibrating: the text must fit the board at this step.
+    args.session.rules()?;
+    check_drawing(&args.session.arm()?, &args.text)
+        .map_err(|e| crate::args::with_step_hint(e.into()))
+        .with_context(|| format!("checking --draw {:?}", args.text))?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut prep = prepare_task(&args.session, &args.source, "draw", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: Vec::new(),
@@ -229,7 +235,6 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
                 .collect(),
         })
     })?;
-    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_drawing(&mut prep.pilot, &args.text, 3, 1.0)
         .with_context(|| format!("drawing {:?}", args.text))?;
     print!("{}", draw_text(&report));
