@@ -214,6 +214,18 @@ impl TrialRecord {
     }
 }
 
+/// How far a calibration is, after each of its trials ([`Session::calibrate_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CalibrationProgress {
+    /// Calibration trials done, of `total`.
+    pub done: usize,
+    pub total: usize,
+    /// Seconds of EEG the calibration has taken so far.
+    pub eeg_seconds: f64,
+    /// Seconds of EEG the remaining trials should take at this pace.
+    pub seconds_left: f64,
+}
+
 /// What calibration measured.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationReport {
@@ -662,13 +674,31 @@ impl<S: Subject> Session<S> {
 
     /// Runs the calibration trials and trains the model.
     pub fn calibrate(&mut self) -> Result<CalibrationReport, SessionError> {
+        self.calibrate_with(&mut |_| {})
+    }
+
+    /// [`Self::calibrate`], telling `progress` after each calibration trial how far it is (for
+    /// a live or real-time calibration, which takes minutes).
+    pub fn calibrate_with(
+        &mut self,
+        progress: &mut dyn FnMut(CalibrationProgress),
+    ) -> Result<CalibrationReport, SessionError> {
         let mut intended: Vec<u32> = (1..=4)
             .flat_map(|c| std::iter::repeat_n(c, self.params.calibration_per_bulb))
             .collect();
         intended.shuffle(&mut self.rng);
         let first = self.trials.len();
-        for code in intended {
+        let total = intended.len();
+        let t0 = self.time_s();
+        for (k, code) in intended.into_iter().enumerate() {
             self.run_trial(Phase::Calibration, Some(code))?;
+            let eeg_seconds = self.time_s() - t0;
+            progress(CalibrationProgress {
+                done: k + 1,
+                total,
+                eeg_seconds,
+                seconds_left: eeg_seconds / (k + 1) as f64 * (total - k - 1) as f64,
+            });
         }
         self.train(first)
     }

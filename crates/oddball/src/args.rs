@@ -421,7 +421,12 @@ impl SessionOptions {
             }
             return Ok((session, CalibrationReport::none(), pen_start));
         }
-        let calibration = session.calibrate().context("calibrating")?;
+        let calibration = if verbose {
+            session.calibrate_with(&mut calibration_progress())
+        } else {
+            session.calibrate()
+        }
+        .context("calibrating")?;
         if self.adapt {
             session
                 .start_adaptation(0.8, 0.9)
@@ -542,6 +547,43 @@ fn recording_arm(step_m: Option<f64>) -> Result<ArmSim> {
     let mut arm = ArmSim::from_config(&config).context("checking --step")?;
     arm.set_recording(true);
     Ok(arm)
+}
+
+/// Prints a calibration's progress ("calibration decision 3 of 40 …") when it is slow enough
+/// to need it: a line after each trial once two seconds of wall time have passed since the
+/// start or the last line (a live or real-time calibration prints every trial; an unpaced
+/// simulation, over in a second, prints nothing).
+pub fn calibration_progress() -> impl FnMut(oddball_session::engine::CalibrationProgress) {
+    let mut last = std::time::Instant::now();
+    let mut printed = false;
+    move |p| {
+        let end = p.done == p.total;
+        if last.elapsed().as_secs_f64() >= 2.0 || (printed && end) {
+            println!(
+                "calibration decision {} of {} · {} of EEG{}",
+                p.done,
+                p.total,
+                minutes_seconds(p.eeg_seconds),
+                if end {
+                    " · training".to_string()
+                } else {
+                    format!(" · about {} left", minutes_seconds(p.seconds_left))
+                }
+            );
+            last = std::time::Instant::now();
+            printed = true;
+        }
+    }
+}
+
+/// "7 s", "2 min 05 s".
+pub fn minutes_seconds(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    if s < 60 {
+        format!("{s} s")
+    } else {
+        format!("{} min {:02} s", s / 60, s % 60)
+    }
 }
 
 /// Adds which option fixes a path that leaves the board: `--step` with the largest step that fits.

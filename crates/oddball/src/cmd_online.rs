@@ -188,7 +188,7 @@ fn run_with(
             args.session.start_uncalibrated(&mut session, p)?;
             println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
         }
-        None => match session.calibrate() {
+        None => match session.calibrate_with(&mut crate::args::calibration_progress()) {
             Ok(c) => {
                 if args.session.adapt {
                     session
