@@ -32,7 +32,7 @@ use crate::ensemble::MemberParams;
 use crate::features::FeatureParams;
 use crate::knn::KnnParams;
 use crate::metrics::roc_auc;
-use crate::pipeline::PipelineParams;
+use crate::pipeline::{FrontCache, PipelineParams};
 use crate::preset::Preset;
 use crate::svm::SvmParams;
 use crate::DecodeError;
@@ -182,6 +182,30 @@ pub fn grid_search_with(
     k: usize,
     on_fit: &mut dyn FnMut(),
 ) -> Result<GridSearch> {
+    let all: Vec<usize> = (0..epochs.dim().0).collect();
+    grid_search_cached(
+        candidates,
+        &mut FrontCache::new(epochs),
+        &all,
+        y,
+        groups,
+        k,
+        on_fit,
+    )
+}
+
+/// [`grid_search_with`] on the epochs at `subset` of `cache`'s epochs (labels `y` and groups
+/// for the subset): a front that learns nothing takes its features from `cache`, shared with
+/// every other search, fold and preset on the same epochs.
+pub fn grid_search_cached(
+    candidates: &[PipelineParams],
+    cache: &mut FrontCache<'_>,
+    subset: &[usize],
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<GridSearch> {
     if candidates.is_empty() {
         return Err(DecodeError::InvalidParameter {
             name: "candidates",
@@ -189,9 +213,9 @@ pub fn grid_search_with(
             reason: "a grid search needs at least one candidate".into(),
         });
     }
-    if y.len() != epochs.dim().0 {
+    if y.len() != subset.len() {
         return Err(DecodeError::LabelCount {
-            n_samples: epochs.dim().0,
+            n_samples: subset.len(),
             n_labels: y.len(),
         });
     }
@@ -199,6 +223,9 @@ pub fn grid_search_with(
     let n = candidates.len();
     let mut fold_auc = vec![vec![0.0; folds.n_folds()]; n];
     let mut done = vec![false; n];
+    // Indices into the cache's epochs of the subset's epochs at `idx`.
+    let full = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| subset[i]).collect() };
+    let epochs = cache.epochs();
     for i in 0..n {
         if done[i] {
             continue;
@@ -210,11 +237,11 @@ pub fn grid_search_with(
                 let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
                 let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&e| g[e]).collect());
                 let m = candidates[i].fit_grouped(
-                    epochs.select(Axis(0), &tr).view(),
+                    epochs.select(Axis(0), &full(&tr)).view(),
                     &ytr,
                     gtr.as_deref(),
                 )?;
-                let scores = m.decision_function(epochs.select(Axis(0), &te).view())?;
+                let scores = m.decision_function(epochs.select(Axis(0), &full(&te)).view())?;
                 fold_auc[i][f] = roc_auc(&scores.to_vec(), &yte)?;
                 on_fit();
             }
@@ -228,7 +255,7 @@ pub fn grid_search_with(
                     && candidates[i].main.same_front(&candidates[j].main)
             })
             .collect();
-        let shared = candidates[i].main.stateless_features(epochs).transpose()?;
+        let shared = cache.rows(&candidates[i].main, subset).transpose()?;
         for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
             let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
             let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
@@ -236,9 +263,9 @@ pub fn grid_search_with(
             let (xtr, xte, n_front) = match &shared {
                 Some(x) => (x.select(&tr), x.select(&te), n_in),
                 None => {
-                    let etr = epochs.select(Axis(0), &tr);
+                    let etr = epochs.select(Axis(0), &full(&tr));
                     let (front, xtr) = candidates[i].main.fit_front(etr.view(), &ytr)?;
-                    let xte = front.transform(epochs.select(Axis(0), &te).view())?;
+                    let xte = front.transform(epochs.select(Axis(0), &full(&te)).view())?;
                     (xtr, xte, front.n_channels(n_in))
                 }
             };
@@ -299,8 +326,30 @@ pub fn tune(
     k: usize,
     on_fit: &mut dyn FnMut(),
 ) -> Result<(PipelineParams, TuningReport)> {
+    let all: Vec<usize> = (0..epochs.dim().0).collect();
+    tune_cached(
+        candidates,
+        &mut FrontCache::new(epochs),
+        &all,
+        y,
+        groups,
+        k,
+        on_fit,
+    )
+}
+
+/// [`tune`] on the epochs at `subset` of `cache`'s epochs ([`grid_search_cached`]).
+pub fn tune_cached(
+    candidates: &[Candidate],
+    cache: &mut FrontCache<'_>,
+    subset: &[usize],
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<(PipelineParams, TuningReport)> {
     let params: Vec<PipelineParams> = candidates.iter().map(|c| c.params.clone()).collect();
-    let g = grid_search_with(&params, epochs, y, groups, k, on_fit)?;
+    let g = grid_search_cached(&params, cache, subset, y, groups, k, on_fit)?;
     let report = TuningReport {
         chosen: candidates[g.best].label.clone(),
         candidates: candidates
@@ -451,6 +500,46 @@ mod tests {
                 assert_eq!(g.fold_auc[j][f], auc, "candidate {j}, fold {f}");
             }
         }
+    }
+
+    /// One cache shared by several presets' searches on different subsets (as nested
+    /// cross-validation shares it across outer folds and presets) gives exactly the scores of
+    /// searches and fits that compute everything from the subset's own epochs.
+    #[test]
+    fn a_shared_front_cache_changes_no_score() {
+        let (x, y, groups) = synthetic(24 * 4, 5);
+        let mut cache = FrontCache::new(x.view());
+        let outer = cv_folds(&y, Some(&groups), 2).unwrap();
+        for name in ["lda", "paper-knn", "riemann", "lda+riemann"] {
+            let grid: Vec<PipelineParams> = preset_grid(name, 64.0)
+                .unwrap()
+                .into_iter()
+                .map(|c| c.params)
+                .collect();
+            for f in 0..2 {
+                let (tr, te) = outer.split(f);
+                let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+                let gtr: Vec<usize> = tr.iter().map(|&i| groups[i]).collect();
+                let xtr = x.select(Axis(0), &tr);
+                let cached =
+                    grid_search_cached(&grid, &mut cache, &tr, &ytr, Some(&gtr), 2, &mut || {})
+                        .unwrap();
+                let alone =
+                    grid_search_with(&grid, xtr.view(), &ytr, Some(&gtr), 2, &mut || {}).unwrap();
+                assert_eq!(cached.fold_auc, alone.fold_auc, "{name}, outer fold {f}");
+                let p = &grid[cached.best];
+                let s = p
+                    .fit_score_cached(&mut cache, &tr, &ytr, Some(&gtr), &te)
+                    .unwrap();
+                let m = p.fit_grouped(xtr.view(), &ytr, Some(&gtr)).unwrap();
+                let whole = m.decision_function(x.select(Axis(0), &te).view()).unwrap();
+                assert_eq!(s.scores, whole, "{name}, outer fold {f}");
+                assert!(s.fit_s >= 0.0 && s.score_s >= 0.0);
+            }
+        }
+        // Amplitude bins of 2 and 3 samples (64/25 and 64/20 both round to 3) and the paper's
+        // features: three fronts, each computed once; riemann's xDAWN learns and is never cached.
+        assert_eq!(cache.len(), 3);
     }
 
     #[test]

@@ -145,19 +145,7 @@ impl SingleParams {
     /// Fits every step on `epochs` labelled `y`.
     pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Single> {
         let (n_epochs, n_channels, n_times) = epochs.dim();
-        if y.len() != n_epochs {
-            return Err(DecodeError::LabelCount {
-                n_samples: n_epochs,
-                n_labels: y.len(),
-            });
-        }
-        let n_targets = y.iter().filter(|&&t| t).count();
-        if n_targets == 0 || n_targets == n_epochs {
-            return Err(DecodeError::NeedBothClasses {
-                n_targets,
-                n_nontargets: n_epochs - n_targets,
-            });
-        }
+        check_labels(n_epochs, y)?;
         let (front, x) = self.fit_front(epochs, y)?;
         let n_front = front.n_channels(n_channels);
         let Front { channels, features } = front;
@@ -257,6 +245,152 @@ impl SingleParams {
                 .and_then(|f| f.transform(epochs)),
         )
     }
+}
+
+/// Features of every epoch of one data set for the fronts that learn nothing (no channel
+/// selection, a stateless feature map: amplitude bins, the paper's EMD + Hilbert + wavelet
+/// features), each computed once and shared by every fold, grid point and preset with that
+/// front. A subset's rows are selected, never recomputed — the same rows the front gives the
+/// subset's epochs alone, since it learns nothing from them. Fronts that learn (channel
+/// selection, xDAWN) are never cached: they must be fitted inside each training split.
+#[derive(Debug)]
+pub struct FrontCache<'a> {
+    epochs: ArrayView3<'a, f64>,
+    /// Each front's features of all epochs and the seconds per epoch they took.
+    entries: Vec<(SingleParams, FeatureData, f64)>,
+}
+
+/// Scores from [`PipelineParams::fit_score_cached`] and the seconds fitting and scoring took; a
+/// cached front's share is its measured seconds per epoch times the epochs of each part.
+#[derive(Debug, Clone)]
+pub struct CachedScores {
+    pub scores: Array1<f64>,
+    pub fit_s: f64,
+    pub score_s: f64,
+}
+
+impl<'a> FrontCache<'a> {
+    /// An empty cache over `epochs` `(n_epochs, n_channels, n_times)`.
+    pub fn new(epochs: ArrayView3<'a, f64>) -> Self {
+        Self {
+            epochs,
+            entries: Vec::new(),
+        }
+    }
+
+    /// The epochs the cache serves.
+    pub fn epochs(&self) -> ArrayView3<'a, f64> {
+        self.epochs
+    }
+
+    /// The features `p`'s front gives the epochs at `subset` (computed for all epochs on first
+    /// use); `None` when the front learns from its training data.
+    pub(crate) fn rows(
+        &mut self,
+        p: &SingleParams,
+        subset: &[usize],
+    ) -> Option<Result<FeatureData>> {
+        self.rows_timed(p, subset).map(|r| r.map(|(x, _)| x))
+    }
+
+    /// [`Self::rows`] and the seconds per epoch the front's features took.
+    fn rows_timed(
+        &mut self,
+        p: &SingleParams,
+        subset: &[usize],
+    ) -> Option<Result<(FeatureData, f64)>> {
+        if let Some((_, x, s)) = self.entries.iter().find(|(q, _, _)| q.same_front(p)) {
+            return Some(Ok((x.select(subset), *s)));
+        }
+        let t0 = std::time::Instant::now();
+        match p.stateless_features(self.epochs)? {
+            Ok(x) => {
+                let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
+                let rows = x.select(subset);
+                self.entries.push((p.clone(), x, per_epoch));
+                Some(Ok((rows, per_epoch)))
+            }
+            Err(e) => Some(Err(e)),
+        }
+    }
+
+    /// Fronts cached so far.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether nothing is cached yet.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+impl PipelineParams {
+    /// Scores of the epochs at `test` by this pipeline fitted on the epochs at `train` (indices
+    /// into `cache`'s epochs, labels `y_train`, groups for a stack's inner folds). A single
+    /// pipeline whose front learns nothing takes its features from `cache`; any other is fitted
+    /// whole — the scores are the same either way.
+    pub fn fit_score_cached(
+        &self,
+        cache: &mut FrontCache<'_>,
+        train: &[usize],
+        y_train: &[bool],
+        groups: Option<&[usize]>,
+        test: &[usize],
+    ) -> Result<CachedScores> {
+        if self.fused.is_empty() {
+            let idx: Vec<usize> = train.iter().chain(test).copied().collect();
+            if let Some(x) = cache.rows_timed(&self.main, &idx) {
+                let (x, per_epoch) = x?;
+                let n = train.len();
+                let tr: Vec<usize> = (0..n).collect();
+                let te: Vec<usize> = (n..idx.len()).collect();
+                check_labels(n, y_train)?;
+                let t0 = std::time::Instant::now();
+                let head = self
+                    .main
+                    .fit_head(x.select(&tr), y_train, cache.epochs().dim().1)?;
+                let fit_s = t0.elapsed().as_secs_f64() + per_epoch * n as f64;
+                let t1 = std::time::Instant::now();
+                let scores = head.decision_function(x.select(&te))?;
+                let score_s = t1.elapsed().as_secs_f64() + per_epoch * te.len() as f64;
+                return Ok(CachedScores {
+                    scores,
+                    fit_s,
+                    score_s,
+                });
+            }
+        }
+        let epochs = cache.epochs();
+        let t0 = std::time::Instant::now();
+        let model = self.fit_grouped(epochs.select(Axis(0), train).view(), y_train, groups)?;
+        let fit_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let scores = model.decision_function(epochs.select(Axis(0), test).view())?;
+        Ok(CachedScores {
+            scores,
+            fit_s,
+            score_s: t1.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The checks [`SingleParams::fit`] makes before fitting: one label per epoch, both classes.
+fn check_labels(n_epochs: usize, y: &[bool]) -> Result<()> {
+    if y.len() != n_epochs {
+        return Err(DecodeError::LabelCount {
+            n_samples: n_epochs,
+            n_labels: y.len(),
+        });
+    }
+    let n_targets = y.iter().filter(|&&t| t).count();
+    if n_targets == 0 || n_targets == n_epochs {
+        return Err(DecodeError::NeedBothClasses {
+            n_targets,
+            n_nontargets: n_epochs - n_targets,
+        });
+    }
+    Ok(())
 }
 
 /// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
