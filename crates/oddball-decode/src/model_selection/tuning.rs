@@ -19,11 +19,16 @@
 //!   share their front (channel selection + features) share its fit in each fold, and a front that
 //!   learns nothing (amplitude or paper features) is computed once for all epochs; both give the
 //!   same scores as fitting each candidate's whole pipeline per fold (a test checks this).
+//!   [`grid_search_cached`] and [`tune_cached`] take those features from a
+//!   [`FrontCache`] over a larger data set, shared with other searches (nested
+//!   cross-validation's outer folds, other presets); the folds of a search run in parallel
+//!   (rayon), which changes no score.
 //!
 //! The functions only ever see the data they are given: the caller passes the training epochs,
 //! and held-out test data can't influence the choice.
 
 use ndarray::{ArrayView3, Axis};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::amplitude::AmplitudeFeatures;
@@ -226,23 +231,42 @@ pub fn grid_search_cached(
     // Indices into the cache's epochs of the subset's epochs at `idx`.
     let full = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| subset[i]).collect() };
     let epochs = cache.epochs();
+    // The labels and groups of each fold's two parts.
+    let parts: Vec<FoldParts> = (0..folds.n_folds())
+        .map(|f| {
+            let (tr, te) = folds.split(f);
+            FoldParts {
+                ytr: tr.iter().map(|&e| y[e]).collect(),
+                yte: te.iter().map(|&e| y[e]).collect(),
+                gtr: groups.map(|g| tr.iter().map(|&e| g[e]).collect()),
+                tr,
+                te,
+            }
+        })
+        .collect();
+    // The folds of one candidate group run in parallel (rayon); each is fitted on its own
+    // training part only, so the scores do not depend on the number of threads.
     for i in 0..n {
         if done[i] {
             continue;
         }
         if !candidates[i].fused.is_empty() {
             // A score fusion is fitted whole in each fold (its fronts differ).
-            for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
-                let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
-                let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-                let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&e| g[e]).collect());
-                let m = candidates[i].fit_grouped(
-                    epochs.select(Axis(0), &full(&tr)).view(),
-                    &ytr,
-                    gtr.as_deref(),
-                )?;
-                let scores = m.decision_function(epochs.select(Axis(0), &full(&te)).view())?;
-                fold_auc[i][f] = roc_auc(&scores.to_vec(), &yte)?;
+            let aucs = parts
+                .par_iter()
+                .map(|p| {
+                    let m = candidates[i].fit_grouped(
+                        epochs.select(Axis(0), &full(&p.tr)).view(),
+                        &p.ytr,
+                        p.gtr.as_deref(),
+                    )?;
+                    let scores =
+                        m.decision_function(epochs.select(Axis(0), &full(&p.te)).view())?;
+                    roc_auc(&scores.to_vec(), &p.yte)
+                })
+                .collect::<Result<Vec<f64>>>()?;
+            for (f, auc) in aucs.into_iter().enumerate() {
+                fold_auc[i][f] = auc;
                 on_fit();
             }
             done[i] = true;
@@ -256,23 +280,32 @@ pub fn grid_search_cached(
             })
             .collect();
         let shared = cache.rows(&candidates[i].main, subset).transpose()?;
-        for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
-            let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
-            let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-            let n_in = epochs.dim().1;
-            let (xtr, xte, n_front) = match &shared {
-                Some(x) => (x.select(&tr), x.select(&te), n_in),
-                None => {
-                    let etr = epochs.select(Axis(0), &full(&tr));
-                    let (front, xtr) = candidates[i].main.fit_front(etr.view(), &ytr)?;
-                    let xte = front.transform(epochs.select(Axis(0), &full(&te)).view())?;
-                    (xtr, xte, front.n_channels(n_in))
-                }
-            };
-            for &j in &members {
-                let head = candidates[j].main.fit_head(xtr.clone(), &ytr, n_front)?;
-                let scores = head.decision_function(xte.clone())?;
-                fold_auc[j][f] = roc_auc(&scores.to_vec(), &yte)?;
+        let n_in = epochs.dim().1;
+        let aucs = parts
+            .par_iter()
+            .map(|p| {
+                let (xtr, xte, n_front) = match &shared {
+                    Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
+                    None => {
+                        let etr = epochs.select(Axis(0), &full(&p.tr));
+                        let (front, xtr) = candidates[i].main.fit_front(etr.view(), &p.ytr)?;
+                        let xte = front.transform(epochs.select(Axis(0), &full(&p.te)).view())?;
+                        (xtr, xte, front.n_channels(n_in))
+                    }
+                };
+                members
+                    .iter()
+                    .map(|&j| {
+                        let head = candidates[j].main.fit_head(xtr.clone(), &p.ytr, n_front)?;
+                        let scores = head.decision_function(xte.clone())?;
+                        roc_auc(&scores.to_vec(), &p.yte)
+                    })
+                    .collect::<Result<Vec<f64>>>()
+            })
+            .collect::<Result<Vec<Vec<f64>>>>()?;
+        for (f, per_member) in aucs.into_iter().enumerate() {
+            for (&j, auc) in members.iter().zip(per_member) {
+                fold_auc[j][f] = auc;
                 on_fit();
             }
         }
@@ -292,6 +325,15 @@ pub fn grid_search_cached(
         n_folds: folds.n_folds(),
         grouped: folds.grouped(),
     })
+}
+
+/// One fold's training and test epochs (indices into the searched subset), labels and groups.
+struct FoldParts {
+    tr: Vec<usize>,
+    te: Vec<usize>,
+    ytr: Vec<bool>,
+    yte: Vec<bool>,
+    gtr: Option<Vec<usize>>,
 }
 
 /// A candidate's cross-validated score, as reported and saved with a tuned model.
