@@ -16,6 +16,7 @@ fuzz_target!(|data: &[u8]| {
                 }
                 ClientMsg::Off { off_ms, .. } => assert!(off_ms.is_finite()),
                 ClientMsg::Hello { frame_ms, .. } => assert!(frame_ms.is_finite()),
+                ClientMsg::Control { .. } => {}
             }
         }
     }

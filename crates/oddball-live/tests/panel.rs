@@ -16,6 +16,7 @@ fn config() -> PanelConfig {
         countdown_s: 5.0,
         board_m: [0.0, 1.0, 0.0, 1.0],
         base_m: [0.5, -0.2],
+        pose_m: [[0.3, 0.2], [0.5, 0.5]],
         targets_m: vec![],
         plan_m: vec![],
         title: "test".into(),
