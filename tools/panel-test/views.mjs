@@ -8,7 +8,8 @@
 //
 // URL is the subject view (the session's `panel:` line); the operator view is URL + "operator".
 // Chromium: $CHROMIUM or /usr/bin/chromium. Prints one JSON line of what it saw; exits 1 with
-// the reasons when a check fails.
+// the reasons when a check fails. Also saves each view paused (-paused.png) and at the end
+// (-end.png) beside the two screenshots.
 import { chromium } from "playwright-core";
 
 const [url, subjectShot, operatorShot] = process.argv.slice(2);
@@ -90,6 +91,8 @@ try {
   out.paused_at_flash = before; out.flashes_while_paused = during - before;
   out.overlay = await subject.evaluate(() => document.getElementById("overlay").textContent);
   out.paused_state = await operator.evaluate(() => document.getElementById("state").textContent);
+  await subject.screenshot({ path: subjectShot.replace(/\.png$/, "-paused.png") });
+  await operator.screenshot({ path: operatorShot.replace(/\.png$/, "-paused.png"), fullPage: true });
   if (during !== before) failures.push(`${during - before} flashes drawn while paused`);
   if (!/paused/i.test(out.overlay)) failures.push(`the subject view does not say it is paused: ${out.overlay}`);
   await operator.click("#resume");
@@ -102,9 +105,12 @@ try {
   await operator.click("#abort");
   await subject.waitForFunction(() => window.oddballDiag.ended, null, { timeout: 30000, polling: 50 });
   await operator.waitForFunction(() => window.oddballOperator.ended, null, { timeout: 10000 });
-  out.end_overlay = await subject.evaluate(() => document.getElementById("overlay").textContent);
+  out.end_text = await subject.evaluate(() => document.getElementById("center").innerText);
+  await subject.waitForTimeout(300);
+  await subject.screenshot({ path: subjectShot.replace(/\.png$/, "-end.png") });
+  await operator.screenshot({ path: operatorShot.replace(/\.png$/, "-end.png"), fullPage: true });
   out.end_state = await operator.evaluate(() => [document.getElementById("state").textContent, document.getElementById("progress-line").textContent]);
-  if (!/over/i.test(out.end_overlay)) failures.push(`the subject view does not say the session is over: ${out.end_overlay}`);
+  if (!/session over/i.test(out.end_text)) failures.push(`the subject view does not say the session is over: ${out.end_text}`);
   const after = await subject.evaluate(() => document.body.innerText);
   if (/calibrat/i.test(after)) failures.push(`the subject view still speaks of calibration: ${JSON.stringify(after)}`);
   console.log(JSON.stringify(out));

@@ -52,17 +52,17 @@
   function showState() {
     const t = S.trial;
     let state, line = "", frac = 0;
+    // Trials done: every decision shown; in calibration, the trials before this one.
+    if (t && t.of) frac = (t.phase === "online" ? O.decisions : t.number - 1) / t.of;
     if (S.ended !== null) {
       state = "session over";
       line = S.ended;
-      frac = 1;
     } else if (!t) {
       state = "waiting for the first trial";
     } else {
       const what = t.phase === "calibration" ? "calibration" : "online";
       const of = t.of !== null ? ` of ${t.of}` : "";
       state = `${what}: decision ${t.number}${of}`;
-      if (t.of) frac = (t.number - 1) / t.of;
       if (S.paused) { state = `paused after ${state}`; line = "nothing flashes until Resume"; }
       else if (S.pauseAsked) line = "pausing after the decision under way…";
       else line = t.phase === "calibration" ? "cued decisions: the model learns from them" : "decisions drive the arm";
@@ -74,7 +74,10 @@
     const over = S.ended !== null;
     $("pause").disabled = over || S.paused || S.pauseAsked;
     $("resume").disabled = over || !(S.paused || S.pauseAsked);
-    if (over) $("abort").disabled = true;
+    if (over) {
+      $("abort").disabled = true;
+      if (O.controls.includes("abort")) $("abort").textContent = "aborted";
+    }
   }
 
   function cell(tr, text, cls) {

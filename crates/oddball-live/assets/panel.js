@@ -139,9 +139,12 @@
         S.ended = m.summary; D.ended = true;
         S.queue = [];
         for (const b of S.bulbByCode.values()) b.classList.remove("cue", "on");
-        $("count").textContent = "";
-        $("phase").textContent = "";
-        overlay("The session is over. Thank you!");
+        // Said where the countdown was, leaving the bulbs, the last decision and the arm's
+        // drawing in view.
+        overlay("");
+        $("count").textContent = "Session over";
+        $("count").classList.add("over");
+        $("phase").textContent = "thank you!";
         break;
       }
     }

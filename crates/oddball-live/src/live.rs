@@ -356,6 +356,10 @@ impl<S: EegSource> LiveSubject<S> {
             m.marker("end", now);
         }
         if let Some(p) = &self.panel {
+            // The operator's figures as they stand at the end, then the end itself.
+            p.send(&ServerMsg::Diag {
+                text: self.status(),
+            });
             p.send(&ServerMsg::End {
                 summary: summary.to_string(),
             });
