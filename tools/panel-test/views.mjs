@@ -4,15 +4,17 @@
 // stops the flashing (none drawn while paused) and a resume restarts it, and that abort ends
 // the session (both pages told). Saves two screenshots.
 //
-//   node views.mjs URL SUBJECT.png OPERATOR.png
+//   node views.mjs URL SUBJECT.png OPERATOR.png [CHANNELS]
 //
+// CHANNELS, a JSON object such as {"ch0":"ok","ch1":"flat or saturated"}: the state the
+// operator view must show for each channel after the first trial.
 // URL is the subject view (the session's `panel:` line); the operator view is URL + "operator".
 // Chromium: $CHROMIUM or /usr/bin/chromium. Prints one JSON line of what it saw; exits 1 with
 // the reasons when a check fails. Also saves each view paused (-paused.png) and at the end
 // (-end.png) beside the two screenshots.
 import { chromium } from "playwright-core";
 
-const [url, subjectShot, operatorShot] = process.argv.slice(2);
+const [url, subjectShot, operatorShot, channelsJson] = process.argv.slice(2);
 if (!url || !subjectShot || !operatorShot) {
   console.error("usage: node views.mjs URL SUBJECT.png OPERATOR.png");
   process.exit(2);
@@ -79,6 +81,14 @@ try {
   out.channels = op.o.channels.map((c) => c.name);
   if (!/^calibration: decision \d+ of \d+$/.test(op.state)) failures.push(`operator progress reads ${JSON.stringify(op.state)}`);
   if (!op.o.of) failures.push("no calibration total");
+  out.channel_states = await operator.evaluate(() => Object.fromEntries(
+    [...document.querySelectorAll("#channels tr")].map((tr) => [tr.cells[0].textContent, tr.cells[1].textContent])));
+  if (channelsJson) {
+    const want = JSON.parse(channelsJson);
+    for (const [name, state] of Object.entries(want)) {
+      if (out.channel_states[name] !== state) failures.push(`channel ${name} shows ${JSON.stringify(out.channel_states[name])}, expected ${JSON.stringify(state)}`);
+    }
+  }
   if (!/flash on-time/.test(op.diag)) failures.push(`no flash timing on the operator view: ${op.diag}`);
 
   // Pause: the trial under way finishes, then nothing flashes until Resume.

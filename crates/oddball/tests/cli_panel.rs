@@ -188,19 +188,28 @@ fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
 }
 
 /// Issue #20, part 3: the operator view shows calibration progress ("calibration: decision 2 of
-/// 8"), channel quality and flash timing while the subject view, full screen, shows only the
-/// task; a pause holds the session (no flash drawn for 3 s), a resume restarts the flashing, and
-/// abort stops the session as SIGTERM does: it exits 0 with its recording complete and readable
-/// (the pause and resume marked in it) and its summary written.
+/// 8"), flash timing and channel quality (a recording played back live with one dead channel and
+/// one far too noisy: "flat or saturated" and "noisy", the others "ok") while the subject view,
+/// full screen, shows only the task; a pause holds the session (no flash drawn for 3 s), a
+/// resume restarts the flashing, and abort stops the session as SIGTERM does: it exits 0 with
+/// its recording complete and readable (the pause and resume marked in it) and its summary
+/// written.
 #[test]
 fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() {
     let Some(chromium) = chromium() else {
         return;
     };
     let dir = common::tmp_dir("panel-views");
+    // 4 channels at 256 Hz: ch1 dead (0 µV), ch2 with ±500 µV of noise.
+    let (mut data, markers, sfreq) = oddball_testkit::synthetic_oddball(4, 7);
+    data.row_mut(1).fill(0.0);
+    data.row_mut(2).mapv_inplace(|v| 100.0 * v);
+    let faulty = dir.join("faulty.csv");
+    oddball_testkit::write_codes_csv(&faulty, &data, &markers, sfreq);
     let out = dir.join("online");
     let mut online = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args(["online", "--serve", "127.0.0.1:0", "--calibrate"])
+        .arg(format!("--source=replay:{}", faulty.display()))
         .args(["--calibration-per-bulb", "2", "--paradigm", "fast"])
         .args(["--commands", "up,left", "--seed", "3"])
         .args(["--out", out.to_str().unwrap()])
@@ -219,6 +228,7 @@ fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() 
         .arg("views.mjs")
         .arg(&url)
         .args(&shots)
+        .arg(r#"{"ch0":"ok","ch1":"flat or saturated","ch2":"noisy","ch3":"ok"}"#)
         .output()
         .expect("node runs");
     let mut rest = String::new();
@@ -257,7 +267,7 @@ fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() 
     let path = out.join("session.xdf");
     let rec = oddball_io::read(&path).expect("the aborted session's recording opens");
     assert_eq!(rec.raw.n_times(), printed);
-    // Several trials' worth of EEG at the simulated subject's rate, the pause included.
+    // Several trials' worth of EEG, the pause included.
     assert!(
         rec.raw.n_times() as f64 / rec.raw.sfreq() > 10.0,
         "{} samples",
