@@ -95,6 +95,10 @@ try {
   await operator.click("#pause");
   await subject.waitForFunction(() => window.oddballDiag.paused, null, { timeout: 60000, polling: 50 });
   await operator.waitForFunction(() => window.oddballOperator.paused, null, { timeout: 5000 });
+  // Quality is per trial and in all: two trials in, a dead channel's total exceeds its last.
+  const dead = await operator.evaluate(() => window.oddballOperator.channels.map((c) => [c.name, c.last.flat, c.total.flat]));
+  out.flat_last_total = dead;
+  if (channelsJson && !dead.some(([, last, total]) => last > 0 && total > last)) failures.push(`flat counts per trial and in all: ${JSON.stringify(dead)}`);
   const before = await subject.evaluate(() => window.oddballDiag.flashes);
   await sleep(3000);
   const during = await subject.evaluate(() => window.oddballDiag.flashes);

@@ -19,6 +19,10 @@
 //!    [`DecisionRule`] decides, continues or abstains. A decision issues the bulb's command to the
 //!    arm, which runs on the same clock as the EEG, one chunk at a time.
 //!
+//! Before every trial the presenter may hold the session ([`Presenter::hold`]: an operator's
+//! pause): the EEG and the arm run on, no trial starts. After every trial the observer hears
+//! each channel's rejected epochs ([`Observer::channel_faults`]).
+//!
 //! Everything shown and decided is kept ([`SessionLog`]) so a session can be saved and
 //! re-evaluated offline to the same decisions ([`crate::record`]).
 
