@@ -27,7 +27,8 @@ try {
   await page.goto(url);
   // The countdown shows a digit before the first flash.
   await page.waitForFunction(() => /^[1-5]$/.test(document.getElementById("count").textContent), null, { timeout: 30000 });
-  // A rogue second client: malformed, oversized and binary messages, then it just goes away.
+  // A rogue second client: malformed, oversized and binary messages and an abort on the
+  // subject's socket, then it just goes away.
   // The server must refuse them and carry on with the real page.
   await page.waitForFunction(() => window.oddballDiag.flashes >= 2, null, { timeout: 30000 });
   await page.evaluate(() => new Promise((done) => {
@@ -37,6 +38,8 @@ try {
       ws.send(JSON.stringify({ t: "hello", frame_ms: 16, agent: "x".repeat(4000) }));
       ws.send(new Uint8Array([1, 2, 3]));
       ws.send(JSON.stringify({ t: "on", id: 1, code: 99, on_ms: 0 }));
+      // Only the operator view may abort: on the subject's socket this is refused.
+      ws.send(JSON.stringify({ t: "control", action: "abort" }));
       setTimeout(() => { ws.close(); done(); }, 200);
     };
     ws.onerror = () => done();

@@ -159,7 +159,9 @@
     if (!S.config) return;
     const [x0, x1, z0, z1] = S.config.board_m;
     const [bx, bz] = S.config.base_m;
-    const xs = [x0, x1, bx], zs = [z0, z1, bz];
+    // The elbow swings on a circle of the upper arm's length about the base: room for its top.
+    const upper = Math.hypot(S.config.pose_m[0][0] - bx, S.config.pose_m[0][1] - bz);
+    const xs = [x0, x1, bx, S.config.pose_m[0][0]], zs = [z0, z1, bz, bz + upper];
     const lo = [Math.min(...xs), Math.min(...zs)], hi = [Math.max(...xs), Math.max(...zs)];
     const u = Math.min(w, h) / 480;   // line widths scale with the picture
     const pad = 20 * u;
