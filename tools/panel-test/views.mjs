@@ -89,7 +89,8 @@ try {
       if (out.channel_states[name] !== state) failures.push(`channel ${name} shows ${JSON.stringify(out.channel_states[name])}, expected ${JSON.stringify(state)}`);
     }
   }
-  if (!/flash on-time/.test(op.diag)) failures.push(`no flash timing on the operator view: ${op.diag}`);
+  if (!/flash on-time/.test(op.diag) || !/page clock offset/.test(op.diag)) failures.push(`no flash timing or clock on the operator view: ${op.diag}`);
+  if (op.o.subjectPages !== 1) failures.push(`the operator view counts ${op.o.subjectPages} subject views`);
 
   // Pause: the trial under way finishes, then nothing flashes until Resume.
   await operator.click("#pause");

@@ -7,7 +7,7 @@
   // What tests can read.
   const O = (window.oddballOperator = {
     connected: false, phase: null, number: 0, of: null, paused: false, ended: false,
-    decisions: 0, channels: [], controls: [],
+    decisions: 0, channels: [], controls: [], subjectPages: 0,
   });
 
   const conn = Oddball.connect(ODDBALL_WS.operator, {
@@ -140,6 +140,11 @@
         break;
       }
       case "diag": $("diag").textContent = m.text; break;
+      case "pages":
+        O.subjectPages = m.subject;
+        $("pages").textContent = m.subject > 0 ? `subject view open (${m.subject})` : "no subject view open!";
+        $("pages").className = m.subject > 0 ? "q-ok" : "q-flat";
+        break;
       case "end":
         S.ended = m.summary; O.ended = true;
         showState();

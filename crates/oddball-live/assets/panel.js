@@ -93,6 +93,8 @@
           S.bestRtt = rtt;
           S.offset = m.server_ms - (sent + rtt / 2);
           D.rtt = rtt; D.offset = S.offset; D.synced = true;
+          // The operator view shows the clock figures.
+          conn.send({ t: "clock", offset_ms: S.offset, rtt_ms: rtt });
         }
         break;
       }

@@ -478,6 +478,11 @@ impl<S: EegSource> LiveSubject<S> {
                 st.frame_ms.map_or("–".into(), |f| format!("{f:.2} ms")),
                 st.rejected
             ));
+            if let (Some(offset), Some(rtt)) = (st.clock_offset_ms, st.clock_rtt_ms) {
+                s.push_str(&format!(
+                    "\npage clock offset {offset:.2} ms (round trip {rtt:.2} ms)"
+                ));
+            }
         }
         s
     }

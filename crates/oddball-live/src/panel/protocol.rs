@@ -40,9 +40,10 @@ impl Role {
     pub fn accepts(self, msg: &ClientMsg) -> bool {
         match msg {
             ClientMsg::Ping { .. } => true,
-            ClientMsg::On { .. } | ClientMsg::Off { .. } | ClientMsg::Hello { .. } => {
-                self == Role::Subject
-            }
+            ClientMsg::On { .. }
+            | ClientMsg::Off { .. }
+            | ClientMsg::Hello { .. }
+            | ClientMsg::Clock { .. } => self == Role::Subject,
             ClientMsg::Control { .. } => self == Role::Operator,
         }
     }
@@ -182,6 +183,12 @@ pub enum ServerMsg {
         page_ms: f64,
         server_ms: f64,
     },
+    /// Pages connected now: subject views and operator views (sent on every connect and
+    /// disconnect).
+    Pages {
+        subject: usize,
+        operator: usize,
+    },
     /// The session is over.
     End {
         summary: String,
@@ -200,6 +207,9 @@ pub enum ClientMsg {
     Off { id: u64, off_ms: f64 },
     /// The page's refresh interval as measured (ms) and its user agent.
     Hello { frame_ms: f64, agent: String },
+    /// The page's clock sync: its offset to the server clock (server − page, ms) and the round
+    /// trip of the ping that set it (ms), sent when it improves.
+    Clock { offset_ms: f64, rtt_ms: f64 },
     /// The operator pauses, resumes or aborts the session.
     Control { action: Control },
 }
@@ -263,6 +273,17 @@ pub fn parse_client(text: &str) -> Result<ClientMsg, ProtocolError> {
         }
         ClientMsg::Off { off_ms, .. } => finite("off_ms", *off_ms)?,
         ClientMsg::Hello { frame_ms, .. } => finite("frame_ms", *frame_ms)?,
+        ClientMsg::Clock { offset_ms, rtt_ms } => {
+            finite("offset_ms", *offset_ms)?;
+            finite("rtt_ms", *rtt_ms)?;
+            if *rtt_ms < 0.0 {
+                return Err(ProtocolError::BadValue {
+                    field: "rtt_ms",
+                    value: rtt_ms.to_string(),
+                    reason: "a round trip cannot be negative",
+                });
+            }
+        }
         ClientMsg::Control { .. } => {}
     }
     Ok(msg)
@@ -330,6 +351,8 @@ mod tests {
                 "{bad}"
             );
         }
+        let e = parse_client(r#"{"t":"clock","offset_ms":5,"rtt_ms":-1}"#).unwrap_err();
+        assert!(e.to_string().contains("rtt_ms = -1"), "{e}");
         let e = parse_client(r#"{"t":"on","id":1,"code":0,"on_ms":5}"#).unwrap_err();
         assert!(e.to_string().contains("code = 0"), "{e}");
         // serde_json refuses NaN literals, and 1e999 overflows to infinity: both refused.

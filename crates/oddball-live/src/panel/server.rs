@@ -56,6 +56,10 @@ pub struct PanelStats {
     /// The page's refresh interval as it measured it, ms, and its user agent.
     pub frame_ms: Option<f64>,
     pub agent: Option<String>,
+    /// The page's clock offset to the server's (server − page, ms) and the round trip that
+    /// set it (ms).
+    pub clock_offset_ms: Option<f64>,
+    pub clock_rtt_ms: Option<f64>,
 }
 
 #[derive(Debug)]
@@ -80,6 +84,7 @@ struct Backlog {
     diag: Option<Arc<str>>,
     quality: Option<Arc<str>>,
     paused: Option<Arc<str>>,
+    pages: Option<Arc<str>>,
     end: Option<Arc<str>>,
 }
 
@@ -221,6 +226,7 @@ impl PanelServer {
                 ServerMsg::Diag { .. } => b.diag = Some(text.clone()),
                 ServerMsg::Quality { .. } => b.quality = Some(text.clone()),
                 ServerMsg::Paused { .. } => b.paused = Some(text.clone()),
+                ServerMsg::Pages { .. } => b.pages = Some(text.clone()),
                 ServerMsg::End { .. } => b.end = Some(text.clone()),
                 ServerMsg::Flash { .. } | ServerMsg::Cancel { .. } | ServerMsg::Pong { .. } => {}
             }
@@ -334,6 +340,22 @@ fn upgrade(ws: WebSocketUpgrade, state: AppState, role: Role) -> Response {
         .on_upgrade(move |socket| client(socket, state, role))
 }
 
+/// Tells every page how many pages are connected.
+fn announce_pages(shared: &Shared) {
+    let msg = {
+        let s = lock(&shared.stats);
+        ServerMsg::Pages {
+            subject: s.connected,
+            operator: s.operators,
+        }
+    };
+    let text: Arc<str> = serde_json::to_string(&msg)
+        .expect("server messages serialise")
+        .into();
+    lock(&shared.backlog).pages = Some(text.clone());
+    let _ = shared.tx.send(text);
+}
+
 async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role) {
     {
         let mut s = lock(&shared.stats);
@@ -348,6 +370,7 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             }
         }
     }
+    announce_pages(&shared);
     let mut rx = shared.tx.subscribe();
     let backlog: Vec<Arc<str>> = {
         let b = lock(&shared.backlog);
@@ -359,6 +382,7 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             .chain(b.diag.iter())
             .chain(b.quality.iter())
             .chain(b.paused.iter())
+            .chain(b.pages.iter())
             .chain(b.end.iter())
             .cloned()
             .collect()
@@ -377,14 +401,17 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
     while alive {
         alive = serve_one(&mut socket, &shared, &mut rx, &mut stop, role).await;
     }
-    let mut s = lock(&shared.stats);
-    match role {
-        Role::Subject => {
-            s.connected -= 1;
-            s.disconnects += 1;
+    {
+        let mut s = lock(&shared.stats);
+        match role {
+            Role::Subject => {
+                s.connected -= 1;
+                s.disconnects += 1;
+            }
+            Role::Operator => s.operators -= 1,
         }
-        Role::Operator => s.operators -= 1,
     }
+    announce_pages(&shared);
 }
 
 /// Forwards one broadcast or handles one client message; `false` when the connection is over.
@@ -464,6 +491,12 @@ fn handle(shared: &Shared, text: &str, role: Role) -> Option<ServerMsg> {
             let mut s = lock(&shared.stats);
             s.frame_ms = Some(frame_ms);
             s.agent = Some(agent);
+            None
+        }
+        Ok(ClientMsg::Clock { offset_ms, rtt_ms }) => {
+            let mut s = lock(&shared.stats);
+            s.clock_offset_ms = Some(offset_ms);
+            s.clock_rtt_ms = Some(rtt_ms);
             None
         }
         Ok(ClientMsg::Control { action }) => {
