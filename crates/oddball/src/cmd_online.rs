@@ -2,8 +2,9 @@
 //! the wall clock), flashes drawn by the browser panel the binary serves, markers stamped by
 //! the frames that drew them, decisions driving the arm, everything recorded to XDF as it runs.
 //!
-//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`), then
-//! waits for a page before the first countdown.
+//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`, the
+//! subject view; the operator view's on the next), then waits for a subject view before the
+//! first countdown.
 
 use std::fs;
 use std::path::PathBuf;
