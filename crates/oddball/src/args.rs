@@ -639,7 +639,8 @@ const MAX_WAIT_PAGE_S: f64 = 86_400.0;
 #[derive(Debug, Clone, clap::Args)]
 pub struct PanelOptions {
     /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one) and
-    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/`.
+    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/` (the subject
+    /// view), its second the operator view's address (progress, timing, pause and abort).
     #[arg(long, value_name = "HOST:PORT")]
     pub serve: Option<String>,
     /// Let --serve bind a non-loopback address.
@@ -665,6 +666,11 @@ impl PanelOptions {
         let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
             .context("starting the panel")?;
         println!("panel: http://{}/", panel.local_addr());
+        println!(
+            "operator view: http://{}{}",
+            panel.local_addr(),
+            oddball_live::panel::protocol::OPERATOR_PAGE
+        );
         if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
             bail!(
                 "no page opened the panel at http://{}/ within {} s",

@@ -2,8 +2,9 @@
 //! the wall clock), flashes drawn by the browser panel the binary serves, markers stamped by
 //! the frames that drew them, decisions driving the arm, everything recorded to XDF as it runs.
 //!
-//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`), then
-//! waits for a page before the first countdown.
+//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`, the
+//! subject view; the operator view's on the next), then waits for a subject view before the
+//! first countdown.
 
 use std::fs;
 use std::path::PathBuf;
@@ -147,7 +148,7 @@ fn run_with(
         if args.session.calibration == CalibrationSpec::None {
             "no calibration"
         } else if args.calibrate {
-            "calibrating first"
+            "labelled calibration"
         } else {
             "model loaded"
         }
@@ -177,6 +178,12 @@ fn run_with(
     subject.source_mut().start_now();
     let mut session = Session::new(args.session.params(rule), subject, Some(arm))
         .context("setting up the session")?;
+    // The operator view's progress: "calibration decision 3 of 40", "decision 2 of 6".
+    let calibrating = model.is_none() && args.session.calibration != CalibrationSpec::None;
+    let n_calibration = calibrating.then(|| session.params().calibration_trials());
+    session
+        .subject_mut()
+        .set_plan(n_calibration, Some(commands.len()));
     // A stop request or a source that ends during calibration still closes the recording and
     // writes the summary (with no decisions).
     let mut ended = None;
