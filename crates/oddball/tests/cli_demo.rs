@@ -163,5 +163,19 @@ fn bad_options_are_clear_errors() {
         tmp("bad").to_str().unwrap(),
     ]);
     assert!(!ok);
+    // A missing replayed file is named itself (it used to be blamed on its calibration file).
+    assert!(err.contains("eeg9_2.dat: no such file"), "{err}");
+    // One that exists without an _1 sibling needs --calibration.
+    let lone = tmp("lone");
+    std::fs::create_dir_all(&lone).unwrap();
+    std::fs::write(lone.join("eeg9_2.dat"), b"").unwrap();
+    let (ok, _, err) = common::oddball(&[
+        "demo",
+        "--subject",
+        &format!("replay:{}", lone.join("eeg9_2.dat").display()),
+        "--out",
+        tmp("bad").to_str().unwrap(),
+    ]);
+    assert!(!ok);
     assert!(err.contains("--calibration"), "{err}");
 }
