@@ -5,6 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::PlotError;
+use oddball_arm::trace::point_segment_distance;
 use oddball_arm::{ArmModel, ArmSim, Board, Vector2};
 
 /// The arm at the start and at the end over the pen trace: a report's `pen_trace.png`.
@@ -71,27 +72,26 @@ fn tick(v: f64) -> String {
     format!("{v:.3}")
 }
 
-/// Ramer–Douglas–Peucker simplification: drops vertices closer than `tolerance` to the chord
-/// of the kept neighbours, so the drawn line differs from the data by less than `tolerance`.
+/// Ramer–Douglas–Peucker simplification: drops vertices closer than `tolerance` to the segment
+/// between the kept neighbours, so every vertex of the data lies within `tolerance` of the drawn
+/// line. The distance is to the segment, not to the line through its ends: an out-and-back
+/// stroke (the spur of a G, the bar of an I) lies on the line of its own chord, and measured to
+/// that line its tip looked redundant and was dropped, leaving the drawn stroke millimetres
+/// short of where the pen went.
 fn simplify(points: &[(f64, f64)], tolerance: f64) -> Vec<(f64, f64)> {
     if points.len() < 3 {
         return points.to_vec();
     }
+    let v = |p: (f64, f64)| Vector2::new(p.0, p.1);
     let mut keep = vec![false; points.len()];
     keep[0] = true;
     keep[points.len() - 1] = true;
     let mut stack = vec![(0, points.len() - 1)];
     while let Some((a, b)) = stack.pop() {
-        let (pa, pb) = (points[a], points[b]);
-        let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
-        let len = dx.hypot(dz);
+        let (pa, pb) = (v(points[a]), v(points[b]));
         let mut worst = (0.0, a);
         for (i, p) in points.iter().enumerate().take(b).skip(a + 1) {
-            let d = if len > 0.0 {
-                ((p.0 - pa.0) * dz - (p.1 - pa.1) * dx).abs() / len
-            } else {
-                (p.0 - pa.0).hypot(p.1 - pa.1)
-            };
+            let d = point_segment_distance(&v(*p), &pa, &pb);
             if d > worst.0 {
                 worst = (d, i);
             }
@@ -107,6 +107,12 @@ fn simplify(points: &[(f64, f64)], tolerance: f64) -> Vec<(f64, f64)> {
         .zip(keep)
         .filter_map(|(p, k)| k.then_some(*p))
         .collect()
+}
+
+/// The pen trace as a picture draws it: the recorded positions simplified to `tolerance_m`
+/// (every recorded position lies within `tolerance_m` of the returned polyline).
+pub fn drawn_pen_trace(sim: &ArmSim, tolerance_m: f64) -> Vec<(f64, f64)> {
+    simplify(&pen_trace_xz(sim), tolerance_m)
 }
 
 /// Corner labels "0", "1", … with corners visited more than once labelled together ("0, 4").
@@ -149,7 +155,6 @@ pub fn draw(
     const H: u32 = 720;
     let model = *sim.plant();
     let board = sim.workspace().board;
-    let trace = pen_trace_xz(sim);
     let expected_xy: Vec<(f64, f64)> = expected.iter().map(|p| (p[0], p[1])).collect();
 
     let mut overview_pts: Vec<Vector2<f64>> = board.corners().to_vec();
@@ -259,7 +264,7 @@ pub fn draw(
             // whole stretches of the line.
             let pixel = (xr.1 - xr.0) / f64::from(W / 2);
             let width = if zoomed { 2 } else { 3 };
-            let drawn = simplify(&trace, 0.25 * pixel);
+            let drawn = drawn_pen_trace(sim, 0.25 * pixel);
             chart
                 .draw_series(
                     drawn
@@ -328,4 +333,85 @@ pub fn draw(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Largest distance from a vertex of `points` to the polyline `drawn`.
+    fn worst_gap(points: &[(f64, f64)], drawn: &[(f64, f64)]) -> f64 {
+        let v = |p: (f64, f64)| Vector2::new(p.0, p.1);
+        points
+            .iter()
+            .map(|&p| {
+                drawn
+                    .windows(2)
+                    .map(|w| point_segment_distance(&v(p), &v(w[0]), &v(w[1])))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn simplifying_keeps_the_tip_of_an_out_and_back_stroke() {
+        // Up 20 mm, out 10 mm to the left and back, down again: the spur of a G. Measured to
+        // the line through its ends, the spur's tip is on that line and was dropped.
+        let mut points = Vec::new();
+        for i in 0..=200 {
+            points.push((0.0, 1e-4 * f64::from(i)));
+        }
+        for i in 1..=100 {
+            points.push((-1e-4 * f64::from(i), 0.02));
+        }
+        for i in (0..100).rev() {
+            points.push((-1e-4 * f64::from(i), 0.02));
+        }
+        for i in (0..200).rev() {
+            points.push((0.0, 1e-4 * f64::from(i)));
+        }
+        let drawn = simplify(&points, 1e-5);
+        assert!(
+            drawn.iter().any(|p| (p.0 + 0.01).abs() < 1e-12),
+            "the spur's tip (-0.01, 0.02) is kept: {drawn:?}"
+        );
+        assert!(worst_gap(&points, &drawn) <= 1e-5);
+        // Right 20 mm, then back 10 mm: the chord from the first to the last point lies on the
+        // stroke, so the tip (0.02, 0) is 0 from its line and 10 mm from its segment.
+        let mut bar: Vec<(f64, f64)> = (0..=200).map(|i| (1e-4 * f64::from(i), 0.0)).collect();
+        bar.extend((100..200).rev().map(|i| (1e-4 * f64::from(i), 0.0)));
+        let drawn = simplify(&bar, 1e-5);
+        assert_eq!(drawn, vec![(0.0, 0.0), (0.02, 0.0), (0.01, 0.0)]);
+        assert!(worst_gap(&bar, &drawn) <= 1e-5);
+    }
+
+    #[test]
+    fn every_vertex_stays_within_the_tolerance_of_the_simplified_line() {
+        // Seeded random walks of unit moves with small wobbles, retracing often.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..50 {
+            let mut p = (0.0f64, 0.0f64);
+            let mut points = vec![p];
+            for _ in 0..12 {
+                let (dx, dz) =
+                    [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)][(next() % 4) as usize];
+                for _ in 0..20 {
+                    let wobble = ((next() % 1000) as f64 / 1000.0 - 0.5) * 2e-6;
+                    p = (p.0 + dx * 1e-3 + wobble, p.1 + dz * 1e-3 - wobble);
+                    points.push(p);
+                }
+            }
+            for tolerance in [1e-6, 1e-5, 1e-4] {
+                let drawn = simplify(&points, tolerance);
+                let gap = worst_gap(&points, &drawn);
+                assert!(gap <= tolerance, "{gap} > {tolerance}");
+            }
+        }
+    }
 }
