@@ -50,11 +50,7 @@ fn an_unknown_extension_or_an_unwritable_file_is_an_error_naming_it() {
 #[test]
 fn the_drawn_pen_trace_reaches_the_end_of_every_out_and_back_stroke() {
     // The letter G of the stroke font: its top bar and its spur go out and come back.
-    let commands: Vec<Command> = oddball_session::task::stroke_plan("G")
-        .unwrap()
-        .iter()
-        .map(|m| m.command)
-        .collect();
+    let commands = oddball_session::task::text_commands("G").unwrap();
     let start = ArmSim::from_config(&ArmConfig::default()).unwrap().pen();
     let arm = arm_after(&commands);
     let expected = planned_path(start, commands.iter().copied(), arm.settings().step_m);

@@ -716,6 +716,12 @@ pub fn stroke_plan(text: &str) -> Result<Vec<PlannedMove>, SessionError> {
     Ok(plan)
 }
 
+/// The commands that draw `text` from its first glyph's bottom-left corner: [`stroke_plan`]'s
+/// moves, travel between glyphs included (`text_commands("G")` is `oddball demo`'s letter G).
+pub fn text_commands(text: &str) -> Result<Vec<Command>, SessionError> {
+    Ok(stroke_plan(text)?.iter().map(|m| m.command).collect())
+}
+
 /// A drawing task's outcome.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DrawReport {
