@@ -209,13 +209,18 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
             .with_context(|| format!("drawing {}", erp_png.display()))?;
     }
-    let expected: Vec<Vector2<f64>> = pen
-        .expected_m
-        .iter()
-        .map(|p| Vector2::new(p[0], p[1]))
-        .collect();
+    let xz = |v: &[[f64; 2]]| -> Vec<Vector2<f64>> {
+        v.iter().map(|p| Vector2::new(p[0], p[1])).collect()
+    };
+    let (intended, executed) = (xz(&pen.intended_m), xz(&pen.executed_m));
+    let paths = oddball_plot::arm::SessionPaths {
+        intended: &intended,
+        executed: &executed,
+        missed: &pen.missed,
+        numbered: true,
+    };
     let pen_png = args.out.join("pen_trace.png");
-    oddball_plot::arm::draw_pen_trace(&arm, &expected, &pen_png)
+    oddball_plot::arm::draw_pen_trace(&arm, &paths, &pen_png)
         .with_context(|| format!("drawing {}", pen_png.display()))?;
     let calibration = CalibrationSummary::from(&prep.calibration);
     let subject_label = prep.subject.clone();

@@ -58,6 +58,9 @@ fn demo_draws_the_g_deterministically_and_its_session_re_evaluates_to_the_same_d
     // spur's tip (not the 4 corners of a square).
     let corners = pen_corners(&s);
     assert!(corners.len() >= 6, "{corners:?}\n{out_a}");
+    // Every decision right: nothing marked, the executed path is the intended one.
+    assert_eq!(s["pen"]["missed"].as_array().unwrap().len(), 0);
+    assert_eq!(s["pen"]["intended_m"], s["pen"]["executed_m"]);
     assert!(s["result"]["itr"]["bits_per_minute"].as_f64().unwrap() > 5.0);
     let csv = std::fs::read_to_string(a.join("decisions.csv")).unwrap();
     assert_eq!(csv.lines().count(), 21);
