@@ -68,7 +68,7 @@ fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
         (["up", "left", "down", "right"].repeat(10).join(","), 37),
     ] {
         let out = tmp.join("me");
-        let mut args = vec![
+        let args = vec![
             "demo",
             "--calibration",
             "none",
