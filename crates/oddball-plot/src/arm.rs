@@ -472,7 +472,13 @@ fn draw_with(
                         });
                 }
             }
-            for (i, (_, q)) in keys.iter().enumerate() {
+            // The first and the last pose on top: the legend names them, and a later pose at the
+            // same place (the G passes its start again) would hide them.
+            let order = (1..keys.len().saturating_sub(1))
+                .chain(keys.len().checked_sub(1).filter(|&l| l > 0))
+                .chain((!keys.is_empty()).then_some(0));
+            for i in order {
+                let q = &keys[i].1;
                 let c = key_colour(i);
                 let pts = arm_points(&model, q);
                 if zoomed {

@@ -19,7 +19,8 @@ fn draws_the_g_and_writes_trajectory_and_svg() {
         plot.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    // Six settled steps, each with a settle time and a final error well under 0.1 mm.
+    // The stroke font's G: 20 settled steps, each with a settle time and a final error well
+    // under 0.1 mm.
     let steps: Vec<&str> = out
         .lines()
         .filter(|l| {
@@ -29,16 +30,16 @@ fn draws_the_g_and_writes_trajectory_and_svg() {
                 && ["up", "down", "left", "right"].contains(&w[1])
         })
         .collect();
-    assert_eq!(steps.len(), 6, "{out}");
+    assert_eq!(steps.len(), 20, "{out}");
     for line in &steps {
         assert!(!line.contains("refused"), "{line}");
     }
-    assert!(out.contains("passes all 7 corners"), "{out}");
+    assert!(out.contains("passes all 21 corners"), "{out}");
     let csv = std::fs::read_to_string(dir.join("trajectory.csv")).expect("trajectory written");
     let rows = csv.lines().count();
     assert!(
         rows > 4000,
-        "4.8 s at 1 ms gives thousands of rows, got {rows}"
+        "16 s at 1 ms gives thousands of rows, got {rows}"
     );
     assert!(csv.starts_with("t_s,theta1_rad,theta2_rad"));
     let svg = std::fs::read_to_string(&plot).expect("plot written");
