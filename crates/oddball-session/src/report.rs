@@ -374,15 +374,21 @@ pub fn report_text(
     if let Some(c) = comparison {
         line(&mut s, c);
     }
+    let count = |m: Miss| pen.missed.iter().filter(|d| d.miss == m).count();
     let _ = writeln!(
         s,
-        "pen: {} corners, max error {:.1e} mm from the path of the executed commands; {}",
+        "pen: after each of its {} moves within {:.1e} mm of where the executed commands put it; {}",
         pen.corners_m.len(),
         pen.max_corner_error_mm,
         if pen.drew_intended_path {
-            "drew the intended path"
+            "drew the intended path".to_string()
         } else {
-            "did NOT draw the intended path (wrong, abstained or refused decisions)"
+            format!(
+                "did NOT draw the intended path ({} wrong, {} abstained, {} refused by the arm)",
+                count(Miss::Wrong),
+                count(Miss::Abstained),
+                count(Miss::Refused)
+            )
         }
     );
     let _ = writeln!(s, "simulated time {:.1} s", simulated_seconds);
