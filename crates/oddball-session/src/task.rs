@@ -889,6 +889,21 @@ mod tests {
     }
 
     #[test]
+    fn the_intended_track_path_takes_the_larger_error_first() {
+        let h = 0.02;
+        let o = Vector2::new(0.0, 0.0);
+        let targets = [Vector2::new(2.0 * h, h), Vector2::new(2.0 * h, -h)];
+        let path = intended_track_path(o, &targets, h);
+        let steps: Vec<[i64; 2]> = path
+            .iter()
+            .map(|p| [(p[0] / h).round() as i64, (p[1] / h).round() as i64])
+            .collect();
+        // Right, right (x first on the tie), up; then down twice.
+        assert_eq!(steps, [[0, 0], [1, 0], [2, 0], [2, 1], [2, 0], [2, -1]]);
+        assert_eq!(text_commands("G").unwrap().len(), 20);
+    }
+
+    #[test]
     fn direction_shrinks_the_larger_error() {
         let o = Vector2::new(0.0, 0.0);
         let h = 0.02;
