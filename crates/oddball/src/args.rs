@@ -28,7 +28,7 @@ pub const LETTER_G: &str = "paper-g";
 pub const STROKE_G: &str = "letter-g";
 
 /// What `--commands` takes, for the help texts.
-pub const COMMANDS_HELP: &str = "Intended commands, comma-separated (up, down, left, right or u, d, l, r), or a named sequence: `letter-g`, the letter G of `task draw --draw G` (20 moves: up the back, then counter-clockwise round the letter, left along the top, down, right, up and the spur, as the paper draws it), or `paper-g`, the paper's six commands up,left,down,right,up,left (the paper's strokes differ in length; on equal steps they trace a 2 cm square one and a half times)";
+pub const COMMANDS_HELP: &str = "Intended commands, comma-separated (up, down, left, right or u, d, l, r), or a named sequence: `letter-g`, the letter G of `task draw --draw G` (20 one-step moves: up the back and out along the top, then counter-clockwise round the letter as the paper draws it, left along the top, down, right, up and the spur left, then back down to the baseline), or `paper-g`, the paper's six commands up,left,down,right,up,left (the paper's strokes differ in length; on equal steps they trace a square one step wide, one and a half times round)";
 
 /// Intended commands: a comma-separated list (up, down, left, right), or a named sequence
 /// ([`STROKE_G`], [`LETTER_G`]).
