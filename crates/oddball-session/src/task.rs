@@ -493,6 +493,24 @@ pub fn seeded_targets(arm: &ArmSim, n: usize, seed: u64) -> Vec<Vector2<f64>> {
     out
 }
 
+/// The path a tracking task intends from `start` through `targets` when every decision is
+/// right: at each step the direction [`direction_towards`] chooses, metres.
+pub fn intended_track_path(
+    start: Vector2<f64>,
+    targets: &[Vector2<f64>],
+    step_m: f64,
+) -> Vec<Vector2<f64>> {
+    let mut path = vec![start];
+    let mut at = start;
+    for target in targets {
+        while let Some(c) = direction_towards(&at, target, step_m) {
+            at = c.apply(&at, step_m);
+            path.push(at);
+        }
+    }
+    path
+}
+
 /// The targets a tracking task places for `arm` where it stands: the given ones snapped to its
 /// step grid, or seeded ones.
 pub fn task_targets(arm: &ArmSim, params: &TrackParams) -> Vec<Vector2<f64>> {
@@ -515,24 +533,6 @@ pub fn drawing_path(arm: &ArmSim, text: &str) -> Result<Vec<Vector2<f64>>, Sessi
         moves.iter().map(|m| m.command),
         arm.settings().step_m,
     ))
-}
-
-/// The path a tracking task intends from `start` through `targets` when every decision is
-/// right: at each step the direction [`direction_towards`] chooses, metres.
-pub fn intended_track_path(
-    start: Vector2<f64>,
-    targets: &[Vector2<f64>],
-    step_m: f64,
-) -> Vec<Vector2<f64>> {
-    let mut path = vec![start];
-    let mut at = start;
-    for target in targets {
-        while let Some(c) = direction_towards(&at, target, step_m) {
-            at = c.apply(&at, step_m);
-            path.push(at);
-        }
-    }
-    path
 }
 
 /// Steers the pen to each target in turn.

@@ -1,5 +1,5 @@
 //! `oddball arm`: simulate the two-link arm drawing on its board from direction commands (the
-//! letter G of the stroke font by default, as `oddball demo`), write the trajectory as CSV and a picture of the arm at key
+//! paper's letter G by default), write the trajectory as CSV and a picture of the arm at key
 //! instants with the pen trace, and print each step's settle time and final error.
 
 use std::fmt::Write as _;
@@ -14,7 +14,7 @@ use oddball_arm::{ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
 /// Options of `oddball arm`.
 #[derive(Debug, clap::Args)]
 pub struct ArmArgs {
-    #[arg(long, default_value = crate::args::STROKE_G, value_parser = crate::args::commands_arg, help = crate::args::COMMANDS_HELP)]
+    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg, help = crate::args::COMMANDS_HELP)]
     pub commands: std::vec::Vec<oddball_arm::Command>,
     /// TOML model of the arm, board, controller and simulation (default: the built-in desk arm;
     /// see --print-config).

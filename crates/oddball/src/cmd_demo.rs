@@ -1,7 +1,7 @@
 //! `oddball demo`: the whole closed loop with no hardware, as a copy task with fixed commands
 //! (by default the letter G of the drawing task's stroke font; `--commands paper-g` gives the
-//! paper's six commands, which on equal steps trace a square). A subject (simulated, over any `--source`, or real EEG replayed)
-//! watches the four-bulb panel; the session calibrates, trains a pipeline, then decodes each
+//! paper's six commands, which on equal steps trace a square). A subject (simulated, over any
+//! `--source`, or real EEG replayed) watches the four-bulb panel; the session calibrates, trains a pipeline, then decodes each
 //! intended command and the arm draws it.
 //!
 //! Writes a report folder: `decisions.csv`, `summary.json`, `pen_trace.png`, `erp.png` (the

@@ -20,8 +20,7 @@ use oddball_session::report::{
     DecisionRow,
 };
 use oddball_session::task::{
-    drawing_path, intended_track_path, run_drawing, run_tracking, task_targets, Pilot, Step,
-    TrackParams,
+    drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
 use serde::Serialize;
 
@@ -212,7 +211,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         .map(|t| Vector2::new(t.target_m[0], t.target_m[1]))
         .collect();
     let step_m = prep.pilot.arm().settings().step_m;
-    let intended = intended_track_path(prep.pen_start, &targets, step_m);
+    let intended = oddball_session::task::intended_track_path(prep.pen_start, &targets, step_m);
     write_common(&args.out, &prep, &report.steps, &intended, None)?;
     oddball_plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
