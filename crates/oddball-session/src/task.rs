@@ -493,6 +493,24 @@ pub fn seeded_targets(arm: &ArmSim, n: usize, seed: u64) -> Vec<Vector2<f64>> {
     out
 }
 
+/// The path a tracking task intends from `start` through `targets` when every decision is
+/// right: at each step the direction [`direction_towards`] chooses, metres.
+pub fn intended_track_path(
+    start: Vector2<f64>,
+    targets: &[Vector2<f64>],
+    step_m: f64,
+) -> Vec<Vector2<f64>> {
+    let mut path = vec![start];
+    let mut at = start;
+    for target in targets {
+        while let Some(c) = direction_towards(&at, target, step_m) {
+            at = c.apply(&at, step_m);
+            path.push(at);
+        }
+    }
+    path
+}
+
 /// The targets a tracking task places for `arm` where it stands: the given ones snapped to its
 /// step grid, or seeded ones.
 pub fn task_targets(arm: &ArmSim, params: &TrackParams) -> Vec<Vector2<f64>> {
@@ -763,6 +781,12 @@ pub fn stroke_plan(text: &str) -> Result<Vec<PlannedMove>, SessionError> {
     Ok(plan)
 }
 
+/// The commands that draw `text` from its first glyph's bottom-left corner: [`stroke_plan`]'s
+/// moves, travel between glyphs included (`text_commands("G")` is `oddball demo`'s letter G).
+pub fn text_commands(text: &str) -> Result<Vec<Command>, SessionError> {
+    Ok(stroke_plan(text)?.iter().map(|m| m.command).collect())
+}
+
 /// A drawing task's outcome.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DrawReport {
@@ -933,6 +957,21 @@ mod tests {
         assert!(plan[h].travel && plan[h].command == Command::Right);
         assert!(plan.iter().filter(|m| m.travel).count() == 1);
         assert!(stroke_plan("H!").is_err());
+    }
+
+    #[test]
+    fn the_intended_track_path_takes_the_larger_error_first() {
+        let h = 0.02;
+        let o = Vector2::new(0.0, 0.0);
+        let targets = [Vector2::new(2.0 * h, h), Vector2::new(2.0 * h, -h)];
+        let path = intended_track_path(o, &targets, h);
+        let steps: Vec<[i64; 2]> = path
+            .iter()
+            .map(|p| [(p[0] / h).round() as i64, (p[1] / h).round() as i64])
+            .collect();
+        // Right, right (x first on the tie), up; then down twice.
+        assert_eq!(steps, [[0, 0], [1, 0], [2, 0], [2, 1], [2, 0], [2, -1]]);
+        assert_eq!(text_commands("G").unwrap().len(), 20);
     }
 
     #[test]

@@ -81,9 +81,23 @@ pub fn output_dir(s: &str) -> Result<PathBuf, String> {
 /// The letter G of the paper, as `--commands` spells it.
 pub const LETTER_G: &str = "up,left,down,right,up,left";
 
-/// Comma-separated intended commands (up, down, left, right).
+/// `--commands letter-g`: the letter G of the drawing task's stroke font (`task draw --draw G`).
+pub const STROKE_G: &str = "letter-g";
+
+/// `--commands paper-g`: the paper's letter G as its six commands (`Command::LETTER_G`).
+pub const PAPER_G: &str = "paper-g";
+
+/// What `--commands` takes, for the help texts.
+pub const COMMANDS_HELP: &str = "Intended commands, comma-separated (up, down, left, right or u, d, l, r), or a named sequence: `letter-g`, the letter G of `task draw --draw G` (20 one-step moves: up the back and out along the top, then counter-clockwise round the letter as the paper draws it, left along the top, down, right, up and the spur left, then back down to the baseline), or `paper-g`, the paper's six commands up,left,down,right,up,left (the paper's strokes differ in length; on equal steps they trace a square one step wide, one and a half times round)";
+
+/// Intended commands: a comma-separated list (up, down, left, right), or a named sequence
+/// ([`STROKE_G`], [`PAPER_G`]).
 pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
-    let c = oddball_arm::parse_commands(s).map_err(|e| e.to_string())?;
+    let c = match s.trim() {
+        STROKE_G => oddball_session::task::text_commands("G").map_err(|e| e.to_string())?,
+        PAPER_G => Command::LETTER_G.to_vec(),
+        list => oddball_arm::parse_commands(list).map_err(|e| e.to_string())?,
+    };
     if c.is_empty() {
         return Err("empty: give at least one of up, down, left, right".into());
     }

@@ -14,8 +14,7 @@ use oddball_arm::{ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
 /// Options of `oddball arm`.
 #[derive(Debug, clap::Args)]
 pub struct ArmArgs {
-    /// Comma-separated commands: up, down, left, right (or u, d, l, r).
-    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg)]
+    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg, help = crate::args::COMMANDS_HELP)]
     pub commands: std::vec::Vec<oddball_arm::Command>,
     /// TOML model of the arm, board, controller and simulation (default: the built-in desk arm;
     /// see --print-config).

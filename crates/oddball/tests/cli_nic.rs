@@ -58,7 +58,7 @@ fn a_demo_over_nic_from_another_process_draws_the_g() {
             dir.join("session.easy").to_str().unwrap(),
         ]);
         assert!(ok, "{err}");
-        assert!(out.contains("6 online decisions: 6 identical"), "{out}");
+        assert!(out.contains("20 online decisions: 20 identical"), "{out}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }
