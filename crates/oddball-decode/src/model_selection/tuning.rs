@@ -30,6 +30,7 @@
 use ndarray::{ArrayView3, Axis};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 use crate::amplitude::AmplitudeFeatures;
 use crate::classifiers::ClassifierParams;
@@ -37,7 +38,7 @@ use crate::ensemble::MemberParams;
 use crate::features::FeatureParams;
 use crate::knn::KnnParams;
 use crate::metrics::roc_auc;
-use crate::pipeline::{FrontCache, PipelineParams};
+use crate::pipeline::{FrontCache, Necked, PipelineParams};
 use crate::preset::Preset;
 use crate::svm::SvmParams;
 use crate::DecodeError;
@@ -281,9 +282,39 @@ pub fn grid_search_cached(
             .collect();
         let shared = cache.rows(&candidates[i].main, subset).transpose()?;
         let n_in = epochs.dim().1;
-        let aucs = parts
-            .par_iter()
+        // Members with the same scaler and PCA share one neck per fold; with a cached front
+        // it comes from (and goes to) the cache, shared with other searches and presets.
+        let mut groups_of_neck: Vec<Vec<usize>> = Vec::new();
+        for &j in &members {
+            match groups_of_neck
+                .iter_mut()
+                .find(|g| candidates[g[0]].main.same_neck(&candidates[j].main))
+            {
+                Some(g) => g.push(j),
+                None => groups_of_neck.push(vec![j]),
+            }
+        }
+        let split_of = |p: &FoldParts| (full(&p.tr), full(&p.te));
+        let known: Vec<Vec<Option<Arc<Necked>>>> = parts
+            .iter()
             .map(|p| {
+                let (tr, te) = split_of(p);
+                groups_of_neck
+                    .iter()
+                    .map(|g| {
+                        let q = &candidates[g[0]].main;
+                        (shared.is_some() && q.has_neck())
+                            .then(|| cache.necked(q, &tr, &te))
+                            .flatten()
+                    })
+                    .collect()
+            })
+            .collect();
+        type FoldOut = (Vec<(usize, f64)>, Vec<(usize, Arc<Necked>)>);
+        let outs = parts
+            .par_iter()
+            .zip(known.par_iter())
+            .map(|(p, known)| -> Result<FoldOut> {
                 let (xtr, xte, n_front) = match &shared {
                     Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
                     None => {
@@ -293,20 +324,43 @@ pub fn grid_search_cached(
                         (xtr, xte, front.n_channels(n_in))
                     }
                 };
-                members
-                    .iter()
-                    .map(|&j| {
-                        let head = candidates[j].main.fit_head(xtr.clone(), &p.ytr, n_front)?;
-                        let scores = head.decision_function(xte.clone())?;
-                        roc_auc(&scores.to_vec(), &p.yte)
-                    })
-                    .collect::<Result<Vec<f64>>>()
+                let mut aucs = Vec::new();
+                let mut fitted = Vec::new();
+                for (gi, g) in groups_of_neck.iter().enumerate() {
+                    let q = &candidates[g[0]].main;
+                    let necked = match &known[gi] {
+                        Some(k) => k.clone(),
+                        None => {
+                            let k = Arc::new(q.neck_split(xtr.clone(), xte.clone())?);
+                            if shared.is_some() && q.has_neck() {
+                                fitted.push((gi, k.clone()));
+                            }
+                            k
+                        }
+                    };
+                    for &j in g {
+                        let (scores, _, _) = candidates[j]
+                            .main
+                            .classifier_scores(&necked, &p.ytr, n_front)?;
+                        aucs.push((j, roc_auc(&scores.to_vec(), &p.yte)?));
+                    }
+                }
+                Ok((aucs, fitted))
             })
-            .collect::<Result<Vec<Vec<f64>>>>()?;
-        for (f, per_member) in aucs.into_iter().enumerate() {
-            for (&j, auc) in members.iter().zip(per_member) {
+            .collect::<Result<Vec<FoldOut>>>()?;
+        for (f, (aucs, fitted)) in outs.into_iter().enumerate() {
+            for (j, auc) in aucs {
                 fold_auc[j][f] = auc;
                 on_fit();
+            }
+            let (tr, te) = split_of(&parts[f]);
+            for (gi, k) in fitted {
+                cache.keep_necked(
+                    &candidates[groups_of_neck[gi][0]].main,
+                    tr.clone(),
+                    te.clone(),
+                    k,
+                );
             }
         }
         for &j in &members {
@@ -552,7 +606,7 @@ mod tests {
         let (x, y, groups) = synthetic(24 * 4, 5);
         let mut cache = FrontCache::new(x.view());
         let outer = cv_folds(&y, Some(&groups), 2).unwrap();
-        for name in ["lda", "paper-knn", "riemann", "lda+riemann"] {
+        for name in ["lda", "paper-knn", "paper-svm", "riemann", "lda+riemann"] {
             let grid: Vec<PipelineParams> = preset_grid(name, 64.0)
                 .unwrap()
                 .into_iter()
@@ -582,6 +636,9 @@ mod tests {
         // Amplitude bins of 2 and 3 samples (64/25 and 64/20 both round to 3) and the paper's
         // features: three fronts, each computed once; riemann's xDAWN learns and is never cached.
         assert_eq!(cache.len(), 3);
+        // The paper presets' scaler + PCA: one per split (2 outer folds × (2 inner + 1)), the
+        // ones paper-knn fitted reused by paper-svm's six grid points.
+        assert_eq!(cache.n_necks(), 6);
     }
 
     #[test]
