@@ -326,8 +326,11 @@ pub struct FrontCache<'a> {
     entries: Vec<(SingleParams, FeatureData, f64)>,
     /// Features of a cached front through a scaler and PCA fitted on one split's training
     /// part: (settings, training indices, test indices, result).
-    necks: Vec<(SingleParams, Vec<usize>, Vec<usize>, Arc<Necked>)>,
+    necks: Vec<NeckEntry>,
 }
+
+/// A cached neck: its settings, the split's training and test indices, the result.
+type NeckEntry = (SingleParams, Vec<usize>, Vec<usize>, Arc<Necked>);
 
 /// Most necked splits a [`FrontCache`] keeps (nested cross-validation of the paper's three
 /// presets needs outer folds × (inner folds + 1), 30 at 5 × 5).
