@@ -23,11 +23,23 @@ fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_r
     let test = oddball_io::read(test).unwrap();
     for pipeline in ["lda", "riemann"] {
         let params = ReplayParams::paper(pipeline);
-        let (model, report) = calibrate(&cal, &params).unwrap();
-        let fixed = replay(&test, &model, &Command::LETTER_G, &params).unwrap();
+        let (model, report) = calibrate(std::slice::from_ref(&cal), &params).unwrap();
+        let fixed = replay(
+            std::slice::from_ref(&test),
+            &model,
+            &Command::LETTER_G,
+            &params,
+        )
+        .unwrap();
         let mut dyn_params = params.clone();
         dyn_params.rule = DecisionRule::dynamic(5);
-        let dynamic = replay(&test, &model, &Command::LETTER_G, &dyn_params).unwrap();
+        let dynamic = replay(
+            std::slice::from_ref(&test),
+            &model,
+            &Command::LETTER_G,
+            &dyn_params,
+        )
+        .unwrap();
         let acc = |d: &[oddball_session::replay::ReplayDecision]| {
             d.iter()
                 .filter(|d| d.decided(&params.paradigm) == Some(d.intended))
