@@ -366,9 +366,6 @@ impl SessionOptions {
     /// The replayed files and their calibration files, for `replay:FILE` subjects.
     pub fn replay_files(&self) -> Result<Option<ReplayFiles>> {
         let SubjectSpec::Replay(test) = &self.subject else {
-            if !self.test_text.is_empty() {
-                bail!("--test-text labels replayed files: it needs --subject replay:FILE");
-            }
             return Ok(None);
         };
         // The replayed files first: a missing one is not its calibration file's fault.
@@ -520,6 +517,9 @@ impl SessionOptions {
         }
         if self.adapt && self.calibration == CalibrationSpec::None {
             bail!("--adapt adapts a labelled calibration; --calibration none adapts by itself");
+        }
+        if !self.test_text.is_empty() && self.preset().is_some() {
+            bail!("--test-text labels replayed files: it needs --subject replay:FILE");
         }
         if self.adapt && self.pipeline != "lda" {
             bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
