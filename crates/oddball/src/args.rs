@@ -368,6 +368,14 @@ impl SessionOptions {
         let SubjectSpec::Replay(test) = &self.subject else {
             return Ok(None);
         };
+        // Options before files.
+        if self.calibration == CalibrationSpec::None {
+            bail!(
+                "--calibration none runs a live or simulated session; a replayed subject \
+                 (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
+                 --unsupervised` to replay a recording without labels)"
+            );
+        }
         // The replayed files first: a missing one is not its calibration file's fault.
         for file in test {
             oddball_io::check_file(file).context("--subject replay:FILE")?;
@@ -379,14 +387,10 @@ impl SessionOptions {
                 test.len()
             );
         }
+        // Labelled (None is refused above): the replayed file's sibling.
         let calibration = match &self.calibration {
             CalibrationSpec::Files(c) => c.clone(),
-            CalibrationSpec::Labelled => vec![sibling_calibration(&test[0])?],
-            CalibrationSpec::None => bail!(
-                "--calibration none runs a live or simulated session; a replayed subject \
-                 (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
-                 --unsupervised` to replay a recording without labels)"
-            ),
+            _ => vec![sibling_calibration(&test[0])?],
         };
         for c in &calibration {
             oddball_io::check_file(c).context("the calibration recording")?;
