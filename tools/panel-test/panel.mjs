@@ -1,15 +1,20 @@
 // Drives the oddball panel in headless Chromium: it must load, count down, flash with on-times
-// of 100 ms within one frame, show the decisions and move the arm. Saves a screenshot, and one
-// of the operator view (SCREENSHOT-operator.png), which must list the decisions with their
-// confidence.
+// of ON_MS (default 100 ms) within one frame, show the decisions and move the arm. Saves a
+// screenshot, and one of the operator view (SCREENSHOT-operator.png), which must list the
+// decisions with their confidence. With GAP_MS, every flash of a trial must be scheduled ON_MS
+// on and GAP_MS off (the `fast` timing: 100 and 75; the off-time within 2 ms, as onsets fall on
+// EEG samples), and the measured gap between the frame
+// that took a flash off and the one that drew the next must be within one frame of GAP_MS.
 //
-//   node panel.mjs URL SCREENSHOT.png N_DECISIONS
+//   node panel.mjs URL SCREENSHOT.png N_DECISIONS [ON_MS [GAP_MS]]
 //
 // Chromium: $CHROMIUM or /usr/bin/chromium (Debian's). Prints one JSON line of measurements;
 // exits 1 with the reasons when a check fails.
 import { chromium } from "playwright-core";
 
-const [url, shot, nDecisions] = process.argv.slice(2);
+const [url, shot, nDecisions, onArg, gapArg] = process.argv.slice(2);
+const onMs = onArg === undefined ? 100 : Number(onArg);
+const gapMs = gapArg === undefined ? null : Number(gapArg);
 if (!url || !shot || !nDecisions) {
   console.error("usage: node panel.mjs URL SCREENSHOT.png N_DECISIONS");
   process.exit(2);
@@ -60,11 +65,25 @@ try {
   const frame = d.frameMs;
   const on = d.onTimes;
   const err = d.onsetErrors;
-  const worstOn = Math.max(...on.map((x) => Math.abs(x - 100)));
+  const worstOn = Math.max(...on.map((x) => Math.abs(x - onMs)));
+  // Successive flashes of one trial (scheduled less than half a second apart): scheduled and
+  // measured off-times between them.
+  const drawn = [...d.drawn].sort((a, b) => a.at - b.at);
+  const gaps = [];
+  for (let i = 1; i < drawn.length; i++) {
+    const [a, b] = [drawn[i - 1], drawn[i]];
+    const nominal = b.at - (a.at + a.dur);
+    if (nominal < 500) gaps.push({ nominal, measured: b.on - a.off });
+  }
+  const gapNominal = gaps.map((g) => g.nominal), gapMeasured = gaps.map((g) => g.measured);
+  const worstGap = gapMs === null ? null : Math.max(...gapMeasured.map((x) => Math.abs(x - gapMs)));
   const out = {
     frame_ms: frame, flashes: d.flashes, countdowns: d.countdowns, decisions: d.decisions.length,
     decided: d.decisions.map((x) => [x.intended, x.code]),
-    on_ms_min: Math.min(...on), on_ms_max: Math.max(...on), on_ms_worst_error: worstOn,
+    on_ms_nominal: onMs, on_ms_min: Math.min(...on), on_ms_max: Math.max(...on), on_ms_worst_error: worstOn,
+    on_ms_scheduled: [...new Set(drawn.map((f) => f.dur))],
+    gap_ms_nominal: gapMs, gaps: gaps.length, gap_ms_scheduled: [...new Set(gapNominal.map((x) => Math.round(x * 100) / 100))],
+    gap_ms_min: Math.min(...gapMeasured), gap_ms_max: Math.max(...gapMeasured), gap_ms_worst_error: worstGap,
     onset_error_ms_min: Math.min(...err), onset_error_ms_max: Math.max(...err),
     clock_rtt_ms: d.rtt, arm_moves: d.armMoves, cancelled: d.cancelled,
     targets: d.targets, plan_points: d.planPoints, ended: d.ended, late_flashes: d.lateFlashes,
@@ -73,7 +92,15 @@ try {
   console.log(JSON.stringify(out));
   if (d.countdowns < want) failures.push(`only ${d.countdowns} countdowns`);
   if (d.flashes < 4 * want) failures.push(`only ${d.flashes} flashes drawn`);
-  if (!(worstOn <= frame)) failures.push(`flash on-time off 100 ms by ${worstOn.toFixed(2)} ms (> one frame, ${frame.toFixed(2)} ms)`);
+  if (!(worstOn <= frame)) failures.push(`flash on-time off ${onMs} ms by ${worstOn.toFixed(2)} ms (> one frame, ${frame.toFixed(2)} ms)`);
+  if (!drawn.every((f) => Math.abs(f.dur - onMs) < 0.5)) failures.push(`flashes scheduled ${JSON.stringify(out.on_ms_scheduled)} ms on, not ${onMs}`);
+  if (gapMs !== null) {
+    if (gaps.length < 4 * want - 2) failures.push(`only ${gaps.length} gaps between the flashes of a trial`);
+    // Onsets are scheduled on the EEG's sample clock (2 ms at the simulator's 500 Hz), so a
+    // 175 ms pitch is 176 or 174 ms: the schedule must hold GAP_MS within 2 ms.
+    if (!gapNominal.every((g) => Math.abs(g - gapMs) <= 2)) failures.push(`gaps scheduled ${JSON.stringify(out.gap_ms_scheduled)} ms, not ${gapMs}`);
+    if (!(worstGap <= frame)) failures.push(`gap between flashes off ${gapMs} ms by ${worstGap.toFixed(2)} ms (> one frame, ${frame.toFixed(2)} ms)`);
+  }
   // Onsets land on the frame nearest the schedule; a busy machine may miss frames, so only
   // gross errors fail (the figures are printed above).
   if (!(Math.max(...err.map(Math.abs)) <= 3 * frame)) failures.push(`flash onset off schedule by up to ${Math.max(...err.map(Math.abs)).toFixed(2)} ms (> three frames)`);

@@ -28,6 +28,9 @@
     onTimes: [], onsetErrors: [], rtt: null, offset: null, frameMs: null, armMoves: 0,
     cancelled: 0, ended: false, targets: 0, planPoints: 0, lateFlashes: [], paused: false,
     fullscreen: false,
+    // Every flash drawn: its schedule (at, dur) and the server times of the frames that drew
+    // it and took it off (on, off), ms.
+    drawn: [],
   });
 
   const conn = Oddball.connect(ODDBALL_WS.subject, {
@@ -204,6 +207,7 @@
         const b = S.bulbByCode.get(f.code);
         if (b) b.classList.remove("on");
         D.onTimes.push(now - f.on);
+        D.drawn.push({ at: f.at, dur: f.dur, on: f.on, off: now });
         conn.send({ t: "off", id: f.id, off_ms: now });
         return false;
       });

@@ -1,5 +1,10 @@
-//! The replay subject: real EEG from BCI2000 P300-speller files played back as a four-choice
-//! session. Nothing is synthesised.
+//! The replay subject: real EEG from P300-speller files (BCI2000's sample files, BCI
+//! Competition II IIb's runs) played back as a four-choice session. Nothing is synthesised.
+//! Calibration and test may each be several recordings (IIb: four training runs, two test
+//! runs); each is streamed on its own (no filter runs across a file boundary) and characters
+//! are numbered across them in the order given. A test run recorded without labels is
+//! labelled by the text it spelled before it reaches here: its labels only say which row or
+//! column is the attended bulb's, nothing is fitted on them.
 //!
 //! The recording is streamed, in its recorded order, through the same causal
 //! [`OnlineEpocher`] as a live session, and every flash's epoch is scored as soon as it is
@@ -112,38 +117,48 @@ pub fn stream_epochs(
     Ok(out)
 }
 
-/// The accepted epochs of a recording's events, streamed causally as
-/// [`stream_epochs`] cuts them, as [`oddball_signal::Epochs`] (targets flagged; `tmin` 0): what
-/// a report's ERP plot shows of a replayed subject's calibration.
+/// The accepted epochs of recordings' events, each streamed causally as [`stream_epochs`] cuts
+/// them, as one [`oddball_signal::Epochs`] (targets flagged; `tmin` 0; the first recording's
+/// rate and channels): what a report's ERP plot shows of a replayed subject's calibration.
 pub fn accepted_epochs(
-    rec: &Recording,
+    recs: &[Recording],
     pre: &Preprocess,
     chunk: usize,
 ) -> Result<oddball_signal::Epochs, SessionError> {
-    let epochs = stream_epochs(rec, pre, chunk)?;
-    let kept: Vec<(usize, &ReadyEpoch)> = epochs
-        .iter()
-        .enumerate()
-        .filter_map(|(i, e)| e.as_ref().filter(|e| e.accepted).map(|e| (i, e)))
-        .collect();
+    let first = first_of(recs)?;
+    let mut kept: Vec<(ReadyEpoch, oddball_signal::Event)> = Vec::new();
+    for rec in recs {
+        let events = rec.raw.events().as_slice();
+        for (i, e) in stream_epochs(rec, pre, chunk)?.into_iter().enumerate() {
+            if let Some(e) = e.filter(|e| e.accepted) {
+                kept.push((e, events[i].clone()));
+            }
+        }
+    }
     let (n_ch, n_t) = kept
         .first()
-        .map_or((rec.raw.n_channels(), 0), |(_, e)| e.data.dim());
+        .map_or((first.raw.n_channels(), 0), |(e, _)| e.data.dim());
     let mut x = Array3::zeros((kept.len(), n_ch, n_t));
-    for (j, (_, e)) in kept.iter().enumerate() {
+    for (j, (e, _)) in kept.iter().enumerate() {
         x.index_axis_mut(Axis(0), j).assign(&e.data);
     }
-    let events = kept
-        .iter()
-        .map(|&(i, _)| rec.raw.events().as_slice()[i].clone())
-        .collect();
+    let events = kept.into_iter().map(|(_, ev)| ev).collect();
     Ok(oddball_signal::Epochs::new(
         x,
-        rec.raw.sfreq(),
+        first.raw.sfreq(),
         0.0,
-        rec.raw.ch_names().to_vec(),
+        first.raw.ch_names().to_vec(),
         events,
     )?)
+}
+
+/// The first of `recs`, or the error saying there is none.
+fn first_of(recs: &[Recording]) -> Result<&Recording, SessionError> {
+    recs.first().ok_or_else(|| SessionError::InvalidParameter {
+        name: "replayed recordings",
+        value: "[]".into(),
+        reason: "at least one recording".into(),
+    })
 }
 
 /// What a replayed subject's report says about its decisions.
@@ -166,55 +181,78 @@ fn character_of_events(rec: &Recording) -> Result<Vec<usize>, SessionError> {
     Ok((0..n).map(|i| i / per).collect())
 }
 
-/// Trains the preset on every accepted epoch of `rec` and fits the score model on scores
+/// Trains the preset on every accepted epoch of `recs` and fits the score model on scores
 /// cross-validated by character.
 pub fn calibrate(
-    rec: &Recording,
+    recs: &[Recording],
     params: &ReplayParams,
 ) -> Result<(Model, CalibrationReport), SessionError> {
-    let (model, report, _) = calibrate_for_bit_rate(rec, params)?;
+    let (model, report, _) = calibrate_for_bit_rate(recs, params)?;
     Ok((model, report))
+}
+
+/// Every recording's streamed epochs with each event's character, numbered across the
+/// recordings in order, and the event itself.
+type Streamed<'a> = Vec<(Option<ReadyEpoch>, usize, &'a oddball_signal::Event)>;
+
+/// Streams every recording of `recs` on its own; characters numbered across them.
+fn stream_all<'a>(
+    recs: &'a [Recording],
+    pre: &Preprocess,
+    chunk: usize,
+) -> Result<(Streamed<'a>, usize), SessionError> {
+    let mut out = Vec::new();
+    let mut n_chars = 0;
+    for rec in recs {
+        let chars = character_of_events(rec)?;
+        let epochs = stream_epochs(rec, pre, chunk)?;
+        let n = chars.last().map_or(0, |c| c + 1);
+        for ((e, c), ev) in epochs.into_iter().zip(chars).zip(rec.raw.events().iter()) {
+            out.push((e, n_chars + c, ev));
+        }
+        n_chars += n;
+    }
+    Ok((out, n_chars))
 }
 
 /// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
 /// cross-validated calibration scores (set in the model's decision model) with what it expects.
 pub fn calibrate_for_bit_rate(
-    rec: &Recording,
+    recs: &[Recording],
     params: &ReplayParams,
 ) -> Result<(Model, CalibrationReport, Option<Expected>), SessionError> {
     let t0 = std::time::Instant::now();
-    let chars = character_of_events(rec)?;
-    let epochs = stream_epochs(rec, &params.preprocess, params.chunk)?;
+    let rec = first_of(recs)?;
+    for other in &recs[1..] {
+        check_same_layout(rec, other)?;
+    }
+    let (epochs, n_chars) = stream_all(recs, &params.preprocess, params.chunk)?;
     let mut kept = Vec::new();
     let mut rejected = 0;
-    for (i, e) in epochs.iter().enumerate() {
+    for (e, ch, ev) in &epochs {
         match e {
             Some(e) if e.accepted => {
-                let target = rec.raw.events().as_slice()[i].target.ok_or_else(|| {
-                    SessionError::InvalidParameter {
-                        name: "calibration recording",
-                        value: rec.path.display().to_string(),
-                        reason: format!("event {i} has no target flag"),
-                    }
+                let target = ev.target.ok_or_else(|| SessionError::InvalidParameter {
+                    name: "calibration recording",
+                    value: recs[0].path.display().to_string(),
+                    reason: format!(
+                        "the event at sample {} (code {}) has no target flag",
+                        ev.onset, ev.code
+                    ),
                 })?;
-                kept.push((i, target));
+                kept.push((e, target, *ch));
             }
             Some(_) => rejected += 1,
             None => {}
         }
     }
-    let (n_ch, n_t) = epochs
-        .iter()
-        .flatten()
-        .next()
-        .map_or((0, 0), |e| e.data.dim());
+    let (n_ch, n_t) = kept.first().map_or((0, 0), |(e, _, _)| e.data.dim());
     let mut x = Array3::zeros((kept.len(), n_ch, n_t));
-    for (j, &(i, _)) in kept.iter().enumerate() {
-        let e = epochs[i].as_ref().expect("kept epochs exist");
+    for (j, (e, _, _)) in kept.iter().enumerate() {
         x.index_axis_mut(Axis(0), j).assign(&e.data);
     }
-    let y: Vec<bool> = kept.iter().map(|&(_, t)| t).collect();
-    let groups: Vec<usize> = kept.iter().map(|&(i, _)| chars[i]).collect();
+    let y: Vec<bool> = kept.iter().map(|&(_, t, _)| t).collect();
+    let groups: Vec<usize> = kept.iter().map(|&(_, _, c)| c).collect();
     let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
         &params.pipeline,
         params.preprocess,
@@ -242,7 +280,7 @@ pub fn calibrate_for_bit_rate(
     Ok((
         model,
         CalibrationReport {
-            n_trials: chars.last().map_or(0, |c| c + 1),
+            n_trials: n_chars,
             n_epochs: kept.len(),
             n_targets: y.iter().filter(|&&t| t).count(),
             n_rejected: rejected,
@@ -252,6 +290,25 @@ pub fn calibrate_for_bit_rate(
         },
         chosen,
     ))
+}
+
+/// A second calibration or test recording must have the first's channels (same order) and rate.
+fn check_same_layout(first: &Recording, other: &Recording) -> Result<(), SessionError> {
+    if other.raw.ch_names() != first.raw.ch_names() || other.raw.sfreq() != first.raw.sfreq() {
+        return Err(SessionError::InvalidParameter {
+            name: "replayed recording",
+            value: other.path.display().to_string(),
+            reason: format!(
+                "its {} channels at {} Hz differ from the {} channels at {} Hz of {}",
+                other.raw.n_channels(),
+                other.raw.sfreq(),
+                first.raw.n_channels(),
+                first.raw.sfreq(),
+                first.path.display()
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Rows or columns of the speller.
@@ -315,6 +372,95 @@ struct Slot {
     scores: Vec<std::collections::BTreeMap<u32, Option<f64>>>,
 }
 
+/// Scores every flash of `rec` with `model` and appends its decision slots to `slots`, its
+/// characters numbered from `first_char`; returns its number of characters.
+fn slots_of(
+    rec: &Recording,
+    model: &Model,
+    params: &ReplayParams,
+    first_char: usize,
+    slots: &mut Vec<Slot>,
+) -> Result<usize, SessionError> {
+    let speller = speller_of(rec)?;
+    let events = rec.raw.events().as_slice();
+    if !events.iter().any(|e| e.target == Some(true)) {
+        return Err(SessionError::InvalidParameter {
+            name: "replayed recording",
+            value: rec.path.display().to_string(),
+            reason: format!(
+                "none of its {} flashes is labelled target: label a run recorded without labels \
+                 by the text it spelled",
+                events.len()
+            ),
+        });
+    }
+    let chars = character_of_events(rec)?;
+    let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;
+    let scores: Vec<Option<Option<f64>>> = epochs
+        .iter()
+        .map(|e| match e {
+            Some(e) if e.accepted => model
+                .pipeline
+                .score_epoch(e.data.view())
+                .map(|s| Some(Some(s))),
+            Some(_) => Ok(Some(None)),
+            None => Ok(None),
+        })
+        .collect::<Result<_, _>>()?;
+    let per_seq = speller.n_rows() + speller.n_cols();
+    let n_chars = chars.last().map_or(0, |c| c + 1);
+    let r = params.rounds_per_decision.max(params.rule.max_rounds());
+    for ch in 0..n_chars {
+        let idx: Vec<usize> = (0..events.len()).filter(|&i| chars[i] == ch).collect();
+        let n_seq = idx.len() / per_seq;
+        for dim in [Dimension::Rows, Dimension::Columns] {
+            let codes: Vec<u32> = match dim {
+                Dimension::Rows => (0..speller.n_rows())
+                    .map(|i| speller.code_of_row(i))
+                    .collect(),
+                Dimension::Columns => (0..speller.n_cols())
+                    .map(|i| speller.code_of_col(i))
+                    .collect(),
+            };
+            let Some(target) = idx
+                .iter()
+                .find(|&&i| events[i].target == Some(true) && codes.contains(&events[i].code))
+                .map(|&i| events[i].code)
+            else {
+                continue;
+            };
+            'slot: for d in 0..n_seq / r {
+                let mut per_sequence = Vec::with_capacity(r);
+                for seq in d * r..(d + 1) * r {
+                    let seq_idx = &idx[seq * per_seq..(seq + 1) * per_seq];
+                    let mut m = std::collections::BTreeMap::new();
+                    for &code in &codes {
+                        match seq_idx.iter().find(|&&i| events[i].code == code) {
+                            Some(&i) => match scores[i] {
+                                Some(s) => {
+                                    m.insert(code, s);
+                                }
+                                None => continue 'slot,
+                            },
+                            None => continue 'slot,
+                        }
+                    }
+                    per_sequence.push(m);
+                }
+                slots.push(Slot {
+                    character: first_char + ch,
+                    dimension: dim,
+                    first_sequence: d * r,
+                    target,
+                    others: codes.iter().copied().filter(|&c| c != target).collect(),
+                    scores: per_sequence,
+                });
+            }
+        }
+    }
+    Ok(n_chars)
+}
+
 /// Real speller EEG as a source of four-choice decisions, one at a time, for whatever the
 /// person intends next (the decision slots are used in recorded order).
 #[derive(Debug, Clone)]
@@ -328,84 +474,24 @@ pub struct ReplaySource {
 }
 
 impl ReplaySource {
-    /// Streams and scores every flash of `rec` with `model`, and cuts the decision slots.
+    /// Streams and scores every flash of `recs` (in order) with `model`, and cuts the decision
+    /// slots.
     pub fn new(
-        rec: &Recording,
+        recs: &[Recording],
         model: &Model,
         params: &ReplayParams,
     ) -> Result<Self, SessionError> {
-        model.check_layout(rec.raw.ch_names(), rec.raw.sfreq())?;
+        first_of(recs)?;
         params.rule.validate()?;
         let decision = DecisionModel {
             scores: model.decision.ok_or(SessionError::NotCalibrated)?.scores,
             rule: params.rule,
         };
-        let speller = speller_of(rec)?;
-        let events = rec.raw.events().as_slice();
-        let chars = character_of_events(rec)?;
-        let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;
-        let scores: Vec<Option<Option<f64>>> = epochs
-            .iter()
-            .map(|e| match e {
-                Some(e) if e.accepted => model
-                    .pipeline
-                    .score_epoch(e.data.view())
-                    .map(|s| Some(Some(s))),
-                Some(_) => Ok(Some(None)),
-                None => Ok(None),
-            })
-            .collect::<Result<_, _>>()?;
-        let per_seq = speller.n_rows() + speller.n_cols();
-        let n_chars = chars.last().map_or(0, |c| c + 1);
-        let r = params.rounds_per_decision.max(params.rule.max_rounds());
         let mut slots = Vec::new();
-        for ch in 0..n_chars {
-            let idx: Vec<usize> = (0..events.len()).filter(|&i| chars[i] == ch).collect();
-            let n_seq = idx.len() / per_seq;
-            for dim in [Dimension::Rows, Dimension::Columns] {
-                let codes: Vec<u32> = match dim {
-                    Dimension::Rows => (0..speller.n_rows())
-                        .map(|i| speller.code_of_row(i))
-                        .collect(),
-                    Dimension::Columns => (0..speller.n_cols())
-                        .map(|i| speller.code_of_col(i))
-                        .collect(),
-                };
-                let Some(target) = idx
-                    .iter()
-                    .find(|&&i| events[i].target == Some(true) && codes.contains(&events[i].code))
-                    .map(|&i| events[i].code)
-                else {
-                    continue;
-                };
-                'slot: for d in 0..n_seq / r {
-                    let mut per_sequence = Vec::with_capacity(r);
-                    for seq in d * r..(d + 1) * r {
-                        let seq_idx = &idx[seq * per_seq..(seq + 1) * per_seq];
-                        let mut m = std::collections::BTreeMap::new();
-                        for &code in &codes {
-                            match seq_idx.iter().find(|&&i| events[i].code == code) {
-                                Some(&i) => match scores[i] {
-                                    Some(s) => {
-                                        m.insert(code, s);
-                                    }
-                                    None => continue 'slot,
-                                },
-                                None => continue 'slot,
-                            }
-                        }
-                        per_sequence.push(m);
-                    }
-                    slots.push(Slot {
-                        character: ch,
-                        dimension: dim,
-                        first_sequence: d * r,
-                        target,
-                        others: codes.iter().copied().filter(|&c| c != target).collect(),
-                        scores: per_sequence,
-                    });
-                }
-            }
+        let mut first_char = 0;
+        for rec in recs {
+            model.check_layout(rec.raw.ch_names(), rec.raw.sfreq())?;
+            first_char += slots_of(rec, model, params, first_char, &mut slots)?;
         }
         Ok(Self {
             slots,
@@ -473,10 +559,10 @@ impl ReplaySource {
     }
 }
 
-/// Plays `rec` back as four-choice decisions, the person intending `commands` in turn
-/// (cycled), as many decisions as the recording holds.
+/// Plays `recs` back, in order, as four-choice decisions, the person intending `commands` in turn
+/// (cycled), as many decisions as the recordings hold.
 pub fn replay(
-    rec: &Recording,
+    recs: &[Recording],
     model: &Model,
     commands: &[Command],
     params: &ReplayParams,
@@ -488,7 +574,7 @@ pub fn replay(
             reason: "at least one command".into(),
         });
     }
-    let mut source = ReplaySource::new(rec, model, params)?;
+    let mut source = ReplaySource::new(recs, model, params)?;
     let mut out = Vec::new();
     while let Some(d) = source.decide(commands[out.len() % commands.len()]) {
         out.push(d);

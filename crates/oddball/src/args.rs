@@ -112,8 +112,8 @@ pub enum CalibrationSpec {
     Labelled,
     /// No calibration: the unsupervised decoder learns from the session itself.
     None,
-    /// The calibration recording of a replayed subject.
-    File(PathBuf),
+    /// The calibration recordings of a replayed subject (comma-separated).
+    Files(Vec<PathBuf>),
 }
 
 impl FromStr for CalibrationSpec {
@@ -123,7 +123,7 @@ impl FromStr for CalibrationSpec {
             "labelled" | "labeled" => Self::Labelled,
             "none" => Self::None,
             "" => return Err("give labelled, none or a calibration recording".into()),
-            file => Self::File(PathBuf::from(file)),
+            files => Self::Files(files.split(',').map(PathBuf::from).collect()),
         })
     }
 }
@@ -133,16 +133,18 @@ impl FromStr for CalibrationSpec {
 pub enum SubjectSpec {
     /// A simulated subject: easy, typical or hard.
     Preset(SubjectPreset),
-    /// A BCI2000 P300-speller recording played back as four-choice decisions.
-    Replay(PathBuf),
+    /// P300-speller recordings played back, in order, as four-choice decisions.
+    Replay(Vec<PathBuf>),
 }
 
 impl FromStr for SubjectSpec {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         match s.strip_prefix("replay:") {
-            Some(f) if !f.is_empty() => Ok(Self::Replay(PathBuf::from(f))),
-            Some(_) => Err("replay: needs a file".into()),
+            Some(f) if !f.split(',').any(str::is_empty) => {
+                Ok(Self::Replay(f.split(',').map(PathBuf::from).collect()))
+            }
+            Some(_) => Err("replay: needs a file, or files separated by commas".into()),
             None => s.parse().map(Self::Preset).map_err(|e| e.to_string()),
         }
     }
@@ -187,8 +189,8 @@ impl SourceArgs {
 /// Who watches the panel and how the session decides: shared by `demo`, `task` and `online`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SessionOptions {
-    /// Who watches the panel: easy, typical or hard (simulated), or replay:FILE (a BCI2000
-    /// P300-speller recording played back as four-choice decisions).
+    /// Who watches the panel: easy, typical or hard (simulated), or replay:FILE[,FILE…]
+    /// (P300-speller recordings played back, in order, as four-choice decisions).
     #[arg(long, default_value = "typical")]
     pub subject: SubjectSpec,
     /// How the session starts: `labelled` (calibration-per-bulb labelled decisions per bulb;
@@ -196,8 +198,9 @@ pub struct SessionOptions {
     /// e.g. eeg3_1.dat for eeg3_2.dat), `none` (no calibration: the first command comes from the
     /// first trial, the decoder is refitted without labels after every decision — EM over "one
     /// bulb per trial" — and abstains while unsure), or FILE (a replayed subject's calibration
-    /// recording).
-    #[arg(long, value_name = "labelled|none|FILE", default_value = "labelled", value_parser = CalibrationSpec::from_str)]
+    /// recording, or several separated by commas, e.g. BCI Competition II IIb's four training
+    /// runs).
+    #[arg(long, value_name = "labelled|none|FILE[,FILE…]", default_value = "labelled", value_parser = CalibrationSpec::from_str)]
     pub calibration: CalibrationSpec,
     /// With --calibration none: start from this model (`model.json` of another person's or
     /// another session's `oddball demo`/`train` run, same montage): its scores start the
@@ -210,6 +213,11 @@ pub struct SessionOptions {
     /// that turns the weights too far from the calibrated ones (cosine below 0.8) is undone.
     #[arg(long)]
     pub adapt: bool,
+    /// With --subject replay:…: the text each replayed file spelled, comma-separated (a
+    /// speller run recorded without labels, e.g. IIb's test runs: HAM,PIE). It only says which
+    /// row or column each decision's attended bulb shows; nothing is fitted on it.
+    #[arg(long, value_name = "TEXT,…", value_delimiter = ',')]
+    pub test_text: Vec<String>,
     /// Seed of the simulated subject and the flash orders.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -369,24 +377,48 @@ impl SessionOptions {
             .context("building the simulated subject")
     }
 
-    /// The replayed file and its calibration file, for `replay:FILE` subjects.
-    pub fn replay_files(&self) -> Result<Option<(PathBuf, PathBuf)>> {
-        let SubjectSpec::Replay(file) = &self.subject else {
+    /// The replayed files and their calibration files, for `replay:FILE` subjects.
+    pub fn replay_files(&self) -> Result<Option<ReplayFiles>> {
+        let SubjectSpec::Replay(test) = &self.subject else {
             return Ok(None);
         };
-        // The replayed file first: a missing one is not its calibration file's fault.
-        oddball_io::check_file(file).context("--subject replay:FILE")?;
-        let cal = match &self.calibration {
-            CalibrationSpec::File(c) => c.clone(),
-            CalibrationSpec::Labelled => sibling_calibration(file)?,
-            CalibrationSpec::None => bail!(
+        // Options before files.
+        if self.calibration == CalibrationSpec::None {
+            bail!(
                 "--calibration none runs a live or simulated session; a replayed subject \
                  (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
                  --unsupervised` to replay a recording without labels)"
-            ),
+            );
+        }
+        // The replayed files first: a missing one is not its calibration file's fault.
+        for file in test {
+            oddball_io::check_file(file).context("--subject replay:FILE")?;
+        }
+        if !self.test_text.is_empty() && self.test_text.len() != test.len() {
+            bail!(
+                "--test-text gives {} texts for {} replayed files (one per file)",
+                self.test_text.len(),
+                test.len()
+            );
+        }
+        // Labelled (None is refused above): the replayed file's sibling.
+        let calibration = match &self.calibration {
+            CalibrationSpec::Files(c) => c.clone(),
+            _ => vec![sibling_calibration(&test[0])?],
         };
-        oddball_io::check_file(&cal).context("the calibration recording")?;
-        Ok(Some((file.clone(), cal)))
+        for c in &calibration {
+            oddball_io::check_file(c).context("the calibration recording")?;
+            if test.contains(c) {
+                bail!(
+                    "{} is both replayed and calibrated on: calibrate on other recordings",
+                    c.display()
+                );
+            }
+        }
+        Ok(Some(ReplayFiles {
+            test: test.clone(),
+            calibration,
+        }))
     }
 
     /// The session's settings under `rule`.
@@ -504,22 +536,37 @@ impl SessionOptions {
         if self.adapt && self.calibration == CalibrationSpec::None {
             bail!("--adapt adapts a labelled calibration; --calibration none adapts by itself");
         }
+        if !self.test_text.is_empty() && self.preset().is_some() {
+            bail!("--test-text labels replayed files: it needs --subject replay:FILE");
+        }
         if self.adapt && self.pipeline != "lda" {
             bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
         }
         Ok(())
     }
 
-    /// Reads a replayed subject's files and calibrates on the first; prints the calibration.
-    pub fn calibrated_replay(
-        &self,
-        file: &Path,
-        cal_file: &Path,
-        rule: DecisionRule,
-    ) -> Result<Replayed> {
-        let cal = oddball_io::read(cal_file)
-            .with_context(|| format!("reading {}", cal_file.display()))?;
-        let test = oddball_io::read(file).with_context(|| format!("reading {}", file.display()))?;
+    /// Reads a replayed subject's files (the replayed ones labelled by --test-text when given)
+    /// and calibrates on the calibration files; prints the calibration.
+    pub fn calibrated_replay(&self, files: &ReplayFiles, rule: DecisionRule) -> Result<Replayed> {
+        let read = |p: &PathBuf, text: Option<&String>| {
+            let how = oddball_decode::dataset::Labelling {
+                text: text.map(String::as_str),
+                ..Default::default()
+            };
+            oddball_decode::dataset::read_labelled(p, how)
+        };
+        let cal = files
+            .calibration
+            .iter()
+            .map(|p| read(p, None))
+            .collect::<Result<Vec<_>, _>>()?;
+        let test = files
+            .test
+            .iter()
+            .enumerate()
+            .map(|(i, p)| read(p, self.test_text.get(i)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let cal_names = files.calibration_names();
         let mut params = ReplayParams::paper(&self.pipeline);
         params.paradigm = self.paradigm();
         params.seed = self.seed;
@@ -527,14 +574,14 @@ impl SessionOptions {
         params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
         params.stopping = self.optimise_stopping.then(|| self.stopping_search());
         let (model, calibration, chosen) = replay::calibrate_for_bit_rate(&cal, &params)
-            .with_context(|| format!("calibrating on {}", cal_file.display()))?;
+            .with_context(|| format!("calibrating on {cal_names}"))?;
         println!(
             "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
             calibration.n_trials,
             calibration.n_epochs,
             calibration.n_targets,
             calibration.n_rejected,
-            cal_file.display(),
+            cal_names,
             calibration.cv_auc,
             calibration.d_prime
         );
@@ -543,7 +590,7 @@ impl SessionOptions {
             println!("{}", oddball_session::timing::stopping_text(e));
         }
         Ok(Replayed {
-            calibration_recording: cal,
+            calibration_recordings: cal,
             test,
             model,
             calibration,
@@ -615,11 +662,37 @@ pub fn with_step_hint(e: anyhow::Error) -> anyhow::Error {
     e.context(hint)
 }
 
-/// A replayed subject: the calibration recording read and trained on, the test recording read.
+/// A replayed subject's files: those played back and those calibrated on, each in order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReplayFiles {
+    pub test: Vec<PathBuf>,
+    pub calibration: Vec<PathBuf>,
+}
+
+impl ReplayFiles {
+    /// The replayed files, comma-separated, as --subject replay: names them.
+    pub fn test_names(&self) -> String {
+        join_paths(&self.test)
+    }
+
+    /// The calibration files, comma-separated.
+    pub fn calibration_names(&self) -> String {
+        join_paths(&self.calibration)
+    }
+}
+
+fn join_paths(p: &[PathBuf]) -> String {
+    p.iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// A replayed subject: the calibration recordings read and trained on, the test recordings read.
 #[derive(Debug)]
 pub struct Replayed {
-    pub calibration_recording: oddball_io::Recording,
-    pub test: oddball_io::Recording,
+    pub calibration_recordings: Vec<oddball_io::Recording>,
+    pub test: Vec<oddball_io::Recording>,
     pub model: oddball_decode::pipeline::Model,
     pub calibration: CalibrationReport,
     pub params: ReplayParams,

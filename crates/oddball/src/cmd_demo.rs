@@ -94,11 +94,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         rule_name(&rule)
     };
     match (&replay_files, opts.preset()) {
-        (Some((file, cal)), _) => {
+        (Some(files), _) => {
             println!(
                 "oddball demo: replaying {} (calibration {}), pipeline {}, {}",
-                file.display(),
-                cal.display(),
+                files.test_names(),
+                files.calibration_names(),
                 opts.pipeline,
                 rule_label
             );

@@ -97,14 +97,14 @@ fn prepare_task(
 ) -> Result<Prepared> {
     let (_, rule) = opts.rules()?;
     match (opts.replay_files()?, opts.preset()) {
-        (Some((file, cal)), _) => {
+        (Some(files), _) => {
             if panel.serve.is_some() {
                 anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
             }
             println!(
                 "oddball task {what}: replaying {} (calibration {}), pipeline {}",
-                file.display(),
-                cal.display(),
+                files.test_names(),
+                files.calibration_names(),
                 opts.pipeline
             );
         }

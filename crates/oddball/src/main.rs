@@ -43,7 +43,11 @@ enum Command {
     #[command(after_help = "Examples:
   oddball demo                                   # simulated subject, report in out/demo
   oddball demo --subject hard --dynamic-stopping --out out/hard
-  oddball demo --subject replay:../shared/data/bci2000-samplefiles-p300/eeg3_2.dat")]
+  oddball demo --subject replay:../shared/data/bci2000-samplefiles-p300/eeg3_2.dat
+  D=../shared/data/bci-competition-ii-iib   # BCI II IIb: test runs, training runs, their texts
+  oddball demo --subject replay:$D/AAS012R03.mat,$D/AAS012R04.mat \\
+    --calibration $D/AAS010R01.mat,$D/AAS010R02.mat,$D/AAS011R01.mat,$D/AAS011R02.mat \\
+    --test-text HAM,PIE --paradigm fast --optimise-stopping --round-limit 5")]
     Demo(cmd_demo::DemoArgs),
     /// Tasks: steer the pen to targets (track) or draw text (draw), with study metrics.
     #[command(after_help = "Examples:

@@ -46,22 +46,22 @@ pub fn prepare(
     paced: bool,
     on_replay: impl FnOnce(&Replayed, &ReplaySource) -> Result<()>,
 ) -> Result<Prepared> {
-    if let Some((file, cal)) = opts.replay_files()? {
+    if let Some(files) = opts.replay_files()? {
         if source.source != SourceSpec::Sim {
             bail!(
                 "--subject replay:{} replays decisions offline: it takes no --source {}",
-                file.display(),
+                files.test_names(),
                 source.source
             );
         }
-        let r = opts.calibrated_replay(&file, &cal, rule)?;
+        let r = opts.calibrated_replay(&files, rule)?;
         let replay = ReplaySource::new(&r.test, &r.model, &r.params)
-            .with_context(|| format!("replaying {}", file.display()))?;
+            .with_context(|| format!("replaying {}", files.test_names()))?;
         on_replay(&r, &replay)?;
         let arm = opts.arm()?;
         let pen_start = arm.pen();
         let erp = accepted_epochs(
-            &r.calibration_recording,
+            &r.calibration_recordings,
             &r.params.preprocess,
             r.params.chunk,
         )?;
@@ -70,7 +70,7 @@ pub fn prepare(
             calibration: r.calibration,
             erp,
             model_json: r.model.to_json(),
-            subject: format!("replay:{}", file.display()),
+            subject: format!("replay:{}", files.test_names()),
             pen_start,
         });
     }

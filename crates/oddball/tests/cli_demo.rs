@@ -211,12 +211,17 @@ fn bad_options_are_clear_errors() {
     let (ok, _, err) = common::oddball(&["demo", "--commands", "up,jump"]);
     assert!(!ok);
     assert!(err.contains("jump"), "{err}");
+    // A replayed file without a calibration sibling (eeg9_1.dat) asks for --calibration.
+    let bad = tmp("bad");
+    std::fs::create_dir_all(&bad).unwrap();
+    let lonely = bad.join("eeg9_2.dat");
+    std::fs::write(&lonely, b"not read: its calibration is missing first").unwrap();
     let (ok, _, err) = common::oddball(&[
         "demo",
         "--subject",
-        "replay:/nonexistent/eeg9_2.dat",
+        &format!("replay:{}", lonely.display()),
         "--out",
-        tmp("bad").to_str().unwrap(),
+        bad.join("out").to_str().unwrap(),
     ]);
     assert!(!ok);
     // A missing replayed file is named itself (it used to be blamed on its calibration file).
