@@ -211,8 +211,18 @@ fn bad_options_are_clear_errors() {
     let (ok, _, err) = common::oddball(&["demo", "--commands", "up,jump"]);
     assert!(!ok);
     assert!(err.contains("jump"), "{err}");
-    // A replayed file without a calibration sibling (eeg9_1.dat) asks for --calibration.
-    let bad = tmp("bad");
+    // A missing replayed file is named itself (it used to be blamed on its calibration file).
+    let (ok, _, err) = common::oddball(&[
+        "demo",
+        "--subject",
+        "replay:/nonexistent/eeg9_2.dat",
+        "--out",
+        tmp("bad").to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("eeg9_2.dat: no such file"), "{err}");
+    // One that exists without a calibration sibling (eeg9_1.dat) asks for --calibration.
+    let bad = tmp("lone");
     std::fs::create_dir_all(&bad).unwrap();
     let lonely = bad.join("eeg9_2.dat");
     std::fs::write(&lonely, b"not read: its calibration is missing first").unwrap();
@@ -222,20 +232,6 @@ fn bad_options_are_clear_errors() {
         &format!("replay:{}", lonely.display()),
         "--out",
         bad.join("out").to_str().unwrap(),
-    ]);
-    assert!(!ok);
-    // A missing replayed file is named itself (it used to be blamed on its calibration file).
-    assert!(err.contains("eeg9_2.dat: no such file"), "{err}");
-    // One that exists without an _1 sibling needs --calibration.
-    let lone = tmp("lone");
-    std::fs::create_dir_all(&lone).unwrap();
-    std::fs::write(lone.join("eeg9_2.dat"), b"").unwrap();
-    let (ok, _, err) = common::oddball(&[
-        "demo",
-        "--subject",
-        &format!("replay:{}", lone.join("eeg9_2.dat").display()),
-        "--out",
-        tmp("bad").to_str().unwrap(),
     ]);
     assert!(!ok);
     assert!(err.contains("--calibration"), "{err}");
