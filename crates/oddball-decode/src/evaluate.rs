@@ -557,6 +557,7 @@ pub fn reps_from_which_all_correct(acc: &[f64]) -> Option<usize> {
 /// `cache` holds `data`'s features for fronts that learn nothing: shared across folds, grid
 /// points and presets, it spares recomputing them (the paper's EMD features above all) without
 /// changing a score.
+#[allow(clippy::too_many_arguments)]
 pub fn cross_validate(
     name: &str,
     data: &Epochs,
