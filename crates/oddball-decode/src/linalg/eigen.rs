@@ -30,7 +30,34 @@ pub(crate) fn sym_eigenvalues(what: &str, m: &DMatrix<f64>) -> Result<DVector<f6
     Ok(tridiagonal_ql(what, m.clone(), false)?.eigenvalues)
 }
 
-pub(crate) fn tridiagonal_ql(
+pub(crate) fn tridiagonal_ql(what: &str, v: DMatrix<f64>, want_vectors: bool) -> Result<SymEigen> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            #[allow(unsafe_code)]
+            // SAFETY: `tridiagonal_ql_avx2` only needs AVX2, which the CPU was just seen to have.
+            return unsafe { tridiagonal_ql_avx2(what, v, want_vectors) };
+        }
+    }
+    tridiagonal_ql_body(what, v, want_vectors)
+}
+
+/// [`tridiagonal_ql`] compiled for AVX2: the column updates of the Householder reduction, of the
+/// accumulation of its transformations and of the QL rotations (16 values for a 16×16 matrix)
+/// run four values per instruction instead of two. The same operations in the same order (no
+/// fused multiply-add, no reordered sums): the results are bit for bit those of the baseline build.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+#[target_feature(enable = "avx2")]
+unsafe fn tridiagonal_ql_avx2(what: &str, v: DMatrix<f64>, want_vectors: bool) -> Result<SymEigen> {
+    tridiagonal_ql_body(what, v, want_vectors)
+}
+
+#[inline(always)]
+pub(super) fn tridiagonal_ql_body(
     what: &str,
     mut v: DMatrix<f64>,
     want_vectors: bool,

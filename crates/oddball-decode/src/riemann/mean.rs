@@ -109,9 +109,14 @@ pub(crate) fn mean_riemann_dm(
         j.fill(0.0);
         for c in mats {
             congruence_into(&mm12, c, &mut tmp, &mut white);
-            let e = spd_eigen("whitened matrix in Riemannian mean", white.clone())?;
+            let e = spd_eigen(
+                "whitened matrix in Riemannian mean",
+                std::mem::take(&mut white),
+            )?;
             eigen_function_into(&e, f64::ln, &mut log);
             j.zip_apply(&log, |a, l| *a += w * l);
+            // The eigenvectors' storage serves the next whitened matrix.
+            white = e.eigenvectors;
         }
         let je = sym_eigen("Riemannian mean gradient", j.clone())?;
         let step = eigen_function(&je, |l| (nu * l).exp());
