@@ -992,7 +992,7 @@ fn read_dispatches_easy_files() {
     assert_eq!(rec.raw.ch_names()[0], "Fz");
     assert!(rec.csv().is_none() && rec.bci2000().is_none() && rec.edf().is_none());
     let e = read(tmp.path().join("missing.easy")).unwrap_err();
-    assert!(matches!(e, IoError::Io { action: "read", .. }), "{e}");
+    assert!(matches!(e, IoError::NotFound { .. }), "{e}");
 }
 
 #[test]
