@@ -288,6 +288,9 @@ pub struct Session<S: Subject> {
     adaptation: Option<Adaptation>,
     /// The stopping rule chosen from the calibration, with its expected performance.
     stopping: Option<Expected>,
+    /// Rows of the subject's channels the epocher takes, in the model's order (a model set
+    /// with other or reordered channels, see [`Session::set_model`]); `None`: all, as they are.
+    pick: Option<Vec<usize>>,
 }
 
 /// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
@@ -382,6 +385,7 @@ impl<S: Subject> Session<S> {
             unlabelled: None,
             adaptation: None,
             stopping: None,
+            pick: None,
         })
     }
 
@@ -553,23 +557,29 @@ impl<S: Subject> Session<S> {
         self.model.as_ref()
     }
 
-    /// Uses a model trained elsewhere (it must carry a decision model).
+    /// Uses a model trained elsewhere, before the session's first sample: a session's, or one
+    /// `oddball train` fitted offline (it must carry a decision model, as format 4 on does).
+    /// Its channels are matched by name (the subject may have more, in any order: the session
+    /// epochs only the model's, in the model's order). A model trained offline (zero-phase
+    /// band-pass) runs its causal fit ([`Model::for_session`]); the model kept, and saved, is
+    /// the one that ran, so re-evaluating the session reproduces its decisions.
     pub fn set_model(&mut self, model: Model) -> Result<(), SessionError> {
-        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        let model = model.for_session();
         if model.decision.is_none() {
-            return Err(SessionError::InvalidParameter {
-                name: "model",
-                value: model.pipeline.name().to_string(),
-                reason: "the model has no decision model (train it in a session)".into(),
+            return Err(SessionError::NoDecisionModel {
+                pipeline: model.pipeline.name().to_string(),
             });
         }
-        if model.preprocess != self.params.preprocess {
-            return Err(SessionError::InvalidParameter {
-                name: "model.preprocess",
-                value: format!("{:?}", model.preprocess),
-                reason: "differs from the session's pre-processing".into(),
-            });
+        let order = model.channel_order(self.subject.ch_names(), self.subject.sfreq())?;
+        let taken = self.raw.first().map_or(0, Vec::len);
+        if taken > 0 {
+            return Err(SessionError::ModelTooLate { n_times: taken });
         }
+        self.epocher = OnlineEpocher::new(&model.preprocess, self.subject.sfreq(), order.len())?;
+        self.params.preprocess = model.preprocess;
+        let identity = order.len() == self.subject.ch_names().len()
+            && order.iter().enumerate().all(|(i, &o)| i == o);
+        self.pick = (!identity).then_some(order);
         self.model = Some(model);
         Ok(())
     }
@@ -781,7 +791,12 @@ impl<S: Subject> Session<S> {
         for d in self.subject.drawn() {
             self.retime(d)?;
         }
-        let ready = self.epocher.push_samples(data.view())?;
+        let ready = match &self.pick {
+            Some(rows) => self
+                .epocher
+                .push_samples(data.select(Axis(0), rows).view())?,
+            None => self.epocher.push_samples(data.view())?,
+        };
         if let (Some(arm), true) = (&mut self.arm, self.arm_running) {
             arm.run_for(n as f64 / self.subject.sfreq())?;
             self.subject.arm_state(self.subject.position(), arm)?;

@@ -13,6 +13,14 @@ pub enum SessionError {
     MarkerTooLate { onset: u64, oldest_kept: u64 },
     #[error("the session has no model yet: calibrate first or load a model")]
     NotCalibrated,
+    /// A model without the decision model a session decides with.
+    #[error("model {pipeline}: {}", oddball_decode::model::NO_DECISION_MODEL)]
+    NoDecisionModel { pipeline: String },
+    /// A model given after the session already took samples (its filter would start late).
+    #[error(
+        "a model is set before the session's first sample; {n_times} samples were already taken"
+    )]
+    ModelTooLate { n_times: usize },
     #[error(
         "{path} is not a P300-speller recording (no TargetDefinitions): it cannot be replayed"
     )]

@@ -275,15 +275,28 @@ impl Redecision {
 }
 
 /// Recomputes every online decision of a session file with `model` (which must carry its
-/// decision model, as session-trained models do).
+/// decision model), as a session runs it ([`Model::for_session`]): the model's channels
+/// picked by name, its band-pass causal.
 pub fn reevaluate(
     rec: &Recording,
     saved: &SavedSession,
     model: &Model,
 ) -> Result<Vec<Redecision>, SessionError> {
-    let raw = &rec.raw;
-    model.check_layout(raw.ch_names(), raw.sfreq())?;
-    let decision = model.decision.ok_or(SessionError::NotCalibrated)?;
+    let model = &model.clone().for_session();
+    model.channel_order(rec.raw.ch_names(), rec.raw.sfreq())?;
+    let picked;
+    let raw = if rec.raw.ch_names() == model.ch_names.as_slice() {
+        &rec.raw
+    } else {
+        picked = rec.raw.pick_channels(&model.ch_names)?;
+        &picked
+    };
+    let decision = model
+        .decision
+        .ok_or_else(|| SessionError::NoDecisionModel {
+            pipeline: model.pipeline.name().to_string(),
+        })?;
+    let preprocess = model.preprocess;
     let online: Vec<&SavedTrial> = saved
         .trials
         .iter()
@@ -293,8 +306,8 @@ pub fn reevaluate(
         .iter()
         .flat_map(|t| t.flashes.iter().map(|f| f.onset))
         .collect();
-    let epochs = offline_epochs(&model.preprocess, raw, &onsets)?;
-    let (first, n_times) = model.preprocess.window(raw.sfreq());
+    let epochs = offline_epochs(&preprocess, raw, &onsets)?;
+    let (first, n_times) = preprocess.window(raw.sfreq());
     let mut out = Vec::new();
     let mut i = 0;
     for t in online {

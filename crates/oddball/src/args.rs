@@ -10,6 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
 use oddball_decode::decision::DecisionRule;
+use oddball_decode::pipeline::Model;
 use oddball_io::nic::{NicFormat, NicMode};
 use oddball_live::clock::Clock;
 use oddball_live::panel::{PanelConfig, PanelServer};
@@ -133,6 +134,12 @@ pub struct SessionOptions {
     /// unsupervised decoder, which then adapts it to this session without labels.
     #[arg(long, value_name = "MODEL")]
     pub transfer: Option<PathBuf>,
+    /// Decide with this saved model instead of calibrating: `oddball train`'s (e.g. `oddball
+    /// train out/demo/session.dat -o m.json`), or the model.json of a `demo`, `task` or
+    /// `online` session. Its channels are matched by name (the EEG may have more, in any order);
+    /// a model trained offline runs its band-pass causally.
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
     /// After the labelled calibration (`lda` pipeline), adapt the model online: after each
     /// decision its class means take in the decision's epochs, labelled by the decision, through
     /// incremental statistics; decisions with a posterior below 0.9 are left out, and an update
@@ -342,6 +349,13 @@ impl SessionOptions {
             }
             return Ok((session, CalibrationReport::none(), pen_start));
         }
+        if let Some(model) = self.session_model(rule)? {
+            if verbose {
+                println!("{}", model_line(&model, self.model.as_deref()));
+            }
+            session.set_model(model).context("using --model")?;
+            return Ok((session, CalibrationReport::none(), pen_start));
+        }
         let calibration = session.calibrate().context("calibrating")?;
         if self.adapt {
             session
@@ -384,8 +398,40 @@ impl SessionOptions {
         Ok(())
     }
 
+    /// The `--model` to decide with instead of calibrating (read and checked), its decision
+    /// rule replaced by this session's `rule`.
+    pub fn session_model(&self, rule: DecisionRule) -> Result<Option<Model>> {
+        let Some(path) = &self.model else {
+            return Ok(None);
+        };
+        let mut model = crate::load::load_model(path)?;
+        match &mut model.decision {
+            // The stopping rule is this session's choice, not the training's.
+            Some(d) => d.rule = rule,
+            None => bail!(
+                "--model {}: {}",
+                path.display(),
+                oddball_decode::model::NO_DECISION_MODEL
+            ),
+        }
+        Ok(Some(model))
+    }
+
     /// Checks option combinations before any session starts.
     pub fn check(&self) -> Result<()> {
+        if self.model.is_some() {
+            if self.calibration == CalibrationSpec::None {
+                bail!("--calibration none starts without a model: not with --model");
+            }
+            if self.adapt {
+                bail!(
+                    "--adapt adapts a calibration made in this session (--calibrate), not --model"
+                );
+            }
+            if self.optimise_stopping {
+                bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+            }
+        }
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");
         }
@@ -438,6 +484,25 @@ impl SessionOptions {
             params,
         })
     }
+}
+
+/// What a session says of the model it decides with instead of calibrating.
+pub fn model_line(model: &Model, path: Option<&Path>) -> String {
+    format!(
+        "model: {}{}, {} channels at {} Hz, epochs {}–{} s{}: no calibration",
+        model.pipeline.name(),
+        path.map(|p| format!(" from {}", p.display()))
+            .unwrap_or_default(),
+        model.ch_names.len(),
+        model.sfreq,
+        model.preprocess.tmin,
+        model.preprocess.tmax,
+        match (model.preprocess.causal, &model.live) {
+            (true, _) => "",
+            (false, Some(_)) => " (its causal fit, as a session filters)",
+            (false, None) => " (trained zero-phase, run causally: expect lower accuracy)",
+        }
+    )
 }
 
 /// The arm every session drives, recording its trace.

@@ -10,7 +10,6 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use oddball_arm::{planned_path, Command};
-use oddball_decode::pipeline::Model;
 use oddball_live::clock::Clock;
 use oddball_live::live::{EegSource, LiveSubject, Summary};
 use oddball_live::online::{
@@ -34,10 +33,6 @@ use crate::args::{
 pub struct OnlineArgs {
     #[command(flatten)]
     pub source: SourceArgs,
-    /// A model trained in a session (`oddball demo` writes one: out/demo/model.json); one of
-    /// --model, --calibrate and --calibration none is needed.
-    #[arg(long, value_name = "FILE")]
-    pub model: Option<PathBuf>,
     /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model
     /// (`--calibration none`: no calibration at all, the decoder learns from the session).
     #[arg(long, conflicts_with = "model")]
@@ -63,20 +58,8 @@ pub struct OnlineArgs {
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
     let uncalibrated = args.session.calibration == CalibrationSpec::None;
-    match (&args.model, args.calibrate, uncalibrated) {
-        (None, false, false) => {
-            bail!(
-                "give --model FILE, --calibrate (labelled calibration first) or --calibration none"
-            )
-        }
-        (Some(_), _, true) => bail!("--calibration none starts without a model: not with --model"),
-        (Some(_), _, _) if args.session.adapt => {
-            bail!("--adapt adapts a calibration made in this session (--calibrate), not --model")
-        }
-        _ => {}
-    }
-    if args.session.optimise_stopping && args.model.is_some() {
-        bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+    if (args.session.model.is_none(), args.calibrate, uncalibrated) == (true, false, false) {
+        bail!("give --model FILE, --calibrate (labelled calibration first) or --calibration none");
     }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
@@ -115,20 +98,7 @@ fn run_with(
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = args.session.paradigm();
     let arm = recording_arm()?;
-    let model = match &args.model {
-        Some(path) => {
-            let text =
-                fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            let mut m =
-                Model::from_json(&text).with_context(|| format!("loading {}", path.display()))?;
-            // The stopping rule is this session's choice, not the training session's.
-            if let Some(d) = &mut m.decision {
-                d.rule = rule;
-            }
-            Some(m)
-        }
-        None => None,
-    };
+    let model = args.session.session_model(rule)?;
     let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
         &record_path,
@@ -181,7 +151,16 @@ fn run_with(
     // writes the summary (with no decisions).
     let mut ended = None;
     match model {
-        Some(m) => session.set_model(m).context("using the model")?,
+        Some(m) => {
+            println!(
+                "{}",
+                crate::args::model_line(&m, args.session.model.as_deref())
+            );
+            session.set_model(m).context("using --model")?;
+            if let Some(m) = session.model() {
+                oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
+            }
+        }
         None if args.session.calibration == CalibrationSpec::None => {
             let p = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;
