@@ -23,6 +23,7 @@ use std::path::Path;
 use oddball_arm::Command;
 use oddball_decode::decision::Verdict;
 use oddball_decode::pipeline::Model;
+use oddball_io::xdf::session_markers;
 use oddball_io::{
     stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary, Recording,
     StateColumn,
@@ -30,7 +31,7 @@ use oddball_io::{
 use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome};
+use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome, TrialRecord};
 use crate::online::offline_epochs;
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
@@ -125,9 +126,15 @@ pub struct SavedSession {
     pub trials: Vec<SavedTrial>,
 }
 
-/// Whether a recording is an oddball four-bulb session file (BCI2000 or `.easy`).
+/// Whether a recording is an oddball four-bulb session file (BCI2000, `.easy`, or the XDF a
+/// live session records, whose flashes carry their flags).
 pub fn is_session(rec: &Recording) -> bool {
-    rec.bci2000()
+    rec.xdf().is_some_and(|x| {
+        x.markers
+            .iter()
+            .any(|m| session_markers::parse_flash_marker(&m.text).is_some())
+    }) || rec
+        .bci2000()
         .and_then(|b| b.parameters.get("Paradigm"))
         .and_then(|p| p.as_str())
         == Some("four-bulb")
@@ -141,6 +148,9 @@ pub fn is_session(rec: &Recording) -> bool {
 pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
     if rec.easy().is_some() {
         return read_session_easy(rec);
+    }
+    if let Some(x) = rec.xdf() {
+        return read_session_xdf(rec, x);
     }
     let path = rec.path.display().to_string();
     let missing = |what: &str| SessionError::NotASession {
@@ -211,6 +221,56 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
     }
     check_trials(&path, &trials, rec.raw.n_times())?;
     Ok(SavedSession { bulbs, trials })
+}
+
+/// The online trials of a live session's XDF recording (`oddball_live::record`): each
+/// decision's trial record (the `oddball-decisions` stream, JSON) with the flagged flashes
+/// inside it. The recording does not name the bulbs' commands: the paper's are assumed.
+fn read_session_xdf(
+    rec: &Recording,
+    x: &oddball_io::xdf::XdfInfo,
+) -> Result<SavedSession, SessionError> {
+    let path = rec.path.display().to_string();
+    if !is_session(rec) {
+        return Err(SessionError::NotASession {
+            path,
+            missing: "flash markers with target flags (`flash C target`)".into(),
+        });
+    }
+    let events = rec.raw.events().as_slice();
+    let mut trials = Vec::new();
+    for m in &x.markers {
+        if !m.text.starts_with('{') {
+            continue;
+        }
+        let t: TrialRecord =
+            serde_json::from_str(&m.text).map_err(|e| SessionError::NotASession {
+                path: path.clone(),
+                missing: format!("a readable trial record ({e})"),
+            })?;
+        let flashes = events_in(events, t.start, t.end)
+            .iter()
+            .map(|e| SavedFlash {
+                onset: e.onset as u64,
+                code: e.code,
+                attended: e.target == Some(true),
+            })
+            .collect();
+        trials.push(SavedTrial {
+            number: trials.len() + 1,
+            phase: t.phase,
+            start: t.start,
+            end: t.end,
+            intended: t.intended,
+            recorded: t.decided(),
+            flashes,
+        });
+    }
+    check_trials(&path, &trials, rec.raw.n_times())?;
+    Ok(SavedSession {
+        bulbs: FourBulbParams::paper().bulbs,
+        trials,
+    })
 }
 
 /// The events with onsets in `start..end` (events are sorted by onset: a binary search, so
