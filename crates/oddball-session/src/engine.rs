@@ -670,6 +670,34 @@ impl<S: Subject> Session<S> {
         self.subject.position() as f64 / self.subject.sfreq()
     }
 
+    /// Passes over a recorded calibration of `n_trials` trials ending at sample `until` (a
+    /// replayed session recording, with a model set): its samples are filtered but no flash is
+    /// shown and nothing decided, and the flash orders are drawn as the calibration drew them,
+    /// so with the recording's seed every later flash falls where the recorded session's did.
+    pub fn pass_calibration(&mut self, n_trials: usize, until: u64) -> Result<(), SessionError> {
+        if n_trials % 4 != 0 {
+            return Err(SessionError::InvalidParameter {
+                name: "recorded calibration trials",
+                value: n_trials.to_string(),
+                reason: "a calibration has as many trials for each of the four bulbs".into(),
+            });
+        }
+        let mut intended: Vec<u32> = (1..=4)
+            .flat_map(|c| std::iter::repeat_n(c, n_trials / 4))
+            .collect();
+        intended.shuffle(&mut self.rng);
+        for _ in &intended {
+            self.params
+                .paradigm
+                .trial(&mut self.rng, self.params.paradigm.n_rounds);
+        }
+        while self.subject.position() < until {
+            let n = (until - self.subject.position()).min(self.params.chunk as u64);
+            self.advance(n as usize)?;
+        }
+        Ok(())
+    }
+
     /// Runs the calibration trials and trains the model.
     pub fn calibrate(&mut self) -> Result<CalibrationReport, SessionError> {
         let mut intended: Vec<u32> = (1..=4)

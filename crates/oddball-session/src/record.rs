@@ -273,6 +273,45 @@ fn read_session_xdf(
     })
 }
 
+/// The calibration a session recording begins with: what a replay with a model passes over
+/// ([`crate::engine::Session::pass_calibration`]) rather than playing it as commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CalibrationPart {
+    /// Calibration trials recorded.
+    pub n_trials: usize,
+    /// The sample where control starts (the first online trial's start, or the end of the
+    /// recording when it holds none).
+    pub end: u64,
+}
+
+/// The calibration part of a session recording (`.dat`, `.easy` or a live session's XDF);
+/// `None` for other recordings and sessions without calibration.
+pub fn calibration_part(rec: &Recording) -> Option<CalibrationPart> {
+    if !is_session(rec) {
+        return None;
+    }
+    let saved = read_session(rec).ok()?;
+    let end = saved
+        .trials
+        .iter()
+        .find(|t| t.phase == Phase::Online)
+        .map_or(rec.raw.n_times() as u64, |t| t.start);
+    let n_trials = match rec.xdf() {
+        // The XDF keeps online trial records only; its cues say which trials calibrated.
+        Some(x) => x
+            .markers
+            .iter()
+            .filter(|m| session_markers::parse_cue_marker(&m.text).is_some_and(|(_, cal)| cal))
+            .count(),
+        None => saved
+            .trials
+            .iter()
+            .filter(|t| t.phase == Phase::Calibration)
+            .count(),
+    };
+    (n_trials > 0).then_some(CalibrationPart { n_trials, end })
+}
+
 /// The events with onsets in `start..end` (events are sorted by onset: a binary search, so
 /// reading a session is linear in its trials and events).
 fn events_in(events: &[Event], start: u64, end: u64) -> &[Event] {

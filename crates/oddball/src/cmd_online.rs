@@ -157,6 +157,21 @@ fn run_with(
                 crate::args::model_line(&m, args.session.model.as_deref())
             );
             session.set_model(m).context("using --model")?;
+            // A replayed recording's calibration is passed over, not played as commands.
+            let recorded = match session.subject().source() {
+                AnySource::Playback(p) => p.calibration(),
+                _ => None,
+            };
+            if let Some(c) = recorded {
+                println!(
+                    "passing over the recording's calibration: {} trials, {:.1} s (filtered, nothing decided)",
+                    c.n_trials,
+                    c.end as f64 / session.sfreq()
+                );
+                session
+                    .pass_calibration(c.n_trials, c.end)
+                    .context("passing over the recorded calibration")?;
+            }
             if let Some(m) = session.model() {
                 oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
             }
