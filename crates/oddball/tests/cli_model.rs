@@ -1,0 +1,211 @@
+//! One model offline and live: a model `oddball train` fits from a session's recording decides
+//! in `demo`, `task` and `online` without calibration; a live recording carries its flashes'
+//! flags, so it inspects, trains and evaluates like any labelled file, and replayed with its own
+//! model it gives the live run's decisions exactly (its calibration passed over, not played).
+
+mod common;
+
+use std::path::Path;
+
+fn tmp(name: &str) -> oddball_testkit::TempDir {
+    common::tmp_dir(&format!("model-{name}"))
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json written");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}
+
+fn decisions(stdout: &str) -> Vec<&str> {
+    stdout
+        .lines()
+        .filter(|l| l.starts_with("decision "))
+        .collect()
+}
+
+#[test]
+fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration() {
+    let dir = tmp("offline");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let m = dir.join("m.json");
+    let (ok, _, err) = common::oddball(&["demo", "--out", a.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let (ok, out, err) = common::oddball(&[
+        "train",
+        a.join("session.dat").to_str().unwrap(),
+        "--pipeline",
+        "lda",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("decision models from 5-fold cross-validated scores"),
+        "{out}"
+    );
+    // The file carries the decision model and the causal fit a session runs.
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    assert_eq!(model["format_version"], 4);
+    assert!(model["decision"]["scores"]["std"].as_f64().unwrap() > 0.0);
+    assert_eq!(model["preprocess"]["causal"], false);
+    assert_eq!(model["live"]["preprocess"]["causal"], true);
+    assert!(model["live"]["decision"].is_object());
+
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--model",
+        m.to_str().unwrap(),
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("no calibration"), "{out}");
+    assert!(!out.contains("calibration: 10 decisions"), "{out}");
+    assert_eq!(decisions(&out).len(), 6, "{out}");
+    let s = summary(&b);
+    assert_eq!(s["calibration"]["trials"], 0, "{s}");
+    let right = s["result"]["correct"].as_u64().unwrap();
+    assert!(right >= 5, "{right}/6 right from the offline model: {out}");
+    // The model the session ran (its causal fit) re-decides the session's own recording.
+    let (ok, out, err) = common::oddball(&[
+        "evaluate",
+        "--model",
+        b.join("model.json").to_str().unwrap(),
+        "--test",
+        b.join("session.dat").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("6 online decisions: 6 identical to the recorded ones"),
+        "{out}"
+    );
+
+    // task takes it too.
+    let (ok, out, err) = common::oddball(&[
+        "task",
+        "track",
+        "--targets",
+        "1",
+        "--model",
+        m.to_str().unwrap(),
+        "--out",
+        dir.join("task").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("no calibration"), "{out}");
+
+    // A model saved before format 4 has no decision model: refused with what fixes it, before
+    // any EEG work.
+    let mut old = model.clone();
+    old["format_version"] = 3.into();
+    old.as_object_mut().unwrap().remove("decision");
+    old.as_object_mut().unwrap().remove("live");
+    let old_path = dir.join("old.json");
+    std::fs::write(&old_path, old.to_string()).unwrap();
+    for cmd in ["demo", "online"] {
+        let (ok, out, err) = common::oddball(&[
+            cmd,
+            "--model",
+            old_path.to_str().unwrap(),
+            "--out",
+            dir.join("old").to_str().unwrap(),
+        ]);
+        assert!(!ok, "{out}");
+        assert!(
+            err.contains("no decision model")
+                && err.contains("oddball train")
+                && err.contains("--calibrate"),
+            "{err}"
+        );
+        assert!(!out.contains("decision 1"), "{out}");
+    }
+}
+
+#[test]
+fn a_live_recording_evaluates_trains_and_replays_to_the_same_decisions() {
+    let dir = tmp("live");
+    let (live, again) = (dir.join("live"), dir.join("again"));
+    // A short live session (paced by the wall clock: ~55 s): 8 calibration trials, 3 commands.
+    let common_args = [
+        "--paradigm",
+        "fast",
+        "--seed",
+        "5",
+        "--commands",
+        "up,left,down",
+    ];
+    let mut args = vec![
+        "online",
+        "--calibrate",
+        "--calibration-per-bulb",
+        "2",
+        "--sim-latency-ms",
+        "20",
+        "--out",
+        live.to_str().unwrap(),
+    ];
+    args.extend(common_args);
+    let (ok, recorded, err) = common::oddball(&args);
+    assert!(ok, "{err}");
+    let recorded_decisions = decisions(&recorded);
+    assert_eq!(recorded_decisions.len(), 3, "{recorded}");
+    let xdf = live.join("session.xdf");
+    let model = live.join("model.json");
+
+    // The recording's flashes carry their flags: 8 calibration + 3 online trials of 5 rounds.
+    let (ok, out, err) = common::oddball(&["inspect", xdf.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("targets    55 target, 165 non-target"),
+        "{out}"
+    );
+    // It evaluates with its model: every online decision recomputed, the same.
+    let (ok, out, err) = common::oddball(&[
+        "evaluate",
+        "--test",
+        xdf.to_str().unwrap(),
+        "--model",
+        model.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("3 online decisions: 3 identical to the recorded ones"),
+        "{out}"
+    );
+    // It trains like any labelled file.
+    let (ok, _, err) = common::oddball(&[
+        "train",
+        xdf.to_str().unwrap(),
+        "-o",
+        dir.join("m.json").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+
+    // Replayed with its model, as fast as it goes: the calibration passed over, the same
+    // decisions (choice, posterior, rounds, time), every flash on a flash of the file.
+    let file = format!("replay:{}", xdf.display());
+    let mut args = vec![
+        "online",
+        "--model",
+        model.to_str().unwrap(),
+        "--source",
+        &file,
+        "--fast",
+        "--out",
+        again.to_str().unwrap(),
+    ];
+    args.extend(common_args);
+    let (ok, replayed, err) = common::oddball(&args);
+    assert!(ok, "{err}");
+    assert!(
+        replayed.contains("passing over the recording's calibration: 8 trials"),
+        "{replayed}"
+    );
+    assert_eq!(decisions(&replayed), recorded_decisions, "{replayed}");
+    assert!(
+        replayed
+            .contains("replay: 60 of 60 flashes of this session fall on a flash of the same bulb"),
+        "{replayed}"
+    );
+}
