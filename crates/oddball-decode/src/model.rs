@@ -206,12 +206,26 @@ impl Model {
 }
 
 /// Where each of `wanted` is among `present`, by name: `order[k]` is the index in `present` of
-/// `wanted[k]`. Every missing name is listed in the [`DecodeError::LayoutMismatch`].
+/// `wanted[k]`; the exact name, else the one name equal to it but for ASCII case (EEG labels
+/// are written both ways: `PO7`, `Po7`), as `Raw::channel_index` finds. Every missing name is
+/// listed in the [`DecodeError::LayoutMismatch`].
 pub fn match_channels(wanted: &[String], present: &[String]) -> Result<Vec<usize>> {
     let mut order = Vec::with_capacity(wanted.len());
     let mut missing = Vec::new();
+    let find = |w: &String| {
+        present.iter().position(|p| p == w).or_else(|| {
+            let mut same = present
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.eq_ignore_ascii_case(w));
+            match (same.next(), same.next()) {
+                (Some((i, _)), None) => Some(i),
+                _ => None,
+            }
+        })
+    };
     for w in wanted {
-        match present.iter().position(|p| p == w) {
+        match find(w) {
             Some(i) => order.push(i),
             None => missing.push(w.as_str()),
         }
