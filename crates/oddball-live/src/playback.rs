@@ -67,6 +67,29 @@ impl PlaybackSource {
         })
     }
 
+    /// The file resampled to `sfreq` Hz before it plays (polyphase, events moved with it:
+    /// [`oddball_signal::resample::resample_raw`]), so a model at another rate can replay it.
+    pub fn resampled(self, sfreq: f64) -> Result<Self, LiveError> {
+        let raw = oddball_signal::Raw::new(
+            self.data,
+            self.sfreq,
+            self.ch_names,
+            oddball_signal::Events::new(self.events),
+        )
+        .and_then(|raw| oddball_signal::resample::resample_raw(&raw, sfreq))
+        .map_err(oddball_session::SessionError::from)?;
+        let (data, sfreq, ch_names, events) = raw.into_parts();
+        // A recorded session's trial samples no longer hold at another rate.
+        Ok(Self {
+            data,
+            sfreq,
+            ch_names,
+            events: events.into_vec(),
+            calibration: None,
+            ..self
+        })
+    }
+
     /// As fast as it can (tests).
     pub fn unpaced(mut self) -> Self {
         self.paced = false;

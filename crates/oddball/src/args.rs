@@ -431,6 +431,13 @@ impl SessionOptions {
             if self.optimise_stopping {
                 bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
             }
+            if let SubjectSpec::Replay(file) = &self.subject {
+                bail!(
+                    "--subject replay:{} calibrates on the recording's calibration file, not --model; to replay a recording with a model: oddball online --source replay:{} --model MODEL --fast",
+                    file.display(),
+                    file.display()
+                );
+            }
         }
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");

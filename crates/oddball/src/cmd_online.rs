@@ -65,6 +65,8 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
     }
+    // The model read and checked before any EEG work.
+    let model = args.session.session_model(rule)?;
     let clock = Clock::new();
     let sim = args.session.simulated()?;
     let (source, markers) = args
@@ -84,7 +86,22 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         _ if markers.is_some() => println!("marker outlet: {}", args.source.markers),
         _ => {}
     }
-    run_with(args, source, markers, clock, rule, &args.commands)
+    // A file at another rate than the model's is resampled to it (polyphase).
+    let source = match (source, &model) {
+        (AnySource::Playback(p), Some(m)) if (p.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
+            println!(
+                "resampling the file from {} Hz to the model's {} Hz (polyphase)",
+                p.sfreq(),
+                m.sfreq
+            );
+            AnySource::Playback(
+                p.resampled(m.sfreq)
+                    .context("resampling the replayed file")?,
+            )
+        }
+        (s, _) => s,
+    };
+    run_with(args, source, markers, clock, (rule, model), &args.commands)
 }
 
 fn run_with(
@@ -92,13 +109,15 @@ fn run_with(
     source: AnySource,
     markers: Option<Box<dyn oddball_live::live::MarkerSink>>,
     clock: Clock,
-    rule: oddball_decode::decision::DecisionRule,
+    (rule, model): (
+        oddball_decode::decision::DecisionRule,
+        Option<oddball_decode::pipeline::Model>,
+    ),
     commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = args.session.paradigm();
     let arm = recording_arm()?;
-    let model = args.session.session_model(rule)?;
     let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
         &record_path,
