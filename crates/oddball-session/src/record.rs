@@ -461,12 +461,12 @@ pub fn reevaluate(
     Ok(out)
 }
 
-/// `.info` key naming the paradigm of a session `.easy`.
-const EASY_PARADIGM: &str = "Oddball paradigm";
+/// `.info` key naming the paradigm of a session `.easy` (the reader's, which labels its flashes).
+const EASY_PARADIGM: &str = oddball_io::easy::ODDBALL_PARADIGM_KEY;
 /// `.info` key of the bulbs' commands.
 const EASY_BULBS: &str = "Oddball bulb commands";
 /// Trigger offset of attended flashes in a session `.easy` (NIC triggers carry one number).
-pub const EASY_ATTENDED_OFFSET: u32 = 10;
+pub const EASY_ATTENDED_OFFSET: u32 = oddball_io::easy::ODDBALL_ATTENDED_OFFSET;
 
 /// Writes a session as NIC `.easy` + `.info`: samples in nV (the values a NIC stream
 /// delivers come back exactly), each flash's bulb code in the trigger column at its onset
@@ -578,12 +578,9 @@ fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
             .iter()
             .map(|e| SavedFlash {
                 onset: e.onset as u64,
-                code: if e.code > EASY_ATTENDED_OFFSET {
-                    e.code - EASY_ATTENDED_OFFSET
-                } else {
-                    e.code
-                },
-                attended: e.code > EASY_ATTENDED_OFFSET,
+                // The reader took the attended offset off and set the flag.
+                code: e.code,
+                attended: e.target == Some(true),
             })
             .collect();
         trials.push(SavedTrial {
