@@ -235,9 +235,11 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     let live = evaluate::train_with(
         &trained.params,
         &live_recs,
-        args.tune
-            .then_some(args.folds)
-            .unwrap_or(evaluate::DECISION_FOLDS),
+        if args.tune {
+            args.folds
+        } else {
+            evaluate::DECISION_FOLDS
+        },
         &mut |p| report.on(p),
     );
     report.finish();
