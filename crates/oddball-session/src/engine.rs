@@ -291,6 +291,8 @@ pub struct Session<S: Subject> {
     /// Rows of the subject's channels the epocher takes, in the model's order (a model set
     /// with other or reordered channels, see [`Session::set_model`]); `None`: all, as they are.
     pick: Option<Vec<usize>>,
+    /// The channels' names: the subject's, or a montage's ([`Session::name_channels`]).
+    ch_names: Vec<String>,
 }
 
 /// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
@@ -369,6 +371,7 @@ impl<S: Subject> Session<S> {
             subject.sfreq(),
             subject.ch_names().len(),
         )?;
+        let ch_names = subject.ch_names().to_vec();
         Ok(Self {
             rng: ChaCha8Rng::seed_from_u64(params.seed),
             raw: vec![Vec::new(); subject.ch_names().len()],
@@ -386,6 +389,7 @@ impl<S: Subject> Session<S> {
             adaptation: None,
             stopping: None,
             pick: None,
+            ch_names,
         })
     }
 
@@ -423,7 +427,7 @@ impl<S: Subject> Session<S> {
         params: UncalibratedParams,
         model: Model,
     ) -> Result<(), SessionError> {
-        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        model.check_layout(&self.ch_names, self.subject.sfreq())?;
         if model.preprocess != self.params.preprocess {
             return Err(SessionError::InvalidParameter {
                 name: "transfer model preprocess",
@@ -557,6 +561,33 @@ impl<S: Subject> Session<S> {
         self.model.as_ref()
     }
 
+    /// Names the subject's channels in order (a montage: the stream's own names are not the
+    /// model's), before the session's first sample: models are matched to these names,
+    /// calibration fits and the session's log carry them.
+    pub fn name_channels(&mut self, names: Vec<String>) -> Result<(), SessionError> {
+        let taken = self.raw.first().map_or(0, Vec::len);
+        if taken > 0 {
+            return Err(SessionError::TooLate {
+                what: "a montage",
+                n_times: taken,
+            });
+        }
+        if names.len() != self.ch_names.len() {
+            return Err(SessionError::InvalidParameter {
+                name: "montage",
+                value: format!("{} names", names.len()),
+                reason: format!(
+                    "the EEG has {} channels ({:?})",
+                    self.ch_names.len(),
+                    self.ch_names
+                ),
+            });
+        }
+        oddball_signal::check_unique_names(&names)?;
+        self.ch_names = names;
+        Ok(())
+    }
+
     /// Uses a model trained elsewhere, before the session's first sample: a session's, or one
     /// `oddball train` fitted offline (it must carry a decision model, as format 4 on does).
     /// Its channels are matched by name (the subject may have more, in any order: the session
@@ -570,15 +601,35 @@ impl<S: Subject> Session<S> {
                 pipeline: model.pipeline.name().to_string(),
             });
         }
-        let order = model.channel_order(self.subject.ch_names(), self.subject.sfreq())?;
+        let sfreq = self.subject.sfreq();
+        if (sfreq - model.sfreq).abs() > 1e-9 * model.sfreq {
+            return Err(SessionError::ModelRate {
+                model_sfreq: model.sfreq,
+                stream_sfreq: sfreq,
+            });
+        }
+        let order = model.channel_order(&self.ch_names, sfreq).map_err(|_| {
+            SessionError::ModelChannels {
+                missing: model
+                    .ch_names
+                    .iter()
+                    .filter(|w| !self.ch_names.iter().any(|h| h.eq_ignore_ascii_case(w)))
+                    .cloned()
+                    .collect(),
+                have: self.ch_names.clone(),
+            }
+        })?;
         let taken = self.raw.first().map_or(0, Vec::len);
         if taken > 0 {
-            return Err(SessionError::ModelTooLate { n_times: taken });
+            return Err(SessionError::TooLate {
+                what: "a model",
+                n_times: taken,
+            });
         }
         self.epocher = OnlineEpocher::new(&model.preprocess, self.subject.sfreq(), order.len())?;
         self.params.preprocess = model.preprocess;
-        let identity = order.len() == self.subject.ch_names().len()
-            && order.iter().enumerate().all(|(i, &o)| i == o);
+        let identity =
+            order.len() == self.ch_names.len() && order.iter().enumerate().all(|(i, &o)| i == o);
         self.pick = (!identity).then_some(order);
         self.model = Some(model);
         Ok(())
@@ -595,7 +646,7 @@ impl<S: Subject> Session<S> {
 
     /// Channels that cost epochs, as text (`P3: 12 flat`), or `None` when all were clean.
     pub fn channel_report(&self) -> Option<String> {
-        let names = self.subject.ch_names();
+        let names = &self.ch_names;
         let parts: Vec<String> = self
             .channel_faults()
             .iter()
@@ -655,7 +706,7 @@ impl<S: Subject> Session<S> {
             x,
             self.subject.sfreq(),
             self.params.preprocess.tmin,
-            self.subject.ch_names().to_vec(),
+            self.ch_names.clone(),
             events,
         )?)
     }
@@ -730,7 +781,7 @@ impl<S: Subject> Session<S> {
             self.params.rule,
             self.params.cv_folds,
             sfreq,
-            self.subject.ch_names(),
+            &self.ch_names,
             &x,
             y,
             &groups,
@@ -800,7 +851,7 @@ impl<S: Subject> Session<S> {
         (
             SessionLog {
                 sfreq: self.subject.sfreq(),
-                ch_names: self.subject.ch_names().to_vec(),
+                ch_names: self.ch_names,
                 raw,
                 flashes: self.flashes,
                 trials: self.trials,

@@ -16,11 +16,22 @@ pub enum SessionError {
     /// A model without the decision model a session decides with.
     #[error("model {pipeline}: {}", oddball_decode::model::NO_DECISION_MODEL)]
     NoDecisionModel { pipeline: String },
-    /// A model given after the session already took samples (its filter would start late).
+    /// A model at another rate than the live stream's (files are resampled to a model's rate;
+    /// a live stream is not).
+    #[error("the EEG stream runs at {stream_sfreq} Hz and the model at {model_sfreq} Hz: a live stream is not resampled (recordings are: `oddball evaluate`, `oddball online --source replay:FILE`); train a model on a recording at {stream_sfreq} Hz")]
+    ModelRate { model_sfreq: f64, stream_sfreq: f64 },
+    /// The EEG lacks channels the model needs (matched by name, case aside).
+    #[error("the EEG has no channel named {missing:?} that the model needs (its channels: {have:?}): name its channels in order with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc)")]
+    ModelChannels {
+        missing: Vec<String>,
+        have: Vec<String>,
+    },
+    /// A model or montage given after the session already took samples (its filter would
+    /// start late, its names change midway).
     #[error(
-        "a model is set before the session's first sample; {n_times} samples were already taken"
+        "{what} is set before the session's first sample; {n_times} samples were already taken"
     )]
-    ModelTooLate { n_times: usize },
+    TooLate { what: &'static str, n_times: usize },
     #[error(
         "{path} is not a P300-speller recording (no TargetDefinitions): it cannot be replayed"
     )]

@@ -140,6 +140,11 @@ pub struct SessionOptions {
     /// a model trained offline runs its band-pass causally.
     #[arg(long, value_name = "FILE")]
     pub model: Option<PathBuf>,
+    /// Names the EEG's channels in order (an EEGLAB .loc montage, e.g. BCI2000's eeg64.loc), for
+    /// a stream or replayed file whose own names are not the model's; the session's recording
+    /// and model carry these names.
+    #[arg(long, value_name = "FILE")]
+    pub montage: Option<PathBuf>,
     /// After the labelled calibration (`lda` pipeline), adapt the model online: after each
     /// decision its class means take in the decision's epochs, labelled by the decision, through
     /// incremental statistics; decisions with a posterior below 0.9 are left out, and an update
@@ -337,6 +342,7 @@ impl SessionOptions {
         let pen_start = arm.pen();
         let mut session = Session::new(self.params(rule), subject, Some(arm))
             .context("setting up the session")?;
+        self.name_channels(&mut session)?;
         if self.calibration == CalibrationSpec::None {
             let params = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;
@@ -415,6 +421,17 @@ impl SessionOptions {
             ),
         }
         Ok(Some(model))
+    }
+
+    /// Names the session's channels from `--montage`, if given.
+    pub fn name_channels<S: Subject>(&self, session: &mut Session<S>) -> Result<()> {
+        if let Some(path) = &self.montage {
+            let names = oddball_io::montage::read_montage(path)?;
+            session.name_channels(names).with_context(|| {
+                format!("naming the channels with --montage {}", path.display())
+            })?;
+        }
+        Ok(())
     }
 
     /// Checks option combinations before any session starts.

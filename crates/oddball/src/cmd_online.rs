@@ -166,6 +166,7 @@ fn run_with(
     subject.source_mut().start_now();
     let mut session = Session::new(args.session.params(rule), subject, Some(arm))
         .context("setting up the session")?;
+    args.session.name_channels(&mut session)?;
     // A stop request or a source that ends during calibration still closes the recording and
     // writes the summary (with no decisions).
     let mut ended = None;

@@ -209,3 +209,95 @@ fn a_live_recording_evaluates_trains_and_replays_to_the_same_decisions() {
         "{replayed}"
     );
 }
+
+#[test]
+fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
+    let dir = tmp("channels");
+    let a = dir.join("a");
+    let (ok, _, err) = common::oddball(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let session = a.join("session.dat");
+    // A model of 4 of the 8 channels, in another order: the session epochs just those.
+    let m4 = dir.join("m4.json");
+    let (ok, _, err) = common::oddball(&[
+        "train",
+        session.to_str().unwrap(),
+        "--channels",
+        "Pz,Cz,Oz,PO8",
+        "-o",
+        m4.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let b = dir.join("b");
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--model",
+        m4.to_str().unwrap(),
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("4 channels at 500 Hz"), "{out}");
+    assert!(
+        summary(&b)["result"]["correct"].as_u64().unwrap() >= 5,
+        "{out}"
+    );
+    let (ok, out, err) = common::oddball(&[
+        "evaluate",
+        "--model",
+        b.join("model.json").to_str().unwrap(),
+        "--test",
+        b.join("session.dat").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("6 online decisions: 6 identical to the recorded ones"),
+        "{out}"
+    );
+
+    // A montage renames every channel: a model trained under those names needs them in the
+    // session too, and says so when they are missing.
+    let loc = dir.join("a8.loc");
+    let text: String = (1..=8).map(|i| format!("{i}\t0\t0.1\tA{i}..\n")).collect();
+    std::fs::write(&loc, text).unwrap();
+    let m8 = dir.join("m8.json");
+    let (ok, _, err) = common::oddball(&[
+        "train",
+        session.to_str().unwrap(),
+        "--montage",
+        loc.to_str().unwrap(),
+        "-o",
+        m8.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let c = dir.join("c");
+    let (ok, _, err) = common::oddball(&[
+        "demo",
+        "--model",
+        m8.to_str().unwrap(),
+        "--out",
+        c.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("no channel named [\"A1\"") && err.contains("--montage"),
+        "{err}"
+    );
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--model",
+        m8.to_str().unwrap(),
+        "--montage",
+        loc.to_str().unwrap(),
+        "--out",
+        c.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        summary(&c)["result"]["correct"].as_u64().unwrap() >= 5,
+        "{out}"
+    );
+    let (ok, out, err) = common::oddball(&["inspect", c.join("session.dat").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(out.contains("channels   8: A1 A2 A3"), "{out}");
+}
