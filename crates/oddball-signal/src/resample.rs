@@ -123,27 +123,47 @@ struct Plan {
     n_out: usize,
 }
 
+/// scipy's filter for `up / down`, zero-padded in front so output samples fall on the
+/// filter's centre, and the outputs of `upfirdn` dropped before the first kept one.
+fn design(up: usize, down: usize) -> (Vec<f64>, usize) {
+    let max_rate = up.max(down);
+    let half_len = 10 * max_rate;
+    let n_pre_pad = down - half_len % down;
+    let mut h = vec![0.0; n_pre_pad];
+    h.extend(
+        firwin_kaiser(2 * half_len + 1, 1.0 / max_rate as f64, 5.0)
+            .into_iter()
+            .map(|v| v * up as f64),
+    );
+    (h, (half_len + n_pre_pad) / down)
+}
+
+/// Output sample `k` of `upfirdn(h, x, up, down)` after `pre_remove`, from the input samples
+/// `x[j]` for `j` in `first..first + x.len()` (those the output needs must be there).
+fn output_at(h: &[f64], up: usize, down: usize, t: usize, x: &[f64], first: usize) -> f64 {
+    let last = first + x.len() - 1;
+    let j_max = (t / up).min(last);
+    let j_min = (t + 1).saturating_sub(h.len()).div_ceil(up).max(first);
+    let mut acc = 0.0;
+    let mut j = j_max as isize;
+    while j >= j_min as isize {
+        let ju = j as usize;
+        acc += h[t - ju * up] * x[ju - first];
+        j -= 1;
+    }
+    acc
+}
+
 impl Plan {
     fn new(n_in: usize, up: u64, down: u64) -> Self {
         let (up, down) = (up as usize, down as usize);
         let n_out = (n_in * up).div_ceil(down);
-        let max_rate = up.max(down);
-        let half_len = 10 * max_rate;
-        let mut h = firwin_kaiser(2 * half_len + 1, 1.0 / max_rate as f64, 5.0);
-        for v in &mut h {
-            *v *= up as f64;
+        let (mut h, pre_remove) = design(up, down);
+        while upfirdn_len(h.len(), n_in, up, down) < n_out + pre_remove {
+            h.push(0.0);
         }
-        let n_pre_pad = down - half_len % down;
-        let pre_remove = (half_len + n_pre_pad) / down;
-        let mut n_post_pad = 0;
-        while upfirdn_len(h.len() + n_pre_pad + n_post_pad, n_in, up, down) < n_out + pre_remove {
-            n_post_pad += 1;
-        }
-        let mut padded = vec![0.0; n_pre_pad];
-        padded.extend(h);
-        padded.extend(std::iter::repeat_n(0.0, n_post_pad));
         Self {
-            h: padded,
+            h,
             up,
             down,
             pre_remove,
@@ -154,20 +174,9 @@ impl Plan {
     /// Output samples `pre_remove .. pre_remove + n_out` of `upfirdn(h, x, up, down)`: sample
     /// `k` is `Σ_j h[k·down − j·up] · x[j]` over the `j` whose tap exists.
     fn apply(&self, x: &[f64], out: &mut [f64]) {
-        let (up, down, h) = (self.up, self.down, &self.h);
         for (o, y) in out.iter_mut().enumerate() {
-            let t = (o + self.pre_remove) * down;
-            // j·up ≤ t and t − j·up < len(h)
-            let j_max = (t / up).min(x.len() - 1);
-            let j_min = (t + 1).saturating_sub(h.len()).div_ceil(up);
-            let mut acc = 0.0;
-            let mut j = j_max as isize;
-            while j >= j_min as isize {
-                let ju = j as usize;
-                acc += h[t - ju * up] * x[ju];
-                j -= 1;
-            }
-            *y = acc;
+            let t = (o + self.pre_remove) * self.down;
+            *y = output_at(&self.h, self.up, self.down, t, x, 0);
         }
     }
 }
@@ -212,6 +221,93 @@ pub fn resample_poly(
     Ok(y)
 }
 
+/// [`resample_poly`] on a stream, chunk by chunk: output sample `k` is the offline one
+/// (zero padding before the first sample, [`Pad::Constant`]) as soon as the input it needs has
+/// arrived, about `10·max(up, down) / up` input samples after its own time (the filter's
+/// half-length); only the end of a recording, which offline pads with zeros, differs. What a
+/// live stream at another rate than a model's goes through.
+#[derive(Debug, Clone)]
+pub struct StreamResampler {
+    h: Vec<f64>,
+    up: usize,
+    down: usize,
+    pre_remove: usize,
+    /// Input samples kept, per channel, from absolute input sample `first`.
+    buf: Vec<Vec<f64>>,
+    first: usize,
+    received: usize,
+    produced: usize,
+}
+
+impl StreamResampler {
+    /// A resampler of `n_channels` by `up / down` (reduced; each at most [`MAX_FACTOR`]).
+    pub fn new(n_channels: usize, up: u64, down: u64) -> Result<Self, SignalError> {
+        if up == 0 || down == 0 || up.max(down) > MAX_FACTOR {
+            return Err(SignalError::ResampleFactors { up, down });
+        }
+        let g = gcd(up, down);
+        let (up, down) = ((up / g) as usize, (down / g) as usize);
+        let (h, pre_remove) = design(up, down);
+        Ok(Self {
+            h,
+            up,
+            down,
+            pre_remove,
+            buf: vec![Vec::new(); n_channels],
+            first: 0,
+            received: 0,
+            produced: 0,
+        })
+    }
+
+    /// Input samples needed in all before `n` more output samples can be taken.
+    pub fn input_needed(&self, n: usize) -> usize {
+        if n == 0 {
+            return self.received;
+        }
+        (self.produced + n - 1 + self.pre_remove) * self.down / self.up + 1
+    }
+
+    /// Output samples that can be taken now.
+    pub fn available(&self) -> usize {
+        (self.received * self.up)
+            .div_ceil(self.down)
+            .saturating_sub(self.pre_remove + self.produced)
+    }
+
+    /// Takes in input samples `(n_channels, n)`.
+    pub fn push(&mut self, x: ArrayView2<f64>) {
+        for (b, row) in self.buf.iter_mut().zip(x.axis_iter(Axis(0))) {
+            b.extend(row.iter());
+        }
+        self.received += x.ncols();
+    }
+
+    /// The next `n` output samples `(n_channels, n)`; at most [`Self::available`].
+    pub fn take(&mut self, n: usize) -> Array2<f64> {
+        let n = n.min(self.available());
+        let mut y = Array2::zeros((self.buf.len(), n));
+        for (b, mut yr) in self.buf.iter().zip(y.axis_iter_mut(Axis(0))) {
+            for (o, v) in yr.iter_mut().enumerate() {
+                let t = (self.produced + o + self.pre_remove) * self.down;
+                *v = output_at(&self.h, self.up, self.down, t, b, self.first);
+            }
+        }
+        self.produced += n;
+        // Inputs no later output reaches are dropped.
+        let t = (self.produced + self.pre_remove) * self.down;
+        let keep_from = (t + 1).saturating_sub(self.h.len()).div_ceil(self.up);
+        if keep_from > self.first {
+            let d = (keep_from - self.first).min(self.received - self.first);
+            for b in &mut self.buf {
+                b.drain(..d);
+            }
+            self.first += d;
+        }
+        y
+    }
+}
+
 /// A recording at `sfreq` Hz: every channel resampled ([`resample_poly`], each channel's mean as
 /// padding), each event moved to `round(onset · up / down)` (MNE's rule for events), kept
 /// when inside the resampled recording.
@@ -250,6 +346,42 @@ mod tests {
         let y = resample_poly(x.view(), 8, 5, Pad::Mean).unwrap();
         assert_eq!(y.ncols(), (101usize * 8).div_ceil(5));
         assert!(y.iter().all(|v| (v - 40.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn a_stream_in_chunks_gives_the_offline_samples() {
+        let n = 400;
+        let x = Array2::from_shape_fn((2, n), |(c, t)| {
+            let t = t as f64;
+            (0.37 * t + c as f64).sin() * 20.0 + (0.05 * t).cos() * 5.0 + 3.0 * c as f64
+        });
+        for (up, down) in [(8u64, 5u64), (64, 125), (5, 8), (1, 2)] {
+            let offline = resample_poly(x.view(), up, down, Pad::Constant).unwrap();
+            let mut r = StreamResampler::new(2, up, down).unwrap();
+            let mut got: Vec<Array2<f64>> = Vec::new();
+            let mut at = 0;
+            for (k, chunk) in [1usize, 7, 20, 3, 50, 13].iter().cycle().enumerate() {
+                if at >= n {
+                    break;
+                }
+                let c = (*chunk).min(n - at);
+                r.push(x.slice(ndarray::s![.., at..at + c]));
+                at += c;
+                let want = if k % 2 == 0 { r.available() } else { r.available() / 2 };
+                got.push(r.take(want));
+            }
+            got.push(r.take(usize::MAX));
+            let views: Vec<_> = got.iter().map(|a| a.view()).collect();
+            let y = ndarray::concatenate(Axis(1), &views).unwrap();
+            // All but the tail (which offline pads with zeros past the end) are there and equal.
+            assert!(y.ncols() + 12 * (up.max(down) / up + 1) as usize >= offline.ncols());
+            assert!(y.ncols() <= offline.ncols());
+            let err = (&y - &offline.slice(ndarray::s![.., ..y.ncols()]))
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(err < 1e-12, "{up}/{down}: {err:e}");
+            assert!(r.input_needed(1) > n);
+        }
     }
 
     #[test]
