@@ -140,7 +140,7 @@ fn design(up: usize, down: usize) -> (Vec<f64>, usize) {
 
 /// Output sample `k` of `upfirdn(h, x, up, down)` after `pre_remove`, from the input samples
 /// `x[j]` for `j` in `first..first + x.len()` (those the output needs must be there).
-fn output_at(h: &[f64], up: usize, down: usize, t: usize, x: &[f64], first: usize) -> f64 {
+fn output_at(h: &[f64], up: usize, t: usize, x: &[f64], first: usize) -> f64 {
     let last = first + x.len() - 1;
     let j_max = (t / up).min(last);
     let j_min = (t + 1).saturating_sub(h.len()).div_ceil(up).max(first);
@@ -176,7 +176,7 @@ impl Plan {
     fn apply(&self, x: &[f64], out: &mut [f64]) {
         for (o, y) in out.iter_mut().enumerate() {
             let t = (o + self.pre_remove) * self.down;
-            *y = output_at(&self.h, self.up, self.down, t, x, 0);
+            *y = output_at(&self.h, self.up, t, x, 0);
         }
     }
 }
@@ -290,7 +290,7 @@ impl StreamResampler {
         for (b, mut yr) in self.buf.iter().zip(y.axis_iter_mut(Axis(0))) {
             for (o, v) in yr.iter_mut().enumerate() {
                 let t = (self.produced + o + self.pre_remove) * self.down;
-                *v = output_at(&self.h, self.up, self.down, t, b, self.first);
+                *v = output_at(&self.h, self.up, t, b, self.first);
             }
         }
         self.produced += n;
@@ -367,7 +367,11 @@ mod tests {
                 let c = (*chunk).min(n - at);
                 r.push(x.slice(ndarray::s![.., at..at + c]));
                 at += c;
-                let want = if k % 2 == 0 { r.available() } else { r.available() / 2 };
+                let want = if k % 2 == 0 {
+                    r.available()
+                } else {
+                    r.available() / 2
+                };
                 got.push(r.take(want));
             }
             got.push(r.take(usize::MAX));

@@ -99,6 +99,15 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
                     .context("resampling the replayed file")?,
             )
         }
+        // A live stream is resampled as it streams.
+        (s, Some(m)) if (s.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
+            println!(
+                "resampling the stream from {} Hz to the model's {} Hz as it streams (polyphase)",
+                s.sfreq(),
+                m.sfreq
+            );
+            s.resampled(m.sfreq).context("resampling the stream")?
+        }
         (s, _) => s,
     };
     run_with(args, source, markers, clock, (rule, model), &args.commands)

@@ -42,6 +42,11 @@ pub struct EventArgs {
     /// those names.
     #[arg(long, value_name = "FILE")]
     pub montage: Option<PathBuf>,
+    /// Resample every file to this rate (Hz, polyphase as MNE's resample) before anything else
+    /// (e.g. to train a model at an amplifier's rate); files are otherwise resampled only to
+    /// meet a model's or the first training file's rate.
+    #[arg(long, value_name = "HZ")]
+    pub resample: Option<f64>,
     /// CSV: the time column (seconds).
     #[arg(long, value_name = "COLUMN")]
     pub time_column: Option<String>,
@@ -222,6 +227,14 @@ pub fn load_epochs_in(
                 read: Some(&read),
             };
             let mut rec = dataset::read_labelled(p, how)?;
+            if let Some(f) = events.resample {
+                if (rec.raw.sfreq() - f).abs() > 1e-9 * f {
+                    rec.raw =
+                        oddball_signal::resample::resample_raw(&rec.raw, f).with_context(|| {
+                            format!("resampling {} to --resample {f} Hz", p.display())
+                        })?;
+                }
+            }
             rec = match &layout {
                 Some(l) => l.fit(rec)?,
                 None => {

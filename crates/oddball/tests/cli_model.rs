@@ -301,3 +301,55 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
     assert!(ok, "{err}");
     assert!(out.contains("channels   8: A1 A2 A3"), "{out}");
 }
+
+#[test]
+fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
+    let dir = tmp("rate");
+    let a = dir.join("a");
+    let (ok, _, err) = common::oddball(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    // A model at 256 Hz from the 500 Hz session (resampled offline, polyphase).
+    let m = dir.join("m256.json");
+    let (ok, _, err) = common::oddball(&[
+        "train",
+        a.join("session.dat").to_str().unwrap(),
+        "--resample",
+        "256",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let b = dir.join("b");
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--model",
+        m.to_str().unwrap(),
+        "--out",
+        b.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("resampling the EEG from 500 Hz to the model's 256 Hz as it streams"),
+        "{out}"
+    );
+    assert!(
+        summary(&b)["result"]["correct"].as_u64().unwrap() >= 5,
+        "{out}"
+    );
+    // The session ran, and recorded, at the model's rate: its recording re-decides the same.
+    let (ok, out, err) = common::oddball(&["inspect", b.join("session.dat").to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(out.contains("sfreq      256 Hz"), "{out}");
+    let (ok, out, err) = common::oddball(&[
+        "evaluate",
+        "--model",
+        b.join("model.json").to_str().unwrap(),
+        "--test",
+        b.join("session.dat").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("6 online decisions: 6 identical to the recorded ones"),
+        "{out}"
+    );
+}
