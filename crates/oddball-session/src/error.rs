@@ -16,9 +16,9 @@ pub enum SessionError {
     /// A model without the decision model a session decides with.
     #[error("model {pipeline}: {}", oddball_decode::model::NO_DECISION_MODEL)]
     NoDecisionModel { pipeline: String },
-    /// A model at another rate than the live stream's (files are resampled to a model's rate;
-    /// a live stream is not).
-    #[error("the EEG stream runs at {stream_sfreq} Hz and the model at {model_sfreq} Hz: a live stream is not resampled (recordings are: `oddball evaluate`, `oddball online --source replay:FILE`); train a model on a recording at {stream_sfreq} Hz")]
+    /// A model at another rate than the EEG the session receives (the command line resamples
+    /// a stream to its model's rate first: `oddball_live::source::AnySource::resampled`).
+    #[error("the EEG arrives at {stream_sfreq} Hz and the model runs at {model_sfreq} Hz: resample the EEG to the model's rate before the session")]
     ModelRate { model_sfreq: f64, stream_sfreq: f64 },
     /// The EEG lacks channels the model needs (matched by name, case aside).
     #[error("the EEG has no channel named {missing:?} that the model needs (its channels: {have:?}): name its channels in order with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc)")]
