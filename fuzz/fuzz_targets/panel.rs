@@ -16,6 +16,10 @@ fuzz_target!(|data: &[u8]| {
                 }
                 ClientMsg::Off { off_ms, .. } => assert!(off_ms.is_finite()),
                 ClientMsg::Hello { frame_ms, .. } => assert!(frame_ms.is_finite()),
+                ClientMsg::Clock { offset_ms, rtt_ms } => {
+                    assert!(offset_ms.is_finite() && rtt_ms.is_finite() && rtt_ms >= 0.0)
+                }
+                ClientMsg::Control { .. } => {}
             }
         }
     }

@@ -1,5 +1,7 @@
 // Drives the oddball panel in headless Chromium: it must load, count down, flash with on-times
-// of 100 ms within one frame, show the decisions and move the arm. Saves a screenshot.
+// of 100 ms within one frame, show the decisions and move the arm. Saves a screenshot, and one
+// of the operator view (SCREENSHOT-operator.png), which must list the decisions with their
+// confidence.
 //
 //   node panel.mjs URL SCREENSHOT.png N_DECISIONS
 //
@@ -25,7 +27,8 @@ try {
   await page.goto(url);
   // The countdown shows a digit before the first flash.
   await page.waitForFunction(() => /^[1-5]$/.test(document.getElementById("count").textContent), null, { timeout: 30000 });
-  // A rogue second client: malformed, oversized and binary messages, then it just goes away.
+  // A rogue second client: malformed, oversized and binary messages and an abort on the
+  // subject's socket, then it just goes away.
   // The server must refuse them and carry on with the real page.
   await page.waitForFunction(() => window.oddballDiag.flashes >= 2, null, { timeout: 30000 });
   await page.evaluate(() => new Promise((done) => {
@@ -35,14 +38,24 @@ try {
       ws.send(JSON.stringify({ t: "hello", frame_ms: 16, agent: "x".repeat(4000) }));
       ws.send(new Uint8Array([1, 2, 3]));
       ws.send(JSON.stringify({ t: "on", id: 1, code: 99, on_ms: 0 }));
+      // Only the operator view may abort: on the subject's socket this is refused.
+      ws.send(JSON.stringify({ t: "control", action: "abort" }));
       setTimeout(() => { ws.close(); done(); }, 200);
     };
     ws.onerror = () => done();
   }));
+  const operator = await browser.newPage({ viewport: { width: 1280, height: 800 } });
+  operator.on("pageerror", (e) => failures.push(`operator page error: ${e.message}`));
+  await operator.goto(url.replace(/\/?$/, "/") + "operator");
   await page.waitForFunction((n) => window.oddballDiag.decisions.length >= n, want, { timeout: 60000 * want, polling: 200 });
   // Let the arm move after the last decision.
   await page.waitForTimeout(1500);
   await page.screenshot({ path: shot });
+  await operator.waitForFunction((n) => window.oddballOperator.decisions >= n, want, { timeout: 10000 });
+  await operator.screenshot({ path: shot.replace(/\.png$/, "-operator.png"), fullPage: true });
+  const rows = await operator.evaluate(() => [...document.querySelectorAll("#decisions tr")].map((tr) => [...tr.cells].map((c) => c.textContent)));
+  const confidences = rows.map((r) => Number(r[3]));
+  if (rows.length !== want || !confidences.every((p) => p >= 0 && p <= 1)) failures.push(`operator decisions: ${JSON.stringify(rows)}`);
   const d = await page.evaluate(() => window.oddballDiag);
   const frame = d.frameMs;
   const on = d.onTimes;
@@ -55,6 +68,7 @@ try {
     onset_error_ms_min: Math.min(...err), onset_error_ms_max: Math.max(...err),
     clock_rtt_ms: d.rtt, arm_moves: d.armMoves, cancelled: d.cancelled,
     targets: d.targets, plan_points: d.planPoints, ended: d.ended, late_flashes: d.lateFlashes,
+    operator_decisions: rows,
   };
   console.log(JSON.stringify(out));
   if (d.countdowns < want) failures.push(`only ${d.countdowns} countdowns`);

@@ -33,7 +33,7 @@ pub enum DecodeError {
     TooFewSamples { what: String },
     #[error("model file: {reason}")]
     ModelFormat { reason: String },
-    #[error("model format version {found:?} cannot be read by this oddball (it reads versions 1 to {expected})")]
+    #[error("model format version {} cannot be read by this oddball (it reads versions 1 to {expected}; a newer oddball wrote it?)", match .found { Some(v) => v.to_string(), None => "(none given)".to_string() })]
     ModelVersion { found: Option<u32>, expected: u32 },
     #[error("recording layout differs from the model's: the model expects {expected}, the data has {got}")]
     LayoutMismatch { expected: String, got: String },

@@ -17,8 +17,9 @@ use serde::Serialize;
 
 use crate::decision::{DecisionModel, DecisionRule, ScoreModelParams};
 use crate::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash};
+use crate::pipeline::FrontCache;
 use crate::pipeline::{Pipeline, PipelineParams};
-use crate::tuning::{cv_folds, preset_grid, tune, Folds, TuningReport};
+use crate::tuning::{cv_folds, preset_grid, tune, tune_cached, Folds, TuningReport};
 use crate::DecodeError;
 
 /// Why an evaluation could not run.
@@ -372,6 +373,10 @@ pub fn evaluate(
         cross_validation: outer.as_ref(),
     });
     let mut results = Vec::new();
+    // One home for the training epochs' features of fronts that learn nothing: every preset,
+    // fold and grid point with such a front shares them.
+    let mut cache = FrontCache::new(train_epochs.data().view());
+    let all: Vec<usize> = (0..ytr.len()).collect();
     for name in &params.presets {
         on(Progress::Preset(name));
         let r = match &outer {
@@ -382,14 +387,16 @@ pub fn evaluate(
                 groups.as_deref(),
                 folds,
                 params.tune.then_some(params.folds),
+                &mut cache,
                 on,
             )?,
             None => {
                 let (p, tuning) = if params.tune {
                     let grid = preset_grid(name, train_epochs.sfreq())?;
-                    let (p, report) = tune(
+                    let (p, report) = tune_cached(
                         &grid,
-                        train_epochs.data().view(),
+                        &mut cache,
+                        &all,
                         &ytr,
                         groups.as_deref(),
                         params.folds,
@@ -633,6 +640,11 @@ pub fn reps_from_which_all_correct(acc: &[f64]) -> Option<usize> {
 /// k-fold cross-validation of `name` on `data` with `folds` (speller characters kept whole, or
 /// stratified by label). With `tune_folds`, the grid search runs inside each fold's training
 /// part with that many inner folds.
+///
+/// `cache` holds `data`'s features for fronts that learn nothing: shared across folds, grid
+/// points and presets, it spares recomputing them (the paper's EMD features above all) without
+/// changing a score.
+#[allow(clippy::too_many_arguments)] // the data, its labels and groups, the folds, the cache, progress
 pub fn cross_validate(
     name: &str,
     data: &Epochs,
@@ -640,8 +652,16 @@ pub fn cross_validate(
     groups: Option<&[usize]>,
     folds: &Folds,
     tune_folds: Option<usize>,
+    cache: &mut FrontCache<'_>,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<PipelineResult> {
+    if cache.epochs().dim() != data.data().dim() {
+        return Err(EvaluateError::Decode(DecodeError::InvalidParameter {
+            name: "cache",
+            value: format!("{:?}", cache.epochs().dim()),
+            reason: format!("a cache over other epochs than {:?}", data.data().dim()),
+        }));
+    }
     let mut aucs = Vec::new();
     let mut fit_s = 0.0;
     let mut score_s = 0.0;
@@ -651,24 +671,19 @@ pub fn cross_validate(
         let (tr, te) = folds.split(f);
         let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
         let yte: Vec<bool> = te.iter().map(|&i| y[i]).collect();
-        let train = data.select(&tr);
         let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
         let params = match tune_folds {
             Some(k) => {
                 let grid = preset_grid(name, data.sfreq())?;
-                let (params, report) = tune(
-                    &grid,
-                    train.data().view(),
-                    &ytr,
-                    gtr.as_deref(),
-                    k,
-                    &mut || on(Progress::Fit),
-                )
-                .map_err(|source| EvaluateError::Tuning {
-                    preset: name.to_string(),
-                    fold: Some(f + 1),
-                    source,
-                })?;
+                let (params, report) =
+                    tune_cached(&grid, cache, &tr, &ytr, gtr.as_deref(), k, &mut || {
+                        on(Progress::Fit)
+                    })
+                    .map_err(|source| EvaluateError::Tuning {
+                        preset: name.to_string(),
+                        fold: Some(f + 1),
+                        source,
+                    })?;
                 on(Progress::Tuned {
                     preset: name,
                     fold: Some((f + 1, folds.n_folds())),
@@ -679,14 +694,12 @@ pub fn cross_validate(
             }
             None => PipelineParams::preset(name, data.sfreq())?,
         };
-        let t0 = Instant::now();
-        let model = params.fit_grouped(train.data().view(), &ytr, gtr.as_deref())?;
-        fit_s += t0.elapsed().as_secs_f64();
+        let c = params.fit_score_cached(cache, &tr, &ytr, gtr.as_deref(), &te)?;
+        fit_s += c.fit_s;
+        score_s += c.score_s;
         on(Progress::Fit);
-        let t1 = Instant::now();
-        let s = model.decision_function(data.select(&te).data().view())?;
-        score_s += t1.elapsed().as_secs_f64();
         n_scored += te.len();
+        let s = c.scores;
         aucs.push(roc_auc(&s.to_vec(), &yte)?);
     }
     Ok(PipelineResult {

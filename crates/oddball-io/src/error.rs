@@ -72,11 +72,23 @@ pub enum IoError {
     Unsupported { path: PathBuf, what: String },
 
     /// The file extension does not name a format [`crate::read`] knows.
-    #[error("{path}: unknown file type (extension {extension:?}); known: .dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7)")]
+    #[error("{path}: unknown file type ({}); known: {KNOWN_FORMATS}", extension_text(.extension))]
     UnknownFormat {
         path: PathBuf,
         extension: Option<String>,
     },
+
+    /// A directory was given where a recording file was expected; `recordings` are the files
+    /// in it that [`crate::read`] knows by their extension (the first few, sorted).
+    #[error("{path} is a directory, not a recording: give a file{}", recordings_text(.recordings))]
+    IsDirectory {
+        path: PathBuf,
+        recordings: Vec<String>,
+    },
+
+    /// The file does not exist.
+    #[error("{path}: no such file")]
+    NotFound { path: PathBuf },
 
     /// A sample a writer was asked to store is not finite or does not fit the file's number type.
     #[error("{path}: channel {channel:?} (index {channel_index}), sample {sample}: cannot write {value} µV: {reason}")]
@@ -174,6 +186,8 @@ impl IoError {
             | IoError::Missing { path, .. }
             | IoError::Unsupported { path, .. }
             | IoError::UnknownFormat { path, .. }
+            | IoError::IsDirectory { path, .. }
+            | IoError::NotFound { path }
             | IoError::UnwritableSample { path, .. }
             | IoError::InvalidState { path, .. }
             | IoError::InvalidParameterLine { path, .. }
@@ -224,4 +238,23 @@ pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, IoError> {
         action: "read",
         source,
     })
+}
+
+/// The formats [`crate::read`] knows, for messages.
+pub const KNOWN_FORMATS: &str =
+    ".dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7)";
+
+fn extension_text(extension: &Option<String>) -> String {
+    match extension {
+        Some(e) => format!("extension .{e}"),
+        None => "no extension".into(),
+    }
+}
+
+fn recordings_text(recordings: &[String]) -> String {
+    if recordings.is_empty() {
+        format!(" (it holds no {KNOWN_FORMATS} file)")
+    } else {
+        format!(" inside it, e.g. {}", recordings.join(", "))
+    }
 }

@@ -180,6 +180,44 @@ impl Recording {
     }
 }
 
+/// Refuses, before any reading, a path that does not exist or is a directory (naming the
+/// recordings inside it).
+pub fn check_file(path: &Path) -> Result<(), IoError> {
+    let meta = std::fs::metadata(path).map_err(|source| match source.kind() {
+        std::io::ErrorKind::NotFound => IoError::NotFound {
+            path: path.to_path_buf(),
+        },
+        _ => IoError::Io {
+            path: path.to_path_buf(),
+            action: "read",
+            source,
+        },
+    })?;
+    if meta.is_dir() {
+        let mut recordings: Vec<String> = std::fs::read_dir(path)
+            .map(|entries| {
+                entries
+                    .filter_map(|e| e.ok())
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|name| {
+                        let lower = name.to_ascii_lowercase();
+                        [".dat", ".csv", ".edf", ".bdf", ".easy", ".xdf", ".mat"]
+                            .iter()
+                            .any(|ext| lower.ends_with(ext))
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        recordings.sort();
+        recordings.truncate(3);
+        return Err(IoError::IsDirectory {
+            path: path.to_path_buf(),
+            recordings,
+        });
+    }
+    Ok(())
+}
+
 /// Reads a recording, choosing the reader by extension (case-insensitive): `.dat` → BCI2000,
 /// `.csv` → CSV with [`CsvOptions::detect`], `.edf`/`.bdf` → EDF/BDF (the header decides which),
 /// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]),
@@ -187,6 +225,7 @@ impl Recording {
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
+    check_file(path)?;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

@@ -123,6 +123,7 @@ fn read_tabular(path: &Path, options: &ReadOptions) -> Result<Recording, IoError
     if let Err(why) = options.check() {
         return Err(unsupported(&why));
     }
+    crate::check_file(path)?;
     let ext = path
         .extension()
         .and_then(|e| e.to_str())

@@ -191,7 +191,19 @@ fn read_dispatches_by_extension() {
         matches!(&e, IoError::UnknownFormat { extension: Some(x), .. } if x == "gdf"),
         "{e}"
     );
+    assert!(e.to_string().contains("extension .gdf"), "{e}");
+    let e = read(tmp.write("noext", b"")).unwrap_err();
+    assert!(e.to_string().contains("(no extension)"), "{e}");
     let e = read(tmp.path().join("missing.edf")).unwrap_err();
-    assert!(matches!(e, IoError::Io { action: "read", .. }), "{e}");
-    assert!(e.to_string().contains("missing.edf"));
+    assert!(matches!(e, IoError::NotFound { .. }), "{e}");
+    assert!(e.to_string().ends_with("missing.edf: no such file"), "{e}");
+    // A folder names the recordings inside it instead of an unknown extension.
+    let e = read(tmp.path()).unwrap_err();
+    match &e {
+        IoError::IsDirectory { recordings, .. } => {
+            assert_eq!(recordings, &["x.DAT", "x.bdf", "x.csv"], "{e}")
+        }
+        other => panic!("expected IsDirectory, got {other}"),
+    }
+    assert!(e.to_string().contains("is a directory"), "{e}");
 }

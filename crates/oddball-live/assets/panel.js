@@ -1,10 +1,10 @@
-// oddball stimulus panel: draws what the session schedules and stamps every flash with the
-// requestAnimationFrame time of the frame that showed it, on the server's clock.
+// oddball subject view: draws what the session schedules and stamps every flash with the
+// requestAnimationFrame time of the frame that showed it, on the server's clock. Shows nothing
+// but the task; the operator view (/operator) has the figures.
 "use strict";
 (() => {
   const $ = (id) => document.getElementById(id);
   const S = {
-    ws: null,
     offset: null,          // server_ms − page_ms
     bestRtt: Infinity,
     pingId: 0,
@@ -20,49 +20,64 @@
     arm: null,
     armDirty: true,
     ended: null,
+    paused: false,
   };
-  // What tests (and curious people) can read.
+  // What tests (and curious people) can read; the operator view shows the timing.
   const D = (window.oddballDiag = {
     connected: false, synced: false, frames: 0, flashes: 0, countdowns: 0, decisions: [],
     onTimes: [], onsetErrors: [], rtt: null, offset: null, frameMs: null, armMoves: 0,
-    cancelled: 0, ended: false, serverDiag: "", targets: 0, planPoints: 0, lateFlashes: [],
+    cancelled: 0, ended: false, targets: 0, planPoints: 0, lateFlashes: [], paused: false,
+    fullscreen: false,
   });
 
-  function send(obj) {
-    if (S.ws && S.ws.readyState === 1) S.ws.send(JSON.stringify(obj));
-  }
+  const conn = Oddball.connect(ODDBALL_WS.subject, {
+    open() {
+      D.connected = true;
+      if (!S.ended) $("phase").textContent = "";
+      for (let i = 0; i < 8; i++) setTimeout(ping, i * 60);
+      setTimeout(() => conn.send({ t: "hello", frame_ms: S.frameMs, agent: navigator.userAgent.slice(0, 200) }), 600);
+    },
+    message: onMessage,
+    close(ended) {
+      D.connected = false;
+      if (!ended) $("phase").textContent = "connection lost — retrying";
+    },
+  });
   function ping() {
     const id = ++S.pingId;
     const page_ms = performance.now();
     S.pings.set(id, page_ms);
-    send({ t: "ping", id, page_ms });
-  }
-  function serverNow(pageMs) { return pageMs + S.offset; }
-
-  function connect() {
-    const ws = new WebSocket(`ws://${location.host}/ws`);
-    S.ws = ws;
-    ws.onopen = () => {
-      D.connected = true;
-      $("status").textContent = "connected";
-      for (let i = 0; i < 8; i++) setTimeout(ping, i * 60);
-      setTimeout(() => send({ t: "hello", frame_ms: S.frameMs, agent: navigator.userAgent.slice(0, 200) }), 600);
-    };
-    ws.onclose = () => {
-      D.connected = false;
-      $("status").textContent = S.ended ? "session over" : "disconnected — retrying";
-      if (!S.ended) setTimeout(connect, 1000);
-    };
-    ws.onmessage = (ev) => onMessage(JSON.parse(ev.data));
+    conn.send({ t: "ping", id, page_ms });
   }
   setInterval(() => { if (D.connected) ping(); }, 2000);
+  function serverNow(pageMs) { return pageMs + S.offset; }
+
+  // Full screen on a click or the F key (browsers allow it only on a gesture); the layout fills
+  // the window either way.
+  function fullscreen() {
+    if (!document.fullscreenElement && document.documentElement.requestFullscreen) {
+      document.documentElement.requestFullscreen().catch(() => {});
+    }
+  }
+  document.addEventListener("click", fullscreen);
+  document.addEventListener("keydown", (e) => { if (e.key === "f" || e.key === "F") fullscreen(); });
+  document.addEventListener("fullscreenchange", () => {
+    D.fullscreen = !!document.fullscreenElement;
+    $("hint").style.display = D.fullscreen ? "none" : "";
+    S.armDirty = true;
+  });
+  window.addEventListener("resize", () => { S.armDirty = true; });
+
+  function overlay(text) {
+    $("overlay").textContent = text || "";
+    $("overlay").classList.toggle("show", !!text);
+  }
 
   function onMessage(m) {
     switch (m.t) {
       case "config": {
         S.config = m;
         D.targets = m.targets_m.length; D.planPoints = m.plan_m.length;
-        $("title").textContent = m.title;
         S.bulbByCode.clear();
         for (const [code, label] of m.bulbs) S.bulbByCode.set(code, $("bulb-" + label));
         S.armDirty = true;
@@ -78,6 +93,8 @@
           S.bestRtt = rtt;
           S.offset = m.server_ms - (sent + rtt / 2);
           D.rtt = rtt; D.offset = S.offset; D.synced = true;
+          // The operator view shows the clock figures.
+          conn.send({ t: "clock", offset_ms: S.offset, rtt_ms: rtt });
         }
         break;
       }
@@ -86,8 +103,7 @@
         D.countdowns++;
         for (const b of S.bulbByCode.values()) b.classList.remove("cue", "chosen", "wrong");
         if (m.cue !== null && S.bulbByCode.has(m.cue)) S.bulbByCode.get(m.cue).classList.add("cue");
-        $("phase").textContent = m.phase === "calibration" ? "calibration: look at the blue bulb"
-          : (m.cue !== null ? "look at the blue bulb" : "");
+        $("phase").textContent = m.cue !== null ? "look at the blue bulb" : "";
         break;
       }
       case "flash": S.queue.push({ id: m.id, code: m.code, at: m.at_ms, dur: m.dur_ms, on: null }); break;
@@ -100,13 +116,11 @@
       case "decision": {
         D.decisions.push(m);
         const b = m.code !== null ? S.bulbByCode.get(m.code) : null;
-        if (b) b.classList.add(m.intended === null || m.intended === m.code ? "chosen" : "wrong");
-        const label = m.code === null ? "abstained" : (S.config ? S.config.bulbs.find((x) => x[0] === m.code)[1] : m.code);
-        const line = document.createElement("div");
-        const p = m.posterior.length ? Math.max(...m.posterior).toFixed(2) : "";
-        line.textContent = `#${m.trial} ${label}` + (m.intended !== null && m.code !== null ? (m.intended === m.code ? " ✓" : " ✗") : "")
-          + ` p=${p} rounds=${m.rounds}` + (m.refused ? ` (arm refused: ${m.refused})` : "");
-        $("decisions").prepend(line);
+        const right = m.intended === null || m.intended === m.code;
+        if (b) b.classList.add(right ? "chosen" : "wrong");
+        const label = Oddball.label(S.config, m.code);
+        $("last").textContent = m.code === null ? "no decision — the arm stays" : `${Oddball.ARROWS[label] || ""} ${label}`;
+        $("last").className = m.code === null || m.intended === null ? "" : (right ? "right" : "wrong");
         break;
       }
       case "arm": {
@@ -117,48 +131,48 @@
         S.armDirty = true;
         break;
       }
-      case "diag": D.serverDiag = m.text; break;
+      case "paused": {
+        S.paused = m.paused; D.paused = m.paused;
+        if (!S.ended) overlay(m.paused ? "Paused — rest a moment" : "");
+        if (m.paused) { $("count").textContent = ""; $("phase").textContent = ""; }
+        break;
+      }
       case "end": {
         S.ended = m.summary; D.ended = true;
-        $("status").textContent = "session over";
-        $("count").textContent = "";
-        $("phase").textContent = m.summary;
+        S.queue = [];
+        for (const b of S.bulbByCode.values()) b.classList.remove("cue", "on");
+        // Said where the countdown was, leaving the bulbs, the last decision and the arm's
+        // drawing in view.
+        overlay("");
+        $("count").textContent = "Session over";
+        $("count").classList.add("over");
+        $("phase").textContent = "thank you!";
         break;
       }
     }
   }
 
-  function stats(xs) {
-    if (!xs.length) return "–";
-    const n = xs.length, mean = xs.reduce((a, b) => a + b, 0) / n;
-    const sd = Math.sqrt(xs.reduce((a, b) => a + (b - mean) ** 2, 0) / n);
-    return `${mean.toFixed(1)} ± ${sd.toFixed(1)} [${Math.min(...xs).toFixed(1)}, ${Math.max(...xs).toFixed(1)}] n=${n}`;
-  }
-  let diagAt = 0;
-  function showDiag(ts) {
-    if (ts - diagAt < 500) return;
-    diagAt = ts;
-    $("diag").textContent =
-      `clock offset  ${S.offset === null ? "–" : S.offset.toFixed(1)} ms (rtt ${D.rtt === null ? "–" : D.rtt.toFixed(2)} ms)\n` +
-      `frame         ${S.frameMs.toFixed(2)} ms\n` +
-      `flashes drawn ${D.flashes}   cancelled ${D.cancelled}\n` +
-      `on-time ms    ${stats(D.onTimes.slice(-200))}\n` +
-      `onset − plan  ${stats(D.onsetErrors.slice(-200))}\n` + D.serverDiag;
-  }
-
   function drawArm() {
     const c = $("arm"), g = c.getContext("2d");
-    g.clearRect(0, 0, c.width, c.height);
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(c.clientWidth * dpr)), h = Math.max(1, Math.round(c.clientHeight * dpr));
+    if (c.width !== w || c.height !== h) { c.width = w; c.height = h; }
+    g.clearRect(0, 0, w, h);
     if (!S.config) return;
     const [x0, x1, z0, z1] = S.config.board_m;
     const [bx, bz] = S.config.base_m;
-    const xs = [x0, x1, bx], zs = [z0, z1, bz];
+    // The elbow swings on a circle of the upper arm's length about the base: room for its top.
+    const upper = Math.hypot(S.config.pose_m[0][0] - bx, S.config.pose_m[0][1] - bz);
+    const xs = [x0, x1, bx, S.config.pose_m[0][0]], zs = [z0, z1, bz, bz + upper];
     const lo = [Math.min(...xs), Math.min(...zs)], hi = [Math.max(...xs), Math.max(...zs)];
-    const pad = 20, scale = Math.min((c.width - 2 * pad) / (hi[0] - lo[0]), (c.height - 2 * pad) / (hi[1] - lo[1]));
-    const P = (p) => [pad + (p[0] - lo[0]) * scale, c.height - pad - (p[1] - lo[1]) * scale];
-    const line = (pts, style, w) => {
+    const u = Math.min(w, h) / 480;   // line widths scale with the picture
+    const pad = 20 * u;
+    const scale = Math.min((w - 2 * pad) / (hi[0] - lo[0]), (h - 2 * pad) / (hi[1] - lo[1]));
+    const ox = (w - scale * (hi[0] - lo[0])) / 2, oy = (h - scale * (hi[1] - lo[1])) / 2;
+    const P = (p) => [ox + (p[0] - lo[0]) * scale, h - oy - (p[1] - lo[1]) * scale];
+    const line = (pts, style, lw) => {
       if (pts.length < 2) return;
-      g.strokeStyle = style; g.lineWidth = w; g.beginPath();
+      g.strokeStyle = style; g.lineWidth = lw * u; g.lineJoin = "round"; g.lineCap = "round"; g.beginPath();
       pts.forEach((p, i) => { const q = P(p); i ? g.lineTo(q[0], q[1]) : g.moveTo(q[0], q[1]); });
       g.stroke();
     };
@@ -166,12 +180,13 @@
     g.fillStyle = "#f4f1e8"; g.fillRect(a[0], a[1], b[0] - a[0], b[1] - a[1]);
     line(S.config.plan_m, "rgba(79,195,247,0.8)", 6);
     for (const t of S.config.targets_m) {
-      const q = P(t); g.strokeStyle = "#e57373"; g.lineWidth = 2;
-      g.beginPath(); g.arc(q[0], q[1], 8, 0, 2 * Math.PI); g.stroke();
+      const q = P(t); g.strokeStyle = "#e57373"; g.lineWidth = 2 * u;
+      g.beginPath(); g.arc(q[0], q[1], 8 * u, 0, 2 * Math.PI); g.stroke();
     }
     line(S.trail, "#222", 2.5);
-    if (S.arm) line([[bx, bz], S.arm.elbow_m, S.arm.pen_m], "#ff9800", 7);
-    const q = P([bx, bz]); g.fillStyle = "#888"; g.fillRect(q[0] - 10, q[1] - 6, 20, 12);
+    const [elbow, pen] = S.arm ? [S.arm.elbow_m, S.arm.pen_m] : S.config.pose_m;
+    line([[bx, bz], elbow, pen], "#ff9800", 7);
+    const q = P([bx, bz]); g.fillStyle = "#888"; g.fillRect(q[0] - 10 * u, q[1] - 6 * u, 20 * u, 12 * u);
   }
 
   function frame(ts) {
@@ -189,7 +204,7 @@
         const b = S.bulbByCode.get(f.code);
         if (b) b.classList.remove("on");
         D.onTimes.push(now - f.on);
-        send({ t: "off", id: f.id, off_ms: now });
+        conn.send({ t: "off", id: f.id, off_ms: now });
         return false;
       });
       S.queue = S.queue.filter((f) => {
@@ -198,19 +213,17 @@
         if (b) b.classList.add("on");
         f.on = now; D.flashes++; D.onsetErrors.push(now - f.at);
         if (now - f.at > 3 * S.frameMs) D.lateFlashes.push({ id: f.id, code: f.code, at: f.at, on: now });
-        send({ t: "on", id: f.id, code: f.code, on_ms: now });
+        conn.send({ t: "on", id: f.id, code: f.code, on_ms: now });
         S.lit.push(f);
         return false;
       });
-      if (S.trial && !S.ended) {
+      if (S.trial && !S.ended && !S.paused) {
         const left = S.trial.at_ms + S.trial.countdown_s * 1000 - now;
         $("count").textContent = left > 0 ? String(Math.ceil(left / 1000)) : "";
       }
     }
     if (S.armDirty) { drawArm(); S.armDirty = false; }
-    showDiag(ts);
     requestAnimationFrame(frame);
   }
   requestAnimationFrame(frame);
-  connect();
 })();

@@ -38,6 +38,9 @@ pub enum LiveError {
     /// SIGINT or SIGTERM asked the session to stop ([`crate::stop`]).
     #[error("stopped on request (SIGINT or SIGTERM)")]
     Stopped,
+    /// The operator view's abort button: a stop like [`LiveError::Stopped`].
+    #[error("aborted from the operator view")]
+    Aborted,
 }
 
 /// A live source's error reaches the session engine as its typed cause

@@ -8,6 +8,10 @@
 //! page, a page that disconnected or stalled) loses its epoch: a decision never rests on
 //! flashes nobody saw, and with none at all the session abstains and the arm holds still.
 //! Without a panel ([`Stamping::Schedule`]) flashes count as drawn on schedule.
+//!
+//! The operator view's requests reach the session here: a pause holds it before its next trial
+//! ([`Presenter::hold`], marked `pause` and `resume` in the recording), an abort stops it at the
+//! next block of EEG with [`LiveError::Aborted`], which ends a session as cleanly as SIGTERM.
 
 use std::time::{Duration, Instant};
 
@@ -15,12 +19,13 @@ use ndarray::Array2;
 use oddball_arm::ArmSim;
 use oddball_io::xdf::session_markers;
 use oddball_session::engine::{Phase, TrialOutcome, TrialRecord};
+use oddball_session::online::ChannelFaults;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::{Drawn, EegStream, Observer, Presenter};
 use oddball_session::{SessionError, SimulatedSubject};
 
 use crate::clock::{Clock, Pacer};
-use crate::panel::{DrawnReport, PanelServer, ServerMsg};
+use crate::panel::{ChannelQuality, DrawnReport, PanelServer, ServerMsg};
 use crate::record::Recorder;
 use crate::LiveError;
 
@@ -241,7 +246,15 @@ pub struct LiveSubject<S: EegSource> {
     clock: Clock,
     position: u64,
     n_trials: usize,
+    /// Trials started in calibration.
+    n_calibration: usize,
     n_decisions: usize,
+    /// Trials to come per phase when known (calibration, online), for the operator's progress.
+    plan: (Option<usize>, Option<usize>),
+    /// Held before the next trial at the operator's request.
+    paused: bool,
+    /// Epochs rejected per channel when the last trial ended (its own are the difference).
+    faults_before: Vec<ChannelFaults>,
     announced: Vec<Announced>,
     /// Flashes on screen: id and on frame (ms).
     lit: Vec<(u64, f64)>,
@@ -278,7 +291,11 @@ impl<S: EegSource> LiveSubject<S> {
             clock,
             position: 0,
             n_trials: 0,
+            n_calibration: 0,
             n_decisions: 0,
+            plan: (None, None),
+            paused: false,
+            faults_before: Vec::new(),
             announced: Vec::new(),
             lit: Vec::new(),
             next_id: 1,
@@ -301,6 +318,12 @@ impl<S: EegSource> LiveSubject<S> {
     pub fn attach_panel(&mut self, panel: PanelServer) {
         self.panel = Some(panel);
         self.stamping = Stamping::Panel;
+    }
+
+    /// How many calibration trials and online decisions the session will run, when known:
+    /// the operator view shows "decision 3 of 40".
+    pub fn set_plan(&mut self, calibration: Option<usize>, decisions: Option<usize>) {
+        self.plan = (calibration, decisions);
     }
 
     pub fn source_mut(&mut self) -> &mut S {
@@ -334,6 +357,10 @@ impl<S: EegSource> LiveSubject<S> {
             m.marker("end", now);
         }
         if let Some(p) = &self.panel {
+            // The operator's figures as they stand at the end, then the end itself.
+            p.send(&ServerMsg::Diag {
+                text: self.status(),
+            });
             p.send(&ServerMsg::End {
                 summary: summary.to_string(),
             });
@@ -453,6 +480,21 @@ impl<S: EegSource> LiveSubject<S> {
         if let Some(l) = Summary::of(&self.decision_latency_ms) {
             s.push_str(&format!("\ndecision latency {l}"));
         }
+        if let Some(p) = &self.panel {
+            let st = p.stats();
+            s.push_str(&format!(
+                "\nsubject page: {} connected ({} in all), frame {}, {} message(s) rejected",
+                st.connected,
+                st.connections,
+                st.frame_ms.map_or("–".into(), |f| format!("{f:.2} ms")),
+                st.rejected
+            ));
+            if let (Some(offset), Some(rtt)) = (st.clock_offset_ms, st.clock_rtt_ms) {
+                s.push_str(&format!(
+                    "\npage clock offset {offset:.2} ms (round trip {rtt:.2} ms)"
+                ));
+            }
+        }
         s
     }
 }
@@ -470,6 +512,13 @@ impl<S: EegSource> EegStream for LiveSubject<S> {
     fn render(&mut self, n: usize) -> Result<Array2<f64>, SessionError> {
         if crate::stop::requested() {
             return Err(LiveError::Stopped.into());
+        }
+        if self
+            .panel
+            .as_ref()
+            .is_some_and(PanelServer::abort_requested)
+        {
+            return Err(LiveError::Aborted.into());
         }
         self.source.wait(n)?;
         self.collect_stamps()?;
@@ -523,6 +572,22 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
     fn drawn(&mut self) -> Vec<Drawn> {
         std::mem::take(&mut self.drawn)
     }
+    fn hold(&mut self) -> Result<bool, SessionError> {
+        let Some(panel) = &self.panel else {
+            return Ok(false);
+        };
+        let wanted = panel.pause_requested();
+        if wanted != self.paused {
+            self.paused = wanted;
+            let now = self.clock.now_ms();
+            panel.send(&ServerMsg::Paused {
+                paused: wanted,
+                at_ms: now,
+            });
+            self.marker(if wanted { "pause" } else { "resume" }, now)?;
+        }
+        Ok(self.paused)
+    }
     fn trial_started(
         &mut self,
         start: u64,
@@ -532,6 +597,13 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
         let at_ms = self.source.time_of(start);
         let trial = self.n_trials;
         self.n_trials += 1;
+        let (number, of) = match phase {
+            Phase::Calibration => {
+                self.n_calibration += 1;
+                (self.n_calibration, self.plan.0)
+            }
+            Phase::Online => (self.n_decisions + 1, self.plan.1),
+        };
         if let Some(p) = &self.panel {
             p.send(&ServerMsg::Trial {
                 trial,
@@ -539,6 +611,8 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
                     Phase::Calibration => "calibration".into(),
                     Phase::Online => "online".into(),
                 },
+                number,
+                of,
                 cue: intended,
                 at_ms,
                 countdown_s: self.paradigm.countdown_s,
@@ -578,6 +652,7 @@ impl<S: EegSource> Observer for LiveSubject<S> {
                     code,
                     intended: t.intended,
                     posterior: t.posterior.clone(),
+                    confidence: t.confidence(),
                     rounds: t.rounds,
                     refused: t.arm_refusal.clone(),
                 });
@@ -598,6 +673,32 @@ impl<S: EegSource> Observer for LiveSubject<S> {
                 text: self.status(),
             });
         }
+        Ok(())
+    }
+    fn channel_faults(&mut self, faults: &[ChannelFaults]) -> Result<(), SessionError> {
+        let before = std::mem::replace(&mut self.faults_before, faults.to_vec());
+        let Some(p) = &self.panel else {
+            return Ok(());
+        };
+        let since = |now: &ChannelFaults, then: Option<&ChannelFaults>| {
+            let then = then.copied().unwrap_or_default();
+            ChannelFaults {
+                non_finite: now.non_finite - then.non_finite,
+                flat: now.flat - then.flat,
+                over_threshold: now.over_threshold - then.over_threshold,
+            }
+        };
+        let channels = faults
+            .iter()
+            .zip(self.source.ch_names())
+            .enumerate()
+            .map(|(c, (f, name))| ChannelQuality {
+                name: name.clone(),
+                last: since(f, before.get(c)),
+                total: *f,
+            })
+            .collect();
+        p.send(&ServerMsg::Quality { channels });
         Ok(())
     }
     fn arm_state(&mut self, position: u64, arm: &ArmSim) -> Result<(), SessionError> {

@@ -111,8 +111,8 @@ impl OnlineSummary {
         }
     }
 
-    /// `3/4 decisions right, 1 abstained`, and when the recording ended early how many of the
-    /// `n_commands` were made.
+    /// `3/4 decisions right, 1 abstained`, and when the session stopped early (the recording
+    /// ended, a stop request, an abort) how many of the `n_commands` were made.
     pub fn line(&self, n_commands: usize) -> String {
         let mut line = format!(
             "{}/{} decisions right, {} abstained",
@@ -122,7 +122,7 @@ impl OnlineSummary {
         );
         if self.ended.is_some() {
             line.push_str(&format!(
-                " ({} of {n_commands} made before the recording ended)",
+                " ({} of {n_commands} made before the session stopped)",
                 self.decisions.len(),
             ));
         }
@@ -186,7 +186,8 @@ pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String>
 }
 
 /// What stops a session cleanly, keeping what it has (the recording closed, the decisions so
-/// far summarised): the replayed file's end, a stop request (SIGINT/SIGTERM), an amplifier
+/// far summarised): the replayed file's end, a stop request (SIGINT/SIGTERM, the operator
+/// view's abort), an amplifier
 /// that dropped out and did not come back within its reconnection attempts, a stream lost or
 /// stalled.
 pub fn is_recording_end(e: &SessionError) -> bool {
@@ -195,6 +196,7 @@ pub fn is_recording_end(e: &SessionError) -> bool {
         Some(
             LiveError::RecordingEnded { .. }
                 | LiveError::Stopped
+                | LiveError::Aborted
                 | LiveError::Reconnect { .. }
                 | LiveError::StreamLost { .. }
                 | LiveError::StreamStalled { .. }

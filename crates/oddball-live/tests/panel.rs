@@ -16,6 +16,7 @@ fn config() -> PanelConfig {
         countdown_s: 5.0,
         board_m: [0.0, 1.0, 0.0, 1.0],
         base_m: [0.5, -0.2],
+        pose_m: [[0.3, 0.2], [0.5, 0.5]],
         targets_m: vec![],
         plan_m: vec![],
         title: "test".into(),
@@ -54,6 +55,19 @@ fn serves_the_embedded_page_and_script() {
         .to_ascii_lowercase()
         .contains("content-type: text/javascript"));
     assert!(js.contains("requestAnimationFrame"));
+    // The operator view and the shared script, which carries the socket paths of the protocol.
+    let operator = get(addr, "/operator");
+    assert!(operator.starts_with("HTTP/1.1 200"), "{operator}");
+    assert!(operator.contains("<script src=\"/operator.js\">"));
+    assert!(operator.contains("id=\"pause\"") && operator.contains("id=\"abort\""));
+    assert!(get(addr, "/operator.js").contains("\"control\""));
+    let common = get(addr, "/common.js");
+    assert!(common.starts_with("HTTP/1.1 200"));
+    assert!(
+        common.contains(r#"const ODDBALL_WS = { subject: "/ws", operator: "/ws/operator" };"#),
+        "{common}"
+    );
+    assert!(!get(addr, "/ws/operator").starts_with("HTTP/1.1 200"));
     assert!(get(addr, "/nothing").starts_with("HTTP/1.1 404"));
     // A plain GET on the WebSocket route is refused, not served.
     assert!(!get(addr, "/ws").starts_with("HTTP/1.1 200"));

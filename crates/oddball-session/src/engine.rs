@@ -19,6 +19,10 @@
 //!    [`DecisionRule`] decides, continues or abstains. A decision issues the bulb's command to the
 //!    arm, which runs on the same clock as the EEG, one chunk at a time.
 //!
+//! Before every trial the presenter may hold the session ([`Presenter::hold`]: an operator's
+//! pause): the EEG and the arm run on, no trial starts. After every trial the observer hears
+//! each channel's rejected epochs ([`Observer::channel_faults`]).
+//!
 //! Everything shown and decided is kept ([`SessionLog`]) so a session can be saved and
 //! re-evaluated offline to the same decisions ([`crate::record`]).
 
@@ -127,7 +131,16 @@ impl SessionParams {
         }
         Ok(())
     }
+
+    /// How many labelled calibration decisions [`Session::calibrate`] runs:
+    /// `calibration_per_bulb` for each of the four bulbs.
+    pub fn calibration_trials(&self) -> usize {
+        CALIBRATION_CODES.len() * self.calibration_per_bulb
+    }
 }
+
+/// The bulb codes calibration cues, each `calibration_per_bulb` times.
+const CALIBRATION_CODES: [u32; 4] = [1, 2, 3, 4];
 
 /// Calibration or online control.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -212,6 +225,18 @@ impl TrialRecord {
     pub fn confidence(&self) -> f64 {
         self.outcome.confidence(&self.posterior)
     }
+}
+
+/// How far a calibration is, after each of its trials ([`Session::calibrate_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CalibrationProgress {
+    /// Calibration trials done, of `total`.
+    pub done: usize,
+    pub total: usize,
+    /// Seconds of EEG the calibration has taken so far.
+    pub eeg_seconds: f64,
+    /// Seconds of EEG the remaining trials should take at this pace.
+    pub seconds_left: f64,
 }
 
 /// What calibration measured.
@@ -751,13 +776,32 @@ impl<S: Subject> Session<S> {
 
     /// Runs the calibration trials and trains the model.
     pub fn calibrate(&mut self) -> Result<CalibrationReport, SessionError> {
-        let mut intended: Vec<u32> = (1..=4)
+        self.calibrate_with(&mut |_| {})
+    }
+
+    /// [`Self::calibrate`], telling `progress` after each calibration trial how far it is (for
+    /// a live or real-time calibration, which takes minutes).
+    pub fn calibrate_with(
+        &mut self,
+        progress: &mut dyn FnMut(CalibrationProgress),
+    ) -> Result<CalibrationReport, SessionError> {
+        let mut intended: Vec<u32> = CALIBRATION_CODES
+            .into_iter()
             .flat_map(|c| std::iter::repeat_n(c, self.params.calibration_per_bulb))
             .collect();
         intended.shuffle(&mut self.rng);
         let first = self.trials.len();
-        for code in intended {
+        let total = intended.len();
+        let t0 = self.time_s();
+        for (k, code) in intended.into_iter().enumerate() {
             self.run_trial(Phase::Calibration, Some(code))?;
+            let eeg_seconds = self.time_s() - t0;
+            progress(CalibrationProgress {
+                done: k + 1,
+                total,
+                eeg_seconds,
+                seconds_left: eeg_seconds / (k + 1) as f64 * (total - k - 1) as f64,
+            });
         }
         self.train(first)
     }
@@ -975,6 +1019,11 @@ impl<S: Subject> Session<S> {
     fn run_trial(&mut self, phase: Phase, intended: Option<u32>) -> Result<usize, SessionError> {
         let p = self.params.paradigm;
         let sfreq = self.subject.sfreq();
+        // An operator's pause holds here, between trials: the EEG (and the arm) run on, no
+        // trial starts and nothing flashes.
+        while self.subject.hold()? {
+            self.advance(self.params.chunk)?;
+        }
         let n_rounds = match phase {
             Phase::Calibration => p.n_rounds,
             Phase::Online => self.params.rule.max_rounds(),
@@ -1059,6 +1108,7 @@ impl<S: Subject> Session<S> {
         }
         self.trials[trial].end = self.subject.position();
         self.subject.trial_ended(&self.trials[trial])?;
+        self.subject.channel_faults(self.epocher.channel_faults())?;
         Ok(trial)
     }
 

@@ -9,6 +9,18 @@ pub enum SessionError {
         value: String,
         reason: String,
     },
+    /// A drawing (text, or a list of commands) leaves the board or the arm's reach.
+    #[error("the path of {what}, with steps of {} mm from ({:.3}, {:.3}) m, leaves the board or the arm's reach at ({:.3}, {:.3}) m{}", .step_m * 1e3, .start_m[0], .start_m[1], .at_m[0], .at_m[1], fit_text(.max_step_m))]
+    PathOffBoard {
+        /// What is drawn, e.g. `the text "HELLO"`.
+        what: String,
+        step_m: f64,
+        start_m: [f64; 2],
+        /// The first vertex off the board or out of reach.
+        at_m: [f64; 2],
+        /// The largest step (a multiple of 0.5 mm) at which the whole path fits, if any.
+        max_step_m: Option<f64>,
+    },
     #[error("marker at sample {onset} arrived too late: its epoch starts before the oldest buffered sample {oldest_kept}")]
     MarkerTooLate { onset: u64, oldest_kept: u64 },
     #[error("the session has no model yet: calibrate first or load a model")]
@@ -52,4 +64,11 @@ pub enum SessionError {
     Unsupervised(#[from] oddball_decode::unsupervised::UnsupervisedError),
     #[error(transparent)]
     Io(#[from] oddball_io::IoError),
+}
+
+fn fit_text(max_step_m: &Option<f64>) -> String {
+    match max_step_m {
+        Some(m) => format!("; it fits with steps of at most {} mm", m * 1e3),
+        None => "; it does not fit with any step from this start".into(),
+    }
 }

@@ -44,7 +44,7 @@ pub struct ReadyEpoch {
 }
 
 /// Why epochs were rejected, counted for one channel.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ChannelFaults {
     /// The channel held NaN or infinite samples in the epoch.
     pub non_finite: u64,

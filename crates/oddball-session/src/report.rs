@@ -1,6 +1,6 @@
 //! What a copy task's run reports (`oddball demo`'s `summary.json` and printed lines): one row
 //! per decision, accuracy and ITR under a stopping rule, the pen's corners against the path of
-//! the executed commands, the calibration without its wall-clock time, and their text (and the
+//! the executed commands, the intended path and the decisions that left it, the calibration without its wall-clock time, and their text (and the
 //! drawing task's line), and a session file's decisions re-made offline ([`SessionResult`]).
 
 use std::fmt::Write as _;
@@ -175,16 +175,87 @@ pub fn rule_name(rule: &DecisionRule) -> String {
     }
 }
 
-/// The pen's corners against the path of the commands the arm executed.
+/// The pen's corners against the path of the commands the arm executed, and the path the
+/// person intended.
 #[derive(Debug, Clone, Serialize)]
 pub struct PenReport {
     /// Pen at each decision and at the end, metres.
     pub corners_m: Vec<[f64; 2]>,
-    /// Where the executed commands put the reference, metres.
-    pub expected_m: Vec<[f64; 2]>,
+    /// Where the intended commands would have put the reference, metres (from the start).
+    pub intended_m: Vec<[f64; 2]>,
+    /// Where the executed commands put the reference, metres (from the start).
+    pub executed_m: Vec<[f64; 2]>,
     pub max_corner_error_mm: f64,
     /// Every decision was the intended command and the arm executed it.
     pub drew_intended_path: bool,
+    /// The decisions that did not move the pen as intended.
+    pub missed: Vec<MissedDecision>,
+}
+
+/// Why a decision did not move the pen as intended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Miss {
+    /// Another command than the intended one was decided (and the arm moved that way).
+    Wrong,
+    /// No command was decided; the arm stayed.
+    Abstained,
+    /// A command was decided and the arm refused it (it would leave the board); the arm stayed.
+    Refused,
+}
+
+/// A decision that did not move the pen as intended, and where.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MissedDecision {
+    /// The decision's number (from 1).
+    pub index: usize,
+    pub miss: Miss,
+    /// The commanded position before the decision and after it (the same unless the arm
+    /// moved), metres.
+    pub from_m: [f64; 2],
+    pub to_m: [f64; 2],
+}
+
+/// The path of the commands the arm executed, from `pen_start`, metres.
+pub fn executed_path(
+    pen_start: Vector2<f64>,
+    rows: &[DecisionRow],
+    step_m: f64,
+) -> Vec<Vector2<f64>> {
+    let executed = rows
+        .iter()
+        .filter_map(|r| r.decided.filter(|_| r.arm_refusal.is_none()));
+    planned_path(pen_start, executed, step_m)
+}
+
+/// The decisions that did not move the pen as intended (wrong, abstained, refused by the arm),
+/// each where the commanded position was, starting from `pen_start`.
+pub fn missed_decisions(
+    pen_start: Vector2<f64>,
+    rows: &[DecisionRow],
+    step_m: f64,
+) -> Vec<MissedDecision> {
+    let mut at = pen_start;
+    let mut out = Vec::new();
+    for r in rows {
+        let from = at;
+        if let Some(c) = r.decided.filter(|_| r.arm_refusal.is_none()) {
+            at = c.apply(&at, step_m);
+        }
+        let miss = match r.decided {
+            None => Miss::Abstained,
+            Some(_) if r.arm_refusal.is_some() => Miss::Refused,
+            Some(c) if Some(c) != r.intended => Miss::Wrong,
+            Some(_) => continue,
+        };
+        out.push(MissedDecision {
+            index: r.index,
+            miss,
+            from_m: [from[0], from[1]],
+            to_m: [at[0], at[1]],
+        });
+    }
+    out
 }
 
 /// The calibration report without its wall-clock fit time (the files must not depend on it).
@@ -212,21 +283,18 @@ impl From<&CalibrationReport> for CalibrationSummary {
 }
 
 /// Corners: the pen after each executed command (at the next decision, or at the end)
-/// against where the executed commands put the reference.
+/// against where the executed commands put the reference; the intended path beside it.
 pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[DecisionRow]) -> PenReport {
-    let executed = rows
-        .iter()
-        .filter_map(|r| r.decided.filter(|_| r.arm_refusal.is_none()));
-    let expected = planned_path(pen_start, executed, arm.settings().step_m);
+    let step_m = arm.settings().step_m;
+    let expected = executed_path(pen_start, rows, step_m);
+    let intended = planned_path(pen_start, rows.iter().filter_map(|r| r.intended), step_m);
+    let missed = missed_decisions(pen_start, rows, step_m);
     let end_pen = [arm.pen()[0], arm.pen()[1]];
     let mut measured = Vec::new();
     let mut errors = Vec::new();
-    let mut intended_ok = true;
     let mut target = expected.iter().skip(1);
     for (k, row) in rows.iter().enumerate() {
-        let executed = row.decided.filter(|_| row.arm_refusal.is_none());
-        intended_ok &= executed.is_some() && row.decided == row.intended;
-        if executed.is_some() {
+        if row.decided.is_some() && row.arm_refusal.is_none() {
             let target = target.next().expect("one target per executed command");
             // The pen when the next decision comes (or at the end) shows where this one left it.
             let pen = rows.get(k + 1).and_then(|r| r.pen_m).unwrap_or(end_pen);
@@ -234,11 +302,14 @@ pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[DecisionRow]) -
             errors.push((Vector2::new(pen[0], pen[1]) - target).norm());
         }
     }
+    let xz = |v: Vec<Vector2<f64>>| v.iter().map(|p| [p[0], p[1]]).collect();
     PenReport {
         corners_m: measured,
-        expected_m: expected.iter().map(|p| [p[0], p[1]]).collect(),
+        intended_m: xz(intended),
+        executed_m: xz(expected),
         max_corner_error_mm: errors.iter().copied().fold(0.0, f64::max) * 1000.0,
-        drew_intended_path: intended_ok,
+        drew_intended_path: missed.is_empty(),
+        missed,
     }
 }
 
@@ -303,15 +374,21 @@ pub fn report_text(
     if let Some(c) = comparison {
         line(&mut s, c);
     }
+    let count = |m: Miss| pen.missed.iter().filter(|d| d.miss == m).count();
     let _ = writeln!(
         s,
-        "pen: {} corners, max error {:.1e} mm from the path of the executed commands; {}",
+        "pen: after each of its {} moves within {:.1e} mm of where the executed commands put it; {}",
         pen.corners_m.len(),
         pen.max_corner_error_mm,
         if pen.drew_intended_path {
-            "drew the intended path"
+            "drew the intended path".to_string()
         } else {
-            "did NOT draw the intended path (wrong, abstained or refused decisions)"
+            format!(
+                "did NOT draw the intended path ({} wrong, {} abstained, {} refused by the arm)",
+                count(Miss::Wrong),
+                count(Miss::Abstained),
+                count(Miss::Refused)
+            )
         }
     );
     let _ = writeln!(s, "simulated time {:.1} s", simulated_seconds);
@@ -455,6 +532,34 @@ mod tests {
         assert_eq!(s.itr, Itr::new(4, 0.5, 2.0));
         // (2 right − 1 wrong) / 4 decisions · log2 3 bits per 2 s.
         assert!((s.utility_bits_per_min - 0.25 * 3f64.log2() * 30.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn missed_decisions_are_placed_where_the_arm_stood() {
+        let h = 0.02;
+        let mut refused = row(4, Command::Up, Some(Command::Up));
+        refused.arm_refusal = Some("off the board".into());
+        let rows = [
+            row(1, Command::Up, Some(Command::Up)),
+            row(2, Command::Left, Some(Command::Right)),
+            row(3, Command::Down, None),
+            refused,
+            row(5, Command::Down, Some(Command::Down)),
+        ];
+        let start = Vector2::new(0.0, 0.0);
+        let missed = missed_decisions(start, &rows, h);
+        let kinds: Vec<(usize, Miss)> = missed.iter().map(|m| (m.index, m.miss)).collect();
+        assert_eq!(
+            kinds,
+            [(2, Miss::Wrong), (3, Miss::Abstained), (4, Miss::Refused)]
+        );
+        // Up to (0, h); the wrong move right to (h, h); the abstention and refusal stay there.
+        assert_eq!((missed[0].from_m, missed[0].to_m), ([0.0, h], [h, h]));
+        assert_eq!((missed[1].from_m, missed[1].to_m), ([h, h], [h, h]));
+        assert_eq!((missed[2].from_m, missed[2].to_m), ([h, h], [h, h]));
+        let executed = executed_path(start, &rows, h);
+        assert_eq!(executed.last(), Some(&Vector2::new(h, 0.0)));
+        assert_eq!(executed.len(), 4);
     }
 
     #[test]

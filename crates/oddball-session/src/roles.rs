@@ -18,6 +18,7 @@ use oddball_arm::ArmSim;
 use serde::{Deserialize, Serialize};
 
 use crate::engine::{Phase, TrialRecord};
+use crate::online::ChannelFaults;
 use crate::SessionError;
 
 /// A source of EEG on its own sample clock.
@@ -62,6 +63,12 @@ pub trait Presenter {
     ) -> Result<(), SessionError> {
         Ok(())
     }
+    /// Asked before every trial: `true` holds the session there (an operator paused it). While
+    /// held the engine keeps taking EEG and running the arm but starts no trial and shows no
+    /// flash, so a pause never cuts a trial and the recording stays continuous.
+    fn hold(&mut self) -> Result<bool, SessionError> {
+        Ok(false)
+    }
 }
 
 /// What is told how the session goes.
@@ -73,6 +80,11 @@ pub trait Observer {
     }
     /// After every chunk while the arm runs: its state at sample `position`.
     fn arm_state(&mut self, _position: u64, _arm: &ArmSim) -> Result<(), SessionError> {
+        Ok(())
+    }
+    /// After every trial: per channel, the epochs rejected because of it so far (NaN, flat or
+    /// saturated, over the threshold), in the stream's channel order.
+    fn channel_faults(&mut self, _faults: &[ChannelFaults]) -> Result<(), SessionError> {
         Ok(())
     }
 }

@@ -493,6 +493,24 @@ pub fn seeded_targets(arm: &ArmSim, n: usize, seed: u64) -> Vec<Vector2<f64>> {
     out
 }
 
+/// The path a tracking task intends from `start` through `targets` when every decision is
+/// right: at each step the direction [`direction_towards`] chooses, metres.
+pub fn intended_track_path(
+    start: Vector2<f64>,
+    targets: &[Vector2<f64>],
+    step_m: f64,
+) -> Vec<Vector2<f64>> {
+    let mut path = vec![start];
+    let mut at = start;
+    for target in targets {
+        while let Some(c) = direction_towards(&at, target, step_m) {
+            at = c.apply(&at, step_m);
+            path.push(at);
+        }
+    }
+    path
+}
+
 /// The targets a tracking task places for `arm` where it stands: the given ones snapped to its
 /// step grid, or seeded ones.
 pub fn task_targets(arm: &ArmSim, params: &TrackParams) -> Vec<Vector2<f64>> {
@@ -515,6 +533,53 @@ pub fn drawing_path(arm: &ArmSim, text: &str) -> Result<Vec<Vector2<f64>>, Sessi
         moves.iter().map(|m| m.command),
         arm.settings().step_m,
     ))
+}
+
+/// Checks, before any EEG work, that `text` drawn from `arm`'s current target stays on the board
+/// and in the arm's reach; returns its path (as [`drawing_path`]).
+pub fn check_drawing(arm: &ArmSim, text: &str) -> Result<Vec<Vector2<f64>>, SessionError> {
+    let moves: Vec<Command> = stroke_plan(text)?.iter().map(|m| m.command).collect();
+    check_path(arm, &moves, &format!("the text {text:?}"))
+}
+
+/// Checks that the commands, each moving the target one step from `arm`'s current target, keep
+/// it on the board and in reach; returns the path's vertices. The error names the first vertex
+/// at fault and the largest step (a multiple of 0.5 mm, at most the arm's) that fits.
+pub fn check_path(
+    arm: &ArmSim,
+    commands: &[Command],
+    what: &str,
+) -> Result<Vec<Vector2<f64>>, SessionError> {
+    let start = arm.target();
+    let step = arm.settings().step_m;
+    let off = |step_m: f64| {
+        oddball_arm::planned_path(start, commands.iter().copied(), step_m)
+            .into_iter()
+            .find(|p| {
+                arm.workspace()
+                    .check_point(arm.plant(), p, arm.elbow())
+                    .is_err()
+            })
+    };
+    let Some(at) = off(step) else {
+        return Ok(oddball_arm::planned_path(
+            start,
+            commands.iter().copied(),
+            step,
+        ));
+    };
+    const GRAIN_M: f64 = 5e-4;
+    let max_step_m = (1..=(step / GRAIN_M).floor() as usize)
+        .rev()
+        .map(|k| k as f64 * GRAIN_M)
+        .find(|&s| s < step && off(s).is_none());
+    Err(SessionError::PathOffBoard {
+        what: what.to_string(),
+        step_m: step,
+        start_m: [start[0], start[1]],
+        at_m: [at[0], at[1]],
+        max_step_m,
+    })
 }
 
 /// Steers the pen to each target in turn.
@@ -716,6 +781,12 @@ pub fn stroke_plan(text: &str) -> Result<Vec<PlannedMove>, SessionError> {
     Ok(plan)
 }
 
+/// The commands that draw `text` from its first glyph's bottom-left corner: [`stroke_plan`]'s
+/// moves, travel between glyphs included (`text_commands("G")` is `oddball demo`'s letter G).
+pub fn text_commands(text: &str) -> Result<Vec<Command>, SessionError> {
+    Ok(stroke_plan(text)?.iter().map(|m| m.command).collect())
+}
+
 /// A drawing task's outcome.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DrawReport {
@@ -743,19 +814,7 @@ pub fn run_drawing<P: Pilot>(
 ) -> Result<DrawReport, SessionError> {
     let plan = stroke_plan(text)?;
     let step = pilot.arm().settings().step_m;
-    let start = pilot.arm().target();
-    let path = drawing_path(pilot.arm(), text)?;
-    let board = pilot.arm().workspace().board;
-    if let Some(p) = path.iter().find(|p| !board.contains(p)) {
-        return Err(SessionError::InvalidParameter {
-            name: "text",
-            value: text.to_string(),
-            reason: format!(
-                "the drawing leaves the board at ({:.3}, {:.3}) m from the start ({:.3}, {:.3}); use a smaller step or shorter text",
-                p[0], p[1], start[0], start[1]
-            ),
-        });
-    }
+    let path = check_drawing(pilot.arm(), text)?;
     let max_decisions = max_factor * plan.len() + 4;
     let mut steps = Vec::new();
     let mut k = 0; // next planned vertex to reach
@@ -838,6 +897,42 @@ pub fn glyph_extents() -> BTreeMap<char, GlyphExtent> {
 mod tests {
     use super::*;
 
+    fn arm_with_step(step_m: f64) -> ArmSim {
+        let mut config = oddball_arm::ArmConfig::default();
+        config.reference.step_m = step_m;
+        ArmSim::from_config(&config).unwrap()
+    }
+
+    #[test]
+    fn a_drawing_off_the_board_names_the_largest_step_that_fits() {
+        let arm = arm_with_step(0.02);
+        let Err(SessionError::PathOffBoard {
+            at_m, max_step_m, ..
+        }) = check_drawing(&arm, "HELLO")
+        else {
+            panic!("HELLO at 20 mm fits the board?");
+        };
+        assert!(!arm
+            .workspace()
+            .board
+            .contains(&Vector2::new(at_m[0], at_m[1])));
+        let m = max_step_m.expect("a smaller step fits");
+        assert!(
+            m < 0.02 && (m / 5e-4 - (m / 5e-4).round()).abs() < 1e-9,
+            "{m}"
+        );
+        // At that step every vertex is on the board; half a millimetre more, one is not.
+        let path = check_drawing(&arm_with_step(m), "HELLO").expect("fits at the step named");
+        let board = arm.workspace().board;
+        assert!(path.iter().all(|p| board.contains(p)));
+        assert!(check_drawing(&arm_with_step(m + 5e-4), "HELLO").is_err());
+        // What fits is returned as drawing_path plans it.
+        assert_eq!(
+            check_drawing(&arm, "HI").unwrap(),
+            drawing_path(&arm, "HI").unwrap()
+        );
+    }
+
     #[test]
     fn every_glyph_stays_in_its_box() {
         for (c, ((x0, x1, z0, z1), (x, z))) in glyph_extents() {
@@ -862,6 +957,21 @@ mod tests {
         assert!(plan[h].travel && plan[h].command == Command::Right);
         assert!(plan.iter().filter(|m| m.travel).count() == 1);
         assert!(stroke_plan("H!").is_err());
+    }
+
+    #[test]
+    fn the_intended_track_path_takes_the_larger_error_first() {
+        let h = 0.02;
+        let o = Vector2::new(0.0, 0.0);
+        let targets = [Vector2::new(2.0 * h, h), Vector2::new(2.0 * h, -h)];
+        let path = intended_track_path(o, &targets, h);
+        let steps: Vec<[i64; 2]> = path
+            .iter()
+            .map(|p| [(p[0] / h).round() as i64, (p[1] / h).round() as i64])
+            .collect();
+        // Right, right (x first on the tie), up; then down twice.
+        assert_eq!(steps, [[0, 0], [1, 0], [2, 0], [2, 1], [2, 0], [2, -1]]);
+        assert_eq!(text_commands("G").unwrap().len(), 20);
     }
 
     #[test]

@@ -168,3 +168,125 @@ fn a_sample_rate_two_percent_off_nominal_still_draws_the_g() {
         "{right}/6 with a 510 Hz amplifier read as 500 Hz"
     );
 }
+
+/// An operator who pauses after the first trial for two seconds of EEG: what the engine asked,
+/// showed and reported.
+struct Paused {
+    sim: SimulatedSubject,
+    trials_ended: usize,
+    /// EEG position when the hold began and when it was lifted.
+    held: Option<(u64, Option<u64>)>,
+    /// Trial starts and flash onsets, samples.
+    starts: Vec<u64>,
+    onsets: Vec<u64>,
+    /// Channels in each per-trial quality report.
+    quality_reports: Vec<usize>,
+}
+
+impl oddball_session::roles::EegStream for Paused {
+    fn sfreq(&self) -> f64 {
+        self.sim.sfreq()
+    }
+    fn ch_names(&self) -> &[String] {
+        self.sim.ch_names()
+    }
+    fn position(&self) -> u64 {
+        self.sim.position()
+    }
+    fn render(&mut self, n: usize) -> Result<ndarray::Array2<f64>, oddball_session::SessionError> {
+        Ok(self.sim.render(n))
+    }
+}
+
+impl oddball_session::roles::Presenter for Paused {
+    fn show(
+        &mut self,
+        onset: u64,
+        _code: u32,
+        attended: bool,
+    ) -> Result<(), oddball_session::SessionError> {
+        self.onsets.push(onset);
+        self.sim.flash(onset, attended)
+    }
+    fn trial_started(
+        &mut self,
+        start: u64,
+        _phase: oddball_session::engine::Phase,
+        _intended: Option<u32>,
+    ) -> Result<(), oddball_session::SessionError> {
+        self.starts.push(start);
+        Ok(())
+    }
+    fn hold(&mut self) -> Result<bool, oddball_session::SessionError> {
+        if self.trials_ended != 1 {
+            return Ok(false);
+        }
+        let now = self.sim.position();
+        let (from, _) = *self.held.get_or_insert((now, None));
+        let hold = now < from + 2 * self.sim.sfreq() as u64;
+        if !hold {
+            self.held = Some((from, Some(now)));
+            self.trials_ended += 1;
+        }
+        Ok(hold)
+    }
+}
+
+impl oddball_session::roles::Observer for Paused {
+    fn trial_ended(
+        &mut self,
+        _t: &oddball_session::engine::TrialRecord,
+    ) -> Result<(), oddball_session::SessionError> {
+        self.trials_ended += 1;
+        Ok(())
+    }
+    fn channel_faults(
+        &mut self,
+        faults: &[oddball_session::online::ChannelFaults],
+    ) -> Result<(), oddball_session::SessionError> {
+        self.quality_reports.push(faults.len());
+        Ok(())
+    }
+}
+
+/// Issue #20, part 3: a pause holds the session between trials: the EEG runs on, no trial
+/// starts and nothing flashes until it is lifted, and calibration then completes as usual; the
+/// observer hears every channel's faults after every trial.
+#[test]
+fn a_pause_holds_the_session_between_trials_without_flashing() {
+    let sim = SubjectParams::preset(SubjectPreset::Easy)
+        .with_seed(2)
+        .build()
+        .unwrap();
+    let n_channels = sim.ch_names().len();
+    let subject = Paused {
+        sim,
+        trials_ended: 0,
+        held: None,
+        starts: Vec::new(),
+        onsets: Vec::new(),
+        quality_reports: Vec::new(),
+    };
+    let mut p = SessionParams::paper("lda");
+    p.calibration_per_bulb = 2;
+    p.seed = 2;
+    assert_eq!(p.calibration_trials(), 8);
+    let mut s = Session::new(p, subject, None).unwrap();
+    let cal = s.calibrate().unwrap();
+    assert_eq!(cal.n_trials, 8);
+    let sub = s.subject();
+    let (from, to) = sub.held.expect("held after the first trial");
+    let to = to.expect("and released");
+    let sfreq = sub.sim.sfreq() as u64;
+    assert!(to >= from + 2 * sfreq, "held {from}..{to}");
+    // No trial started and no flash fell inside the hold; the second trial starts at its end.
+    assert!(sub.onsets.iter().all(|&o| o < from || o >= to));
+    assert!(sub.onsets.iter().any(|&o| o < from) && sub.onsets.iter().any(|&o| o >= to));
+    assert_eq!(sub.starts.len(), 8);
+    assert!(
+        sub.starts[0] < from && sub.starts[1] == to,
+        "{:?}",
+        sub.starts
+    );
+    assert_eq!(sub.quality_reports, vec![n_channels; 8]);
+}

@@ -32,7 +32,7 @@ pub enum SignalError {
     },
     #[error("time window [{tmin}, {tmax}] s is empty, reversed, not finite or reaches further than {max} s from the onset", max = crate::MAX_WINDOW_S)]
     InvalidWindow { tmin: f64, tmax: f64 },
-    #[error("band {l_freq:?}–{h_freq:?} Hz does not fit between 0 and the Nyquist frequency {nyquist} Hz")]
+    #[error("{} does not fit between 0 and the Nyquist frequency {nyquist} Hz (half the sampling rate)", band_text(.l_freq, .h_freq))]
     InvalidBand {
         l_freq: Option<f64>,
         h_freq: Option<f64>,
@@ -65,4 +65,14 @@ pub enum SignalError {
     InvalidSection { index: usize },
     #[error("rejection threshold {threshold} µV must be positive and finite")]
     InvalidThreshold { threshold: f64 },
+}
+
+/// A band as a person writes it: "band 1–15 Hz", "high-pass 1 Hz", "low-pass 15 Hz".
+fn band_text(l_freq: &Option<f64>, h_freq: &Option<f64>) -> String {
+    match (l_freq, h_freq) {
+        (Some(l), Some(h)) => format!("band {l}–{h} Hz"),
+        (Some(l), None) => format!("high-pass {l} Hz"),
+        (None, Some(h)) => format!("low-pass {h} Hz"),
+        (None, None) => "a filter with neither edge".into(),
+    }
 }

@@ -50,10 +50,13 @@ fn a_band_beyond_nyquist_is_refused() {
             h_freq: 40.0,
         },
     };
-    assert!(matches!(
-        p.design(64.0),
-        Err(SignalError::InvalidBand { .. })
-    ));
+    let e = p.design(64.0).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidBand { .. }));
+    // As a person writes a band, not Rust's Option (it said "Some(1.0)–Some(40.0) Hz").
+    assert_eq!(
+        e.to_string(),
+        "band 1–40 Hz does not fit between 0 and the Nyquist frequency 32 Hz (half the sampling rate)"
+    );
     assert!(p.design(128.0).is_ok());
 }
 

@@ -22,12 +22,83 @@ use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides}
 use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
 
+/// An output file (`-o`, `--json`, `--csv`): checked when the arguments are parsed, before any
+/// work, so a mistyped folder fails at once instead of after training. Its folder must exist
+/// and the path must not be a folder.
+pub fn output_file(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() {
+        return Err("an empty path".into());
+    }
+    if path.is_dir() {
+        return Err(format!("{s} is a folder: give a file name inside it"));
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(path),
+    };
+    if !parent.is_dir() {
+        return Err(if parent.exists() {
+            format!("{} is not a folder", parent.display())
+        } else {
+            format!(
+                "the folder {} does not exist (create it first, e.g. mkdir -p {})",
+                parent.display(),
+                parent.display()
+            )
+        });
+    }
+    Ok(path)
+}
+
+/// A picture to write (`--plot`): an [`output_file`] ending in .png or .svg.
+pub fn plot_file(s: &str) -> Result<PathBuf, String> {
+    let path = output_file(s)?;
+    oddball_plot::PlotFormat::from_path(&path).map_err(|e| e.to_string())?;
+    Ok(path)
+}
+
+/// A report folder (`--out DIR`): created when the command starts; refused at once when a file
+/// of that name is in the way (or in the way of one of its parents).
+pub fn output_dir(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    if s.is_empty() {
+        return Err("an empty path".into());
+    }
+    for p in path.ancestors().filter(|p| !p.as_os_str().is_empty()) {
+        if p.exists() {
+            if !p.is_dir() {
+                return Err(format!(
+                    "{} is a file, not a folder: give another --out",
+                    p.display()
+                ));
+            }
+            break;
+        }
+    }
+    Ok(path)
+}
+
 /// The letter G of the paper, as `--commands` spells it.
 pub const LETTER_G: &str = "up,left,down,right,up,left";
 
-/// Comma-separated intended commands (up, down, left, right).
+/// `--commands letter-g`: the letter G of the drawing task's stroke font (`task draw --draw G`).
+pub const STROKE_G: &str = "letter-g";
+
+/// `--commands paper-g`: the paper's letter G as its six commands (`Command::LETTER_G`).
+pub const PAPER_G: &str = "paper-g";
+
+/// What `--commands` takes, for the help texts.
+pub const COMMANDS_HELP: &str = "Intended commands, comma-separated (up, down, left, right or u, d, l, r), or a named sequence: `letter-g`, the letter G of `task draw --draw G` (20 one-step moves: up the back and out along the top, then counter-clockwise round the letter as the paper draws it, left along the top, down, right, up and the spur left, then back down to the baseline), or `paper-g`, the paper's six commands up,left,down,right,up,left (the paper's strokes differ in length; on equal steps they trace a square one step wide, one and a half times round)";
+
+/// Intended commands: a comma-separated list (up, down, left, right), or a named sequence
+/// ([`STROKE_G`], [`PAPER_G`]).
 pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
-    let c = oddball_arm::parse_commands(s).map_err(|e| e.to_string())?;
+    let c = match s.trim() {
+        STROKE_G => oddball_session::task::text_commands("G").map_err(|e| e.to_string())?,
+        PAPER_G => Command::LETTER_G.to_vec(),
+        list => oddball_arm::parse_commands(list).map_err(|e| e.to_string())?,
+    };
     if c.is_empty() {
         return Err("empty: give at least one of up, down, left, right".into());
     }
@@ -162,10 +233,15 @@ pub struct SessionOptions {
     #[arg(long)]
     pub dynamic_stopping: bool,
     /// Posterior at which dynamic stopping decides.
-    #[arg(long, default_value_t = 0.95, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.95,
+        value_name = "P",
+        requires = "dynamic_stopping"
+    )]
     pub threshold: f64,
     /// Most rounds per decision with dynamic stopping.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, requires = "dynamic_stopping")]
     pub max_rounds: usize,
     /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
     /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
@@ -182,12 +258,26 @@ pub struct SessionOptions {
     #[arg(long, conflicts_with_all = ["dynamic_stopping", "threshold", "max_rounds"])]
     pub optimise_stopping: bool,
     /// The most rounds --optimise-stopping may choose.
-    #[arg(long, default_value_t = 12, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 12,
+        value_name = "N",
+        requires = "optimise_stopping"
+    )]
     pub round_limit: usize,
     /// With --optimise-stopping: only rules expected (from the calibration) to be right at
     /// least this often compete on bits/min; the most accurate wins when none is.
-    #[arg(long, default_value_t = 0.0, value_name = "P")]
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "P",
+        requires = "optimise_stopping"
+    )]
     pub min_accuracy: f64,
+    /// The step h one command moves the pen, metres (e.g. --step 0.01 for text that does not
+    /// fit the board at the default) [default: the arm's, 0.02].
+    #[arg(long, value_name = "METRES")]
+    pub step: Option<f64>,
 }
 
 /// The panel's timing: a named preset and changes to it.
@@ -296,6 +386,8 @@ impl SessionOptions {
         let SubjectSpec::Replay(file) = &self.subject else {
             return Ok(None);
         };
+        // The replayed file first: a missing one is not its calibration file's fault.
+        oddball_io::check_file(file).context("--subject replay:FILE")?;
         let cal = match &self.calibration {
             CalibrationSpec::File(c) => c.clone(),
             CalibrationSpec::Labelled => sibling_calibration(file)?,
@@ -305,6 +397,7 @@ impl SessionOptions {
                  --unsupervised` to replay a recording without labels)"
             ),
         };
+        oddball_io::check_file(&cal).context("the calibration recording")?;
         Ok(Some((file.clone(), cal)))
     }
 
@@ -338,7 +431,7 @@ impl SessionOptions {
         rule: DecisionRule,
         verbose: bool,
     ) -> Result<(Session<S>, CalibrationReport, Vector2<f64>)> {
-        let arm = recording_arm()?;
+        let arm = self.arm()?;
         let pen_start = arm.pen();
         let mut session = Session::new(self.params(rule), subject, Some(arm))
             .context("setting up the session")?;
@@ -362,7 +455,12 @@ impl SessionOptions {
             session.set_model(model).context("using --model")?;
             return Ok((session, CalibrationReport::none(), pen_start));
         }
-        let calibration = session.calibrate().context("calibrating")?;
+        let calibration = if verbose {
+            session.calibrate_with(&mut calibration_progress())
+        } else {
+            session.calibrate()
+        }
+        .context("calibrating")?;
         if self.adapt {
             session
                 .start_adaptation(0.8, 0.9)
@@ -434,6 +532,19 @@ impl SessionOptions {
         Ok(())
     }
 
+    /// The arm the session drives (recording its trace), with `--step`.
+    pub fn arm(&self) -> Result<ArmSim> {
+        recording_arm(self.step)
+    }
+
+    /// Checks, before any EEG work, that the intended commands keep the pen on the board.
+    pub fn check_commands(&self, commands: &[Command]) -> Result<()> {
+        oddball_session::task::check_path(&self.arm()?, commands, "the commands")
+            .map(|_| ())
+            .map_err(|e| with_step_hint(e.into()))
+            .context("checking --commands")
+    }
+
     /// Checks option combinations before any session starts.
     pub fn check(&self) -> Result<()> {
         if self.model.is_some() {
@@ -456,6 +567,7 @@ impl SessionOptions {
                 );
             }
         }
+        self.arm()?;
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");
         }
@@ -530,10 +642,66 @@ pub fn model_line(model: &Model, path: Option<&Path>) -> String {
 }
 
 /// The arm every session drives, recording its trace.
-pub fn recording_arm() -> Result<ArmSim> {
-    let mut arm = ArmSim::from_config(&ArmConfig::default()).context("setting up the arm")?;
+fn recording_arm(step_m: Option<f64>) -> Result<ArmSim> {
+    let mut config = ArmConfig::default();
+    if let Some(step) = step_m {
+        config.reference.step_m = step;
+    }
+    let mut arm = ArmSim::from_config(&config).context("checking --step")?;
     arm.set_recording(true);
     Ok(arm)
+}
+
+/// Prints a calibration's progress ("calibration decision 3 of 40 …") when it is slow enough
+/// to need it: a line after each trial once two seconds of wall time have passed since the
+/// start or the last line (a live or real-time calibration prints every trial; an unpaced
+/// simulation, over in a second, prints nothing).
+pub fn calibration_progress() -> impl FnMut(oddball_session::engine::CalibrationProgress) {
+    let mut last = std::time::Instant::now();
+    let mut printed = false;
+    move |p| {
+        let end = p.done == p.total;
+        if last.elapsed().as_secs_f64() >= 2.0 || (printed && end) {
+            println!(
+                "calibration decision {} of {} · {} of EEG{}",
+                p.done,
+                p.total,
+                minutes_seconds(p.eeg_seconds),
+                if end {
+                    " · training".to_string()
+                } else {
+                    format!(" · about {} left", minutes_seconds(p.seconds_left))
+                }
+            );
+            last = std::time::Instant::now();
+            printed = true;
+        }
+    }
+}
+
+/// "7 s", "2 min 05 s".
+pub fn minutes_seconds(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    if s < 60 {
+        format!("{s} s")
+    } else {
+        format!("{} min {:02} s", s / 60, s % 60)
+    }
+}
+
+/// Adds which option fixes a path that leaves the board: `--step` with the largest step that fits.
+pub fn with_step_hint(e: anyhow::Error) -> anyhow::Error {
+    let hint = match e.downcast_ref::<oddball_session::SessionError>() {
+        Some(oddball_session::SessionError::PathOffBoard {
+            max_step_m: Some(m),
+            ..
+        }) => format!("use --step {} (metres) or less, or draw less", m),
+        Some(oddball_session::SessionError::PathOffBoard { .. }) => {
+            "draw less: no step fits from the pen's start".to_string()
+        }
+        _ => return e,
+    };
+    e.context(hint)
 }
 
 /// A replayed subject: the calibration recording read and trained on, the test recording read.
@@ -574,7 +742,8 @@ const MAX_WAIT_PAGE_S: f64 = 86_400.0;
 #[derive(Debug, Clone, clap::Args)]
 pub struct PanelOptions {
     /// Serve the stimulus panel here (loopback unless --allow-remote; port 0 picks one) and
-    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/`.
+    /// wait for a page to open it; its first stdout line is `panel: http://ADDR/` (the subject
+    /// view), its second the operator view's address (progress, timing, pause and abort).
     #[arg(long, value_name = "HOST:PORT")]
     pub serve: Option<String>,
     /// Let --serve bind a non-loopback address.
@@ -600,6 +769,11 @@ impl PanelOptions {
         let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
             .context("starting the panel")?;
         println!("panel: http://{}/", panel.local_addr());
+        println!(
+            "operator view: http://{}{}",
+            panel.local_addr(),
+            oddball_live::panel::protocol::OPERATOR_PAGE
+        );
         if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
             bail!(
                 "no page opened the panel at http://{}/ within {} s",

@@ -14,8 +14,7 @@ use oddball_arm::{ArmConfig, ArmSim, ProgramReport, StepOutcome, Vector2};
 /// Options of `oddball arm`.
 #[derive(Debug, clap::Args)]
 pub struct ArmArgs {
-    /// Comma-separated commands: up, down, left, right (or u, d, l, r).
-    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg)]
+    #[arg(long, default_value = crate::args::LETTER_G, value_parser = crate::args::commands_arg, help = crate::args::COMMANDS_HELP)]
     pub commands: std::vec::Vec<oddball_arm::Command>,
     /// TOML model of the arm, board, controller and simulation (default: the built-in desk arm;
     /// see --print-config).
@@ -25,10 +24,10 @@ pub struct ArmArgs {
     #[arg(long, value_name = "METRES")]
     pub step: Option<f64>,
     /// Output directory for trajectory.csv and the plot.
-    #[arg(long, value_name = "DIR", default_value = "out/arm")]
+    #[arg(long, value_name = "DIR", default_value = "out/arm", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
     /// Plot file, .png or .svg [default: <out>/arm.png].
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
     /// Integration step and control period in seconds [default: from the config, 0.001 s].
     #[arg(long, value_name = "SECONDS")]

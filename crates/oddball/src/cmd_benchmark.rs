@@ -64,13 +64,13 @@ pub struct BenchmarkArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// Write every row, the summary and the comparisons as JSON here.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::output_file)]
     pub json: Option<PathBuf>,
     /// Write every row as CSV here.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::output_file)]
     pub csv: Option<PathBuf>,
     /// Draw per-subject AUC per preset and mean character accuracy vs repetitions (.png/.svg).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
 }
 

@@ -29,7 +29,8 @@ pub struct TrainArgs {
         long,
         visible_alias = "output",
         value_name = "FILE",
-        default_value = "model.json"
+        default_value = "model.json",
+        value_parser = crate::args::output_file
     )]
     pub out: PathBuf,
     /// Choose the preset's hyper-parameters from a small grid by cross-validation on the
@@ -95,10 +96,10 @@ pub struct EvaluateArgs {
     #[arg(long)]
     pub tune: bool,
     /// Draw character accuracy vs repetitions per preset (speller test files) to this .png/.svg.
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
     /// Also write the results as JSON here.
-    #[arg(short, long, visible_alias = "json", value_name = "FILE")]
+    #[arg(short, long, visible_alias = "json", value_name = "FILE", value_parser = crate::args::output_file)]
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub events: EventArgs,

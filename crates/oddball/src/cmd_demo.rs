@@ -1,6 +1,7 @@
 //! `oddball demo`: the whole closed loop with no hardware, as a copy task with fixed commands
-//! (the letter G by default). A subject (simulated, over any `--source`, or real EEG replayed)
-//! watches the four-bulb panel; the session calibrates, trains a pipeline, then decodes each
+//! (by default the letter G of the drawing task's stroke font; `--commands paper-g` gives the
+//! paper's six commands, which on equal steps trace a square). A subject (simulated, over any
+//! `--source`, or real EEG replayed) watches the four-bulb panel; the session calibrates, trains a pipeline, then decodes each
 //! intended command and the arm draws it.
 //!
 //! Writes a report folder: `decisions.csv`, `summary.json`, `pen_trace.png`, `erp.png` (the
@@ -29,7 +30,7 @@ use oddball_session::task::{run_copy, Pilot};
 use oddball_session::timing::{stopping_text, time_report, time_text, TimeReport};
 use serde::Serialize;
 
-use crate::args::{commands_arg, SessionOptions, SourceArgs, LETTER_G};
+use crate::args::{commands_arg, SessionOptions, SourceArgs, COMMANDS_HELP, STROKE_G};
 use crate::pilot::{live_subject, prepare, write_decisions_csv, AnyPilot};
 
 /// Options of `oddball demo`.
@@ -37,13 +38,12 @@ use crate::pilot::{live_subject, prepare, write_decisions_csv, AnyPilot};
 pub struct DemoArgs {
     #[command(flatten)]
     pub session: SessionOptions,
-    /// Comma-separated intended commands (up, down, left, right); the paper's letter G by default.
-    #[arg(long, default_value = LETTER_G, value_parser = commands_arg)]
+    #[arg(long, default_value = STROKE_G, value_parser = commands_arg, help = COMMANDS_HELP)]
     pub commands: std::vec::Vec<Command>,
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/demo")]
+    #[arg(long, value_name = "DIR", default_value = "out/demo", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
 }
 
@@ -78,6 +78,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let wall = Instant::now();
     let commands = &args.commands;
     let (fixed, rule) = args.session.rules()?;
+    args.session.check_commands(&args.commands)?;
     let opts = &args.session;
     let replay_files = opts.replay_files()?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
@@ -215,13 +216,18 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
             .with_context(|| format!("drawing {}", erp_png.display()))?;
     }
-    let expected: Vec<Vector2<f64>> = pen
-        .expected_m
-        .iter()
-        .map(|p| Vector2::new(p[0], p[1]))
-        .collect();
+    let xz = |v: &[[f64; 2]]| -> Vec<Vector2<f64>> {
+        v.iter().map(|p| Vector2::new(p[0], p[1])).collect()
+    };
+    let (intended, executed) = (xz(&pen.intended_m), xz(&pen.executed_m));
+    let paths = oddball_plot::arm::SessionPaths {
+        intended: &intended,
+        executed: &executed,
+        missed: &pen.missed,
+        numbered: true,
+    };
     let pen_png = args.out.join("pen_trace.png");
-    oddball_plot::arm::draw_pen_trace(&arm, &expected, &pen_png)
+    oddball_plot::arm::draw_pen_trace(&arm, &paths, &pen_png)
         .with_context(|| format!("drawing {}", pen_png.display()))?;
     let calibration = CalibrationSummary::from(&prep.calibration);
     let subject_label = prep.subject.clone();

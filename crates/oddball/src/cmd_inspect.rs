@@ -17,7 +17,7 @@ pub struct InspectArgs {
     pub files: Vec<PathBuf>,
     /// Draw target vs non-target averages per channel to this .png or .svg (all files pooled;
     /// they must share channels and sampling rate).
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
     /// High-pass edge of the band-pass applied before averaging, Hz.
     #[arg(long, default_value_t = 1.0)]

@@ -2,8 +2,9 @@
 //! the wall clock), flashes drawn by the browser panel the binary serves, markers stamped by
 //! the frames that drew them, decisions driving the arm, everything recorded to XDF as it runs.
 //!
-//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`), then
-//! waits for a page before the first countdown.
+//! Prints the panel's address on its first line when serving (`panel: http://ADDR/`, the
+//! subject view; the operator view's on the next), then waits for a subject view before the
+//! first countdown.
 
 use std::fs;
 use std::path::PathBuf;
@@ -24,8 +25,7 @@ use oddball_session::roles::EegStream;
 use oddball_session::task::run_copy;
 
 use crate::args::{
-    commands_arg, recording_arm, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs,
-    LETTER_G,
+    commands_arg, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
 };
 
 /// Options of `oddball online`.
@@ -51,12 +51,13 @@ pub struct OnlineArgs {
     pub session: SessionOptions,
     /// Report folder: session.xdf (written as the session runs; an existing one is kept and the
     /// new one numbered) and summary.json.
-    #[arg(long, value_name = "DIR", default_value = "out/online")]
+    #[arg(long, value_name = "DIR", default_value = "out/online", value_parser = crate::args::output_dir)]
     pub out: PathBuf,
 }
 
 pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
+    args.session.check_commands(&args.commands)?;
     let uncalibrated = args.session.calibration == CalibrationSpec::None;
     if (args.session.model.is_none(), args.calibrate, uncalibrated) == (true, false, false) {
         bail!("give --model FILE, --calibrate (labelled calibration first) or --calibration none");
@@ -126,7 +127,7 @@ fn run_with(
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = args.session.paradigm();
-    let arm = recording_arm()?;
+    let arm = args.session.arm()?;
     let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
         &record_path,
@@ -145,7 +146,7 @@ fn run_with(
         if args.session.calibration == CalibrationSpec::None {
             "no calibration"
         } else if args.calibrate {
-            "calibrating first"
+            "labelled calibration"
         } else {
             "model loaded"
         }
@@ -176,6 +177,12 @@ fn run_with(
     let mut session = Session::new(args.session.params(rule), subject, Some(arm))
         .context("setting up the session")?;
     args.session.name_channels(&mut session)?;
+    // The operator view's progress: "calibration decision 3 of 40", "decision 2 of 6".
+    let calibrating = model.is_none() && args.session.calibration != CalibrationSpec::None;
+    let n_calibration = calibrating.then(|| session.params().calibration_trials());
+    session
+        .subject_mut()
+        .set_plan(n_calibration, Some(commands.len()));
     // A stop request or a source that ends during calibration still closes the recording and
     // writes the summary (with no decisions).
     let mut ended = None;
@@ -211,7 +218,7 @@ fn run_with(
             args.session.start_uncalibrated(&mut session, p)?;
             println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
         }
-        None => match session.calibrate() {
+        None => match session.calibrate_with(&mut crate::args::calibration_progress()) {
             Ok(c) => {
                 if args.session.adapt {
                     session

@@ -2,9 +2,10 @@
 //! simulated or replayed subject, and the metrics a BCI study reports.
 //!
 //! Writes a report folder like `oddball demo`: `decisions.csv`, `summary.json`, `model.json`,
-//! `erp.png`, `pen_trace.png` (the arm, and the pen trace over the planned path), `task.png`
-//! (tracking: targets, the path taken and the minimal path), and for simulated subjects the raw
-//! session `session.dat`.
+//! `erp.png`, `pen_trace.png` (the arm, and the pen trace over the intended path with the
+//! executed path and the wrong and abstained decisions marked), `task.png` (tracking: targets,
+//! the path taken and the minimal path; drawing: the pen panel alone, under the task's result),
+//! and for simulated subjects the raw session `session.dat`.
 
 use std::fs;
 use std::path::Path;
@@ -15,10 +16,11 @@ use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
 use oddball_session::report::{
-    accuracy_over_time, accuracy_over_time_text, draw_text, DecisionRow,
+    accuracy_over_time, accuracy_over_time_text, draw_text, executed_path, missed_decisions,
+    DecisionRow,
 };
 use oddball_session::task::{
-    drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
+    check_drawing, drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
 };
 use serde::Serialize;
 
@@ -58,7 +60,7 @@ pub struct TrackArgs {
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/track")]
+    #[arg(long, value_name = "DIR", default_value = "out/track", value_parser = crate::args::output_dir)]
     pub out: std::path::PathBuf,
 }
 
@@ -74,7 +76,7 @@ pub struct DrawArgs {
     #[command(flatten)]
     pub source: SourceArgs,
     /// Report folder.
-    #[arg(long, value_name = "DIR", default_value = "out/draw")]
+    #[arg(long, value_name = "DIR", default_value = "out/draw", value_parser = crate::args::output_dir)]
     pub out: std::path::PathBuf,
 }
 
@@ -189,8 +191,9 @@ fn run_track(args: &TrackArgs) -> Result<()> {
     };
     // Before calibrating: the targets, tolerance and count (TrackParams::check).
     params
-        .check(&crate::args::recording_arm()?)
+        .check(&args.session.arm()?)
         .context("checking --target/--targets/--tolerance-mm")?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut prep = prepare_task(&args.session, &args.source, "track", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: task_targets(arm, &params)
@@ -200,18 +203,16 @@ fn run_track(args: &TrackArgs) -> Result<()> {
             plan_m: Vec::new(),
         })
     })?;
-    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_tracking(&mut prep.pilot, &params)?;
     print!("{report}");
-    let expected: Vec<Vector2<f64>> = std::iter::once(prep.pen_start)
-        .chain(
-            report
-                .targets
-                .iter()
-                .flat_map(|t| t.path_m.iter().skip(1).map(|p| Vector2::new(p[0], p[1]))),
-        )
+    let targets: Vec<Vector2<f64>> = report
+        .targets
+        .iter()
+        .map(|t| Vector2::new(t.target_m[0], t.target_m[1]))
         .collect();
-    write_common(&args.out, &prep, &report.steps, &expected)?;
+    let step_m = prep.pilot.arm().settings().step_m;
+    let intended = oddball_session::task::intended_track_path(prep.pen_start, &targets, step_m);
+    write_common(&args.out, &prep, &report.steps, &intended, None)?;
     oddball_plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
     write_summary(&args.out, "track", &args.session, &prep, &report)?;
@@ -220,6 +221,12 @@ fn run_track(args: &TrackArgs) -> Result<()> {
 
 fn run_draw(args: &DrawArgs) -> Result<()> {
     let wall = Instant::now();
+    // Before calibrating: the text must fit the board at this step.
+    args.session.rules()?;
+    check_drawing(&args.session.arm()?, &args.text)
+        .map_err(|e| crate::args::with_step_hint(e.into()))
+        .with_context(|| format!("checking --draw {:?}", args.text))?;
+    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut prep = prepare_task(&args.session, &args.source, "draw", &args.panel, |arm| {
         Ok(TaskView {
             targets_m: Vec::new(),
@@ -229,27 +236,40 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
                 .collect(),
         })
     })?;
-    fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let report = run_drawing(&mut prep.pilot, &args.text, 3, 1.0)
         .with_context(|| format!("drawing {:?}", args.text))?;
     print!("{}", draw_text(&report));
-    let expected: Vec<Vector2<f64>> = report
+    let plan: Vec<Vector2<f64>> = report
         .plan_path_m
         .iter()
         .map(|p| Vector2::new(p[0], p[1]))
         .collect();
-    write_common(&args.out, &prep, &report.steps, &expected)?;
+    let title = format!(
+        "Drawing {:?}: {} in {} decisions (plan {}), pen within {:.3} mm of the plan",
+        report.text,
+        if report.completed {
+            "completed"
+        } else {
+            "NOT completed"
+        },
+        report.decisions,
+        report.min_decisions,
+        report.max_deviation_m * 1e3
+    );
+    write_common(&args.out, &prep, &report.steps, &plan, Some(&title))?;
     write_summary(&args.out, "draw", &args.session, &prep, &report)?;
     finish(prep, &args.out, wall)
 }
 
-/// decisions.csv, model.json, erp.png (after a labelled calibration) and pen_trace.png; prints
-/// the accuracy over time.
+/// decisions.csv, model.json, erp.png (after a labelled calibration) and pen_trace.png (the
+/// `intended` path, the executed one and the missed decisions), and with `task_title` the pen
+/// panel alone as task.png; prints the accuracy over time.
 fn write_common(
     out: &Path,
     prep: &Prepared,
     steps: &[Step],
-    expected: &[Vector2<f64>],
+    intended: &[Vector2<f64>],
+    task_title: Option<&str>,
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
     oddball_io::write_atomic(out.join("model.json"), crate::pilot::model_json(prep)?)
@@ -269,9 +289,25 @@ fn write_common(
         oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp)
             .with_context(|| format!("drawing {}", erp_png.display()))?;
     }
+    let arm = prep.pilot.arm();
+    let step_m = arm.settings().step_m;
+    let executed = executed_path(prep.pen_start, &rows, step_m);
+    let missed = missed_decisions(prep.pen_start, &rows, step_m);
+    let paths = oddball_plot::arm::SessionPaths {
+        intended,
+        executed: &executed,
+        missed: &missed,
+        numbered: false,
+    };
     let pen_png = out.join("pen_trace.png");
-    oddball_plot::arm::draw_pen_trace(prep.pilot.arm(), expected, &pen_png)
-        .with_context(|| format!("drawing {}", pen_png.display()))
+    oddball_plot::arm::draw_pen_trace(arm, &paths, &pen_png)
+        .with_context(|| format!("drawing {}", pen_png.display()))?;
+    if let Some(title) = task_title {
+        let task_png = out.join("task.png");
+        oddball_plot::arm::draw_pen_paths(arm, &paths, title, &task_png)
+            .with_context(|| format!("drawing {}", task_png.display()))?;
+    }
+    Ok(())
 }
 
 /// summary.json: what ran, the calibration and the task's report.

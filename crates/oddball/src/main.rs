@@ -40,22 +40,53 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// The whole closed loop without hardware: calibrate, then steer the arm through the letter G.
+    #[command(after_help = "Examples:
+  oddball demo                                   # simulated subject, report in out/demo
+  oddball demo --subject hard --dynamic-stopping --out out/hard
+  oddball demo --subject replay:../shared/data/bci2000-samplefiles-p300/eeg3_2.dat")]
     Demo(cmd_demo::DemoArgs),
     /// Tasks: steer the pen to targets (track) or draw text (draw), with study metrics.
+    #[command(after_help = "Examples:
+  oddball task track --targets 5
+  oddball task draw --draw HI
+  oddball task draw --draw HELLO --step 0.01     # smaller steps so the text fits the board")]
     Task(cmd_task::TaskArgs),
     /// A live session: EEG from a live stream, the stimulus panel in a browser, recorded as it runs.
+    #[command(after_help = "Examples:
+  oddball online --source sim --calibrate --serve 127.0.0.1:8080 --realtime
+  oddball online --source lsl:type=EEG --calibrate --serve 127.0.0.1:8080   # needs --features lsl
+  oddball online --source nic:127.0.0.1:1234 --model out/demo/model.json")]
     Online(Box<cmd_online::OnlineArgs>),
     /// Serve the simulated subject as a live amplifier stream: NIC's TCP protocol or an LSL outlet.
+    #[command(after_help = "Examples:
+  oddball simulate --nic 127.0.0.1:1234          # then: oddball demo --source nic:127.0.0.1:1234
+  oddball simulate --lsl oddball-sim             # needs --features lsl")]
     Simulate(cmd_simulate::SimulateArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
+    #[command(after_help = "Examples:
+  oddball inspect eeg3_1.dat --plot erp.png
+  oddball inspect muse.csv --target-events 2 --nontarget-events 1")]
     Inspect(cmd_inspect::InspectArgs),
     /// Fit a decoding pipeline on recordings and save the model (JSON).
+    #[command(after_help = "Examples:
+  oddball train eeg3_1.dat --pipeline lda -o model.json
+  oddball train run1.csv run2.csv --target-events 2 --nontarget-events 1 --tune -o model.json")]
     Train(cmd_decode::TrainArgs),
     /// Score pipelines on held-out recordings (or by cross-validation): AUC, speller accuracy vs repetitions, ITR.
+    #[command(after_help = "Examples:
+  oddball evaluate --train eeg3_1.dat --test eeg3_2.dat --pipeline all --plot accuracy.png
+  oddball evaluate --train session.dat --pipeline lda,riemann --tune   # nested cross-validation
+  oddball evaluate --test eeg3_2.dat --model model.json")]
     Evaluate(cmd_decode::EvaluateArgs),
     /// Every preset on every subject of dataset manifests (MOABB's protocols): per-subject rows, means, paired tests, JSON/CSV/plot.
+    #[command(after_help = "Examples:
+  oddball benchmark datasets/bci2000-eeg3.toml --pipeline all --json results.json --plot results.png
+  oddball benchmark datasets/*.toml --protocol within-session --folds 5")]
     Benchmark(cmd_benchmark::BenchmarkArgs),
     /// Simulate the 2-DoF arm following direction commands (the paper's G by default).
+    #[command(after_help = "Examples:
+  oddball arm                                    # the paper's six commands
+  oddball arm --commands up,up,right --step 0.01 --plot arm.svg")]
     Arm(cmd_arm::ArmArgs),
 }
 

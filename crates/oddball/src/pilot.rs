@@ -13,7 +13,7 @@ use oddball_live::source::{AnySource, SourceSpec};
 use oddball_session::replay::{accepted_epochs, ReplaySource};
 use oddball_session::task::{ReplayPilot, Step};
 
-use crate::args::{recording_arm, Replayed, SessionOptions, SourceArgs};
+use crate::args::{Replayed, SessionOptions, SourceArgs};
 
 /// The live subject over `--source` (the simulated subject of `opts` for `sim`), paced by the
 /// wall clock when `paced`.
@@ -74,7 +74,7 @@ pub fn prepare(
         let replay = ReplaySource::new(&r.test, &r.model, &r.params)
             .with_context(|| format!("replaying {}", file.display()))?;
         on_replay(&r, &replay)?;
-        let arm = recording_arm()?;
+        let arm = opts.arm()?;
         let pen_start = arm.pen();
         let erp = accepted_epochs(
             &r.calibration_recording,

@@ -42,20 +42,28 @@ fn demo_draws_the_g_deterministically_and_its_session_re_evaluates_to_the_same_d
             "{f} differs between two runs of one seed"
         );
     }
-    // Six decisions, each printed with intended, decided, rounds and confidence.
+    // The G of the stroke font: 20 decisions, each printed with intended, decided, rounds and
+    // confidence.
     let lines: Vec<&str> = out_a
         .lines()
         .filter(|l| l.starts_with("decision "))
         .collect();
-    assert_eq!(lines.len(), 6, "{out_a}");
+    assert_eq!(lines.len(), 20, "{out_a}");
     let s = summary(&a);
     assert!(s["result"]["accuracy"].as_f64().unwrap() >= 0.95, "{out_a}");
     assert!(s["pen"]["drew_intended_path"].as_bool().unwrap());
     assert!(s["pen"]["max_corner_error_mm"].as_f64().unwrap() < 0.5);
-    assert_eq!(s["pen"]["corners_m"].as_array().unwrap().len(), 6);
+    assert_eq!(s["pen"]["corners_m"].as_array().unwrap().len(), 20);
+    // The pen's corners trace a G: back, top, bottom, the right side's two corners and the
+    // spur's tip (not the 4 corners of a square).
+    let corners = pen_corners(&s);
+    assert!(corners.len() >= 6, "{corners:?}\n{out_a}");
+    // Every decision right: nothing marked, the executed path is the intended one.
+    assert_eq!(s["pen"]["missed"].as_array().unwrap().len(), 0);
+    assert_eq!(s["pen"]["intended_m"], s["pen"]["executed_m"]);
     assert!(s["result"]["itr"]["bits_per_minute"].as_f64().unwrap() > 5.0);
     let csv = std::fs::read_to_string(a.join("decisions.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 7);
+    assert_eq!(csv.lines().count(), 21);
     assert!(csv.starts_with("decision,intended,decided,"));
 
     // The saved raw session, re-evaluated offline with the saved model: the same decisions.
@@ -68,7 +76,7 @@ fn demo_draws_the_g_deterministically_and_its_session_re_evaluates_to_the_same_d
     ]);
     assert!(ok, "{err}");
     assert!(
-        out.contains("6 online decisions: 6 identical to the recorded ones"),
+        out.contains("20 online decisions: 20 identical to the recorded ones"),
         "{out}"
     );
     // The session file is a recording like any other.
@@ -77,6 +85,54 @@ fn demo_draws_the_g_deterministically_and_its_session_re_evaluates_to_the_same_d
     assert!(out.contains("500"), "{out}");
     std::fs::remove_dir_all(&a).ok();
     std::fs::remove_dir_all(&b).ok();
+}
+
+/// The distinct corners of the pen's path in a demo's summary (to the millimetre): its start,
+/// its end and every point where it turns, each counted once however often it is visited.
+fn pen_corners(s: &serde_json::Value) -> Vec<(i64, i64)> {
+    let xz = |p: &serde_json::Value| {
+        let mm = |v: &serde_json::Value| (v.as_f64().unwrap() * 1e3).round() as i64;
+        (mm(&p[0]), mm(&p[1]))
+    };
+    // Where the pen was at the first decision, then after each executed command.
+    let mut path = vec![xz(&s["decisions"][0]["pen_m"])];
+    path.extend(s["pen"]["corners_m"].as_array().unwrap().iter().map(xz));
+    path.dedup();
+    let heading = |a: (i64, i64), b: (i64, i64)| ((b.0 - a.0).signum(), (b.1 - a.1).signum());
+    let mut corners: Vec<(i64, i64)> = Vec::new();
+    for (i, &p) in path.iter().enumerate() {
+        let turns =
+            i == 0 || i + 1 == path.len() || heading(path[i - 1], p) != heading(p, path[i + 1]);
+        if turns && !corners.contains(&p) {
+            corners.push(p);
+        }
+    }
+    corners
+}
+
+#[test]
+fn the_papers_six_commands_are_one_option_away_and_trace_a_square() {
+    let dir = tmp("paper-g");
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--commands",
+        "paper-g",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let s = summary(&dir);
+    assert_eq!(s["result"]["decisions"].as_u64(), Some(6), "{out}");
+    assert!(s["pen"]["drew_intended_path"].as_bool().unwrap(), "{out}");
+    // Up, left, down, right, up, left on equal steps: a square's 4 corners, one and a half
+    // times round. The help says why.
+    assert_eq!(pen_corners(&s).len(), 4, "{out}");
+    let (ok, help, _) = common::oddball(&["demo", "--help"]);
+    assert!(
+        ok && help.contains("paper-g") && help.contains("square"),
+        "{help}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -159,6 +215,20 @@ fn bad_options_are_clear_errors() {
         "demo",
         "--subject",
         "replay:/nonexistent/eeg9_2.dat",
+        "--out",
+        tmp("bad").to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    // A missing replayed file is named itself (it used to be blamed on its calibration file).
+    assert!(err.contains("eeg9_2.dat: no such file"), "{err}");
+    // One that exists without an _1 sibling needs --calibration.
+    let lone = tmp("lone");
+    std::fs::create_dir_all(&lone).unwrap();
+    std::fs::write(lone.join("eeg9_2.dat"), b"").unwrap();
+    let (ok, _, err) = common::oddball(&[
+        "demo",
+        "--subject",
+        &format!("replay:{}", lone.join("eeg9_2.dat").display()),
         "--out",
         tmp("bad").to_str().unwrap(),
     ]);

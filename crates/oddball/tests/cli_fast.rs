@@ -23,8 +23,16 @@ fn seven_gs() -> String {
 #[test]
 fn demo_at_the_fast_timing_draws_the_g_and_splits_the_time() {
     let dir = tmp("g");
-    let (ok, out, err) =
-        common::oddball(&["demo", "--paradigm", "fast", "--out", dir.to_str().unwrap()]);
+    // The paper's six commands (the stroke font's 20-move G: 18/20 right on this seed).
+    let (ok, out, err) = common::oddball(&[
+        "demo",
+        "--paradigm",
+        "fast",
+        "--commands",
+        "paper-g",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
     assert!(ok, "{err}");
     assert!(
         out.contains("panel timing: 100 ms on, 75 ms off, rounds of 700 ms, 1.0 s cue"),

@@ -16,6 +16,26 @@ fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&text).expect("summary.json is JSON")
 }
 
+/// At least 5 of every 6 decisions of the run in `dir` right.
+fn mostly_right(dir: &Path) -> bool {
+    let s = summary(dir);
+    let n = s["result"]["decisions"].as_u64().unwrap();
+    n > 0 && 6 * s["result"]["correct"].as_u64().unwrap() >= 5 * n
+}
+
+/// `evaluate --model … --test session` found every online decision identical.
+fn all_identical(stdout: &str) -> bool {
+    stdout.lines().any(|l| {
+        let mut w = l.split_whitespace();
+        match (w.next(), w.next(), w.next(), w.next(), w.next()) {
+            (Some(n), Some("online"), Some("decisions:"), Some(m), Some("identical")) => {
+                n == m.trim_end_matches(',') && n != "0"
+            }
+            _ => false,
+        }
+    })
+}
+
 fn decisions(stdout: &str) -> Vec<&str> {
     stdout
         .lines()
@@ -62,11 +82,15 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
     assert!(ok, "{err}");
     assert!(out.contains("no calibration"), "{out}");
     assert!(!out.contains("calibration: 10 decisions"), "{out}");
-    assert_eq!(decisions(&out).len(), 6, "{out}");
     let s = summary(&b);
+    let n = s["commands"].as_array().unwrap().len();
+    assert_eq!(decisions(&out).len(), n, "{out}");
     assert_eq!(s["calibration"]["trials"], 0, "{s}");
-    let right = s["result"]["correct"].as_u64().unwrap();
-    assert!(right >= 5, "{right}/6 right from the offline model: {out}");
+    let right = s["result"]["correct"].as_u64().unwrap() as usize;
+    assert!(
+        6 * right >= 5 * n,
+        "{right}/{n} right from the offline model: {out}"
+    );
     // The model the session ran (its causal fit) re-decides the session's own recording.
     let (ok, out, err) = common::oddball(&[
         "evaluate",
@@ -77,7 +101,9 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
     ]);
     assert!(ok, "{err}");
     assert!(
-        out.contains("6 online decisions: 6 identical to the recorded ones"),
+        out.contains(&format!(
+            "{n} online decisions: {n} identical to the recorded ones"
+        )),
         "{out}"
     );
 
@@ -238,10 +264,7 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("4 channels at 500 Hz"), "{out}");
-    assert!(
-        summary(&b)["result"]["correct"].as_u64().unwrap() >= 5,
-        "{out}"
-    );
+    assert!(mostly_right(&b), "{out}");
     let (ok, out, err) = common::oddball(&[
         "evaluate",
         "--model",
@@ -250,10 +273,7 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         b.join("session.dat").to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(
-        out.contains("6 online decisions: 6 identical to the recorded ones"),
-        "{out}"
-    );
+    assert!(all_identical(&out), "{out}");
 
     // A montage renames every channel: a model trained under those names needs them in the
     // session too, and says so when they are missing.
@@ -293,10 +313,7 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         c.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(
-        summary(&c)["result"]["correct"].as_u64().unwrap() >= 5,
-        "{out}"
-    );
+    assert!(mostly_right(&c), "{out}");
     let (ok, out, err) = common::oddball(&["inspect", c.join("session.dat").to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(out.contains("channels   8: A1 A2 A3"), "{out}");
@@ -332,10 +349,7 @@ fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
         out.contains("resampling the EEG from 500 Hz to the model's 256 Hz as it streams"),
         "{out}"
     );
-    assert!(
-        summary(&b)["result"]["correct"].as_u64().unwrap() >= 5,
-        "{out}"
-    );
+    assert!(mostly_right(&b), "{out}");
     // The session ran, and recorded, at the model's rate: its recording re-decides the same.
     let (ok, out, err) = common::oddball(&["inspect", b.join("session.dat").to_str().unwrap()]);
     assert!(ok, "{err}");
@@ -348,8 +362,5 @@ fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
         b.join("session.dat").to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(
-        out.contains("6 online decisions: 6 identical to the recorded ones"),
-        "{out}"
-    );
+    assert!(all_identical(&out), "{out}");
 }

@@ -195,7 +195,7 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
     assert!(ok, "{err}");
     assert!(short.contains("ended after"), "{short}");
     assert!(
-        short.contains("(1 of 2 made before the recording ended)"),
+        short.contains("(1 of 2 made before the session stopped)"),
         "{short}"
     );
     assert!(!short.contains("replay: 20 of 20"), "{short}");

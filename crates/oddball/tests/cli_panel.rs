@@ -1,8 +1,14 @@
 //! The stimulus panel in a real browser: `oddball online --serve` with headless Chromium driven
 //! by Playwright (tools/panel-test/panel.mjs). The page loads, counts down, flashes with on-times
 //! of 100 ms within one frame, shows the decisions and moves the arm; a screenshot is saved
-//! to target/panel-test.png. Meanwhile a second client sends malformed, oversized and binary
-//! messages and disconnects: the server refuses them and the session goes on.
+//! to target/panel-test.png (and the operator view's decisions to
+//! target/panel-test-operator.png). Meanwhile a second client sends malformed, oversized and
+//! binary messages and an abort on the subject's socket, and disconnects: the server refuses
+//! them and the session goes on.
+//!
+//! Both views at once (tools/panel-test/views.mjs): the subject view full screen and the
+//! operator view during a live calibration, screenshots of each (target/panel-subject.png,
+//! target/panel-operator.png); pause, resume and abort from the operator view.
 //!
 //! Needs Chromium and Node with playwright-core: runs when ODDBALL_CHROMIUM names the browser
 //! (CI: `apt-get install chromium`, `npm ci` in tools/panel-test), otherwise says it skips.
@@ -149,7 +155,9 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
                 .ok()
         })
         .expect("panel stats line");
-    assert!(rejected >= 3, "{rest}");
+    // Malformed, oversized, binary, a bad code, and an abort on the subject's socket (refused:
+    // the session made both decisions).
+    assert!(rejected >= 5, "{rest}");
 }
 
 #[test]
@@ -181,4 +189,100 @@ fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
         "the page shows the target: {page_out}"
     );
     assert!(rest.contains("reached 1/1 targets"), "{rest}");
+}
+
+/// Issue #20, part 3: the operator view shows calibration progress ("calibration: decision 2 of
+/// 8"), flash timing and channel quality (a recording played back live with one dead channel and
+/// one far too noisy: "flat or saturated" and "noisy", the others "ok") while the subject view,
+/// full screen, shows only the task; a pause holds the session (no flash drawn for 3 s), a
+/// resume restarts the flashing, and abort stops the session as SIGTERM does: it exits 0 with
+/// its recording complete and readable (the pause and resume marked in it) and its summary
+/// written.
+#[test]
+fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() {
+    let Some(chromium) = chromium() else {
+        return;
+    };
+    let dir = common::tmp_dir("panel-views");
+    // 4 channels at 256 Hz: ch1 dead (0 µV), ch2 with ±500 µV of noise.
+    let (mut data, markers, sfreq) = oddball_testkit::synthetic_oddball(4, 7);
+    data.row_mut(1).fill(0.0);
+    data.row_mut(2).mapv_inplace(|v| 100.0 * v);
+    let faulty = dir.join("faulty.csv");
+    oddball_testkit::write_codes_csv(&faulty, &data, &markers, sfreq);
+    let out = dir.join("online");
+    let mut online = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["online", "--serve", "127.0.0.1:0", "--calibrate"])
+        .arg(format!("--source=replay:{}", faulty.display()))
+        .args(["--calibration-per-bulb", "2", "--paradigm", "fast"])
+        .args(["--commands", "up,left", "--seed", "3"])
+        .args(["--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("oddball online starts");
+    let mut stdout = BufReader::new(online.stdout.take().unwrap());
+    let url = panel_url(&mut stdout);
+    let shots = ["panel-subject.png", "panel-operator.png"].map(|s| root().join("target").join(s));
+    for s in &shots {
+        let _ = std::fs::remove_file(s);
+    }
+    let page = Command::new("node")
+        .current_dir(root().join("tools/panel-test"))
+        .env("CHROMIUM", &chromium)
+        .arg("views.mjs")
+        .arg(&url)
+        .args(&shots)
+        .arg(r#"{"ch0":"ok","ch1":"flat or saturated","ch2":"noisy","ch3":"ok"}"#)
+        .output()
+        .expect("node runs");
+    let mut rest = String::new();
+    stdout.read_to_string(&mut rest).unwrap();
+    let status = online.wait().unwrap();
+    println!(
+        "page: {}\n{}\nsession:\n{rest}",
+        String::from_utf8_lossy(&page.stdout),
+        String::from_utf8_lossy(&page.stderr)
+    );
+    assert!(page.status.success(), "the page checks failed");
+    for s in &shots {
+        assert!(s.is_file(), "no screenshot {}", s.display());
+    }
+    // Aborted during calibration: a clean stop, not an error.
+    assert!(status.success(), "the session failed:\n{rest}");
+    assert!(
+        rest.contains("calibration: aborted from the operator view"),
+        "{rest}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["ended"], "aborted from the operator view");
+    // The recording is complete: it opens, and holds every sample the session printed.
+    let printed: usize = rest
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("recording: ")?
+                .rsplit_once(" (")?
+                .1
+                .strip_suffix(" samples)")?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no recording line:\n{rest}"));
+    let path = out.join("session.xdf");
+    let rec = oddball_io::read(&path).expect("the aborted session's recording opens");
+    assert_eq!(rec.raw.n_times(), printed);
+    // Several trials' worth of EEG, the pause included.
+    assert!(
+        rec.raw.n_times() as f64 / rec.raw.sfreq() > 10.0,
+        "{} samples",
+        rec.raw.n_times()
+    );
+    let bytes = std::fs::read(&path).unwrap();
+    for marker in [&b"pause"[..], b"resume"] {
+        assert!(
+            bytes.windows(marker.len()).any(|w| w == marker),
+            "no {} marker in the recording",
+            String::from_utf8_lossy(marker)
+        );
+    }
 }

@@ -38,3 +38,25 @@ fn inspect_into_a_pipe_closed_after_one_line_exits_0() {
     assert!(out.status.success(), "{:?}: {stderr}", out.status);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `oddball demo | head -1` (issue #20: it exited 101).
+#[test]
+fn demo_into_a_pipe_closed_after_one_line_exits_0() {
+    let dir = TempDir::new("cli-pipe-demo");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["demo", "--out"])
+        .arg(dir.path().join("demo"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("oddball runs");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut first)
+        .unwrap();
+    assert!(first.starts_with("oddball demo:"), "{first}");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -69,6 +69,10 @@ fn drawing_hi_stays_within_a_millimetre() {
     let s = summary(&dir);
     assert!(s["report"]["completed"].as_bool().unwrap());
     assert!(s["report"]["max_deviation_m"].as_f64().unwrap() < 1e-3);
+    // The drawing's own picture, beside the arm's.
+    for f in ["task.png", "pen_trace.png"] {
+        assert!(dir.join(f).exists(), "{f} written");
+    }
     // Text the font lacks, and explicit targets that are not numbers, are clear errors.
     let (ok, _, err) = common::oddball(&[
         "task",

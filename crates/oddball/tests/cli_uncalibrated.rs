@@ -64,14 +64,11 @@ fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
     assert!(ok, "{err}");
     let model = other.join("model.json");
     for (commands, need) in [
-        (None, 5),
-        (
-            Some(["up", "left", "down", "right"].repeat(10).join(",")),
-            37,
-        ),
+        ("paper-g".to_string(), 5),
+        (["up", "left", "down", "right"].repeat(10).join(","), 37),
     ] {
         let out = tmp.join("me");
-        let mut args = vec![
+        let args = vec![
             "demo",
             "--calibration",
             "none",
@@ -79,10 +76,9 @@ fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
             model.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
+            "--commands",
+            &commands,
         ];
-        if let Some(c) = &commands {
-            args.extend(["--commands", c]);
-        }
         let (ok, text, err) = oddball(&args);
         assert!(ok, "{err}");
         assert!(text.contains("transfer: starting from"), "{text}");
@@ -90,7 +86,7 @@ fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
                 .unwrap();
         let correct = s["result"]["correct"].as_u64().unwrap();
-        // The G: at least 5 of its 6 strokes right; 40 decisions: at least 37 right.
+        // The paper's G: at least 5 of its 6 strokes right; 40 decisions: at least 37 right.
         assert!(correct >= need, "{correct} right:\n{text}");
     }
     let (ok, _, err) = oddball(&["demo", "--transfer", model.to_str().unwrap()]);

@@ -19,12 +19,18 @@
 //!   share their front (channel selection + features) share its fit in each fold, and a front that
 //!   learns nothing (amplitude or paper features) is computed once for all epochs; both give the
 //!   same scores as fitting each candidate's whole pipeline per fold (a test checks this).
+//!   [`grid_search_cached`] and [`tune_cached`] take those features from a
+//!   [`FrontCache`] over a larger data set, shared with other searches (nested
+//!   cross-validation's outer folds, other presets); the folds of a search run in parallel
+//!   (rayon), which changes no score.
 //!
 //! The functions only ever see the data they are given: the caller passes the training epochs,
 //! and held-out test data can't influence the choice.
 
 use ndarray::{ArrayView3, Axis};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 use crate::amplitude::AmplitudeFeatures;
 use crate::classifiers::ClassifierParams;
@@ -32,7 +38,7 @@ use crate::ensemble::MemberParams;
 use crate::features::FeatureParams;
 use crate::knn::KnnParams;
 use crate::metrics::roc_auc;
-use crate::pipeline::PipelineParams;
+use crate::pipeline::{FrontCache, Necked, PipelineParams};
 use crate::preset::Preset;
 use crate::svm::SvmParams;
 use crate::DecodeError;
@@ -182,6 +188,30 @@ pub fn grid_search_with(
     k: usize,
     on_fit: &mut dyn FnMut(),
 ) -> Result<GridSearch> {
+    let all: Vec<usize> = (0..epochs.dim().0).collect();
+    grid_search_cached(
+        candidates,
+        &mut FrontCache::new(epochs),
+        &all,
+        y,
+        groups,
+        k,
+        on_fit,
+    )
+}
+
+/// [`grid_search_with`] on the epochs at `subset` of `cache`'s epochs (labels `y` and groups
+/// for the subset): a front that learns nothing takes its features from `cache`, shared with
+/// every other search, fold and preset on the same epochs.
+pub fn grid_search_cached(
+    candidates: &[PipelineParams],
+    cache: &mut FrontCache<'_>,
+    subset: &[usize],
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<GridSearch> {
     if candidates.is_empty() {
         return Err(DecodeError::InvalidParameter {
             name: "candidates",
@@ -189,9 +219,9 @@ pub fn grid_search_with(
             reason: "a grid search needs at least one candidate".into(),
         });
     }
-    if y.len() != epochs.dim().0 {
+    if y.len() != subset.len() {
         return Err(DecodeError::LabelCount {
-            n_samples: epochs.dim().0,
+            n_samples: subset.len(),
             n_labels: y.len(),
         });
     }
@@ -199,23 +229,45 @@ pub fn grid_search_with(
     let n = candidates.len();
     let mut fold_auc = vec![vec![0.0; folds.n_folds()]; n];
     let mut done = vec![false; n];
+    // Indices into the cache's epochs of the subset's epochs at `idx`.
+    let full = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| subset[i]).collect() };
+    let epochs = cache.epochs();
+    // The labels and groups of each fold's two parts.
+    let parts: Vec<FoldParts> = (0..folds.n_folds())
+        .map(|f| {
+            let (tr, te) = folds.split(f);
+            FoldParts {
+                ytr: tr.iter().map(|&e| y[e]).collect(),
+                yte: te.iter().map(|&e| y[e]).collect(),
+                gtr: groups.map(|g| tr.iter().map(|&e| g[e]).collect()),
+                tr,
+                te,
+            }
+        })
+        .collect();
+    // The folds of one candidate group run in parallel (rayon); each is fitted on its own
+    // training part only, so the scores do not depend on the number of threads.
     for i in 0..n {
         if done[i] {
             continue;
         }
         if !candidates[i].fused.is_empty() {
             // A score fusion is fitted whole in each fold (its fronts differ).
-            for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
-                let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
-                let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-                let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&e| g[e]).collect());
-                let m = candidates[i].fit_grouped(
-                    epochs.select(Axis(0), &tr).view(),
-                    &ytr,
-                    gtr.as_deref(),
-                )?;
-                let scores = m.decision_function(epochs.select(Axis(0), &te).view())?;
-                fold_auc[i][f] = roc_auc(&scores.to_vec(), &yte)?;
+            let aucs = parts
+                .par_iter()
+                .map(|p| {
+                    let m = candidates[i].fit_grouped(
+                        epochs.select(Axis(0), &full(&p.tr)).view(),
+                        &p.ytr,
+                        p.gtr.as_deref(),
+                    )?;
+                    let scores =
+                        m.decision_function(epochs.select(Axis(0), &full(&p.te)).view())?;
+                    roc_auc(&scores.to_vec(), &p.yte)
+                })
+                .collect::<Result<Vec<f64>>>()?;
+            for (f, auc) in aucs.into_iter().enumerate() {
+                fold_auc[i][f] = auc;
                 on_fit();
             }
             done[i] = true;
@@ -228,25 +280,87 @@ pub fn grid_search_with(
                     && candidates[i].main.same_front(&candidates[j].main)
             })
             .collect();
-        let shared = candidates[i].main.stateless_features(epochs).transpose()?;
-        for (f, (tr, te)) in (0..folds.n_folds()).map(|f| folds.split(f)).enumerate() {
-            let ytr: Vec<bool> = tr.iter().map(|&e| y[e]).collect();
-            let yte: Vec<bool> = te.iter().map(|&e| y[e]).collect();
-            let n_in = epochs.dim().1;
-            let (xtr, xte, n_front) = match &shared {
-                Some(x) => (x.select(&tr), x.select(&te), n_in),
-                None => {
-                    let etr = epochs.select(Axis(0), &tr);
-                    let (front, xtr) = candidates[i].main.fit_front(etr.view(), &ytr)?;
-                    let xte = front.transform(epochs.select(Axis(0), &te).view())?;
-                    (xtr, xte, front.n_channels(n_in))
+        let shared = cache.rows(&candidates[i].main, subset).transpose()?;
+        let n_in = epochs.dim().1;
+        // Members with the same scaler and PCA share one neck per fold; with a cached front
+        // it comes from (and goes to) the cache, shared with other searches and presets.
+        let mut groups_of_neck: Vec<Vec<usize>> = Vec::new();
+        for &j in &members {
+            match groups_of_neck
+                .iter_mut()
+                .find(|g| candidates[g[0]].main.same_neck(&candidates[j].main))
+            {
+                Some(g) => g.push(j),
+                None => groups_of_neck.push(vec![j]),
+            }
+        }
+        let split_of = |p: &FoldParts| (full(&p.tr), full(&p.te));
+        let known: Vec<Vec<Option<Arc<Necked>>>> = parts
+            .iter()
+            .map(|p| {
+                let (tr, te) = split_of(p);
+                groups_of_neck
+                    .iter()
+                    .map(|g| {
+                        let q = &candidates[g[0]].main;
+                        (shared.is_some() && q.has_neck())
+                            .then(|| cache.necked(q, &tr, &te))
+                            .flatten()
+                    })
+                    .collect()
+            })
+            .collect();
+        type FoldOut = (Vec<(usize, f64)>, Vec<(usize, Arc<Necked>)>);
+        let outs = parts
+            .par_iter()
+            .zip(known.par_iter())
+            .map(|(p, known)| -> Result<FoldOut> {
+                let (xtr, xte, n_front) = match &shared {
+                    Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
+                    None => {
+                        let etr = epochs.select(Axis(0), &full(&p.tr));
+                        let (front, xtr) = candidates[i].main.fit_front(etr.view(), &p.ytr)?;
+                        let xte = front.transform(epochs.select(Axis(0), &full(&p.te)).view())?;
+                        (xtr, xte, front.n_channels(n_in))
+                    }
+                };
+                let mut aucs = Vec::new();
+                let mut fitted = Vec::new();
+                for (gi, g) in groups_of_neck.iter().enumerate() {
+                    let q = &candidates[g[0]].main;
+                    let necked = match &known[gi] {
+                        Some(k) => k.clone(),
+                        None => {
+                            let k = Arc::new(q.neck_split(xtr.clone(), xte.clone())?);
+                            if shared.is_some() && q.has_neck() {
+                                fitted.push((gi, k.clone()));
+                            }
+                            k
+                        }
+                    };
+                    for &j in g {
+                        let (scores, _, _) = candidates[j]
+                            .main
+                            .classifier_scores(&necked, &p.ytr, n_front)?;
+                        aucs.push((j, roc_auc(&scores.to_vec(), &p.yte)?));
+                    }
                 }
-            };
-            for &j in &members {
-                let head = candidates[j].main.fit_head(xtr.clone(), &ytr, n_front)?;
-                let scores = head.decision_function(xte.clone())?;
-                fold_auc[j][f] = roc_auc(&scores.to_vec(), &yte)?;
+                Ok((aucs, fitted))
+            })
+            .collect::<Result<Vec<FoldOut>>>()?;
+        for (f, (aucs, fitted)) in outs.into_iter().enumerate() {
+            for (j, auc) in aucs {
+                fold_auc[j][f] = auc;
                 on_fit();
+            }
+            let (tr, te) = split_of(&parts[f]);
+            for (gi, k) in fitted {
+                cache.keep_necked(
+                    &candidates[groups_of_neck[gi][0]].main,
+                    tr.clone(),
+                    te.clone(),
+                    k,
+                );
             }
         }
         for &j in &members {
@@ -265,6 +379,15 @@ pub fn grid_search_with(
         n_folds: folds.n_folds(),
         grouped: folds.grouped(),
     })
+}
+
+/// One fold's training and test epochs (indices into the searched subset), labels and groups.
+struct FoldParts {
+    tr: Vec<usize>,
+    te: Vec<usize>,
+    ytr: Vec<bool>,
+    yte: Vec<bool>,
+    gtr: Option<Vec<usize>>,
 }
 
 /// A candidate's cross-validated score, as reported and saved with a tuned model.
@@ -299,8 +422,30 @@ pub fn tune(
     k: usize,
     on_fit: &mut dyn FnMut(),
 ) -> Result<(PipelineParams, TuningReport)> {
+    let all: Vec<usize> = (0..epochs.dim().0).collect();
+    tune_cached(
+        candidates,
+        &mut FrontCache::new(epochs),
+        &all,
+        y,
+        groups,
+        k,
+        on_fit,
+    )
+}
+
+/// [`tune`] on the epochs at `subset` of `cache`'s epochs ([`grid_search_cached`]).
+pub fn tune_cached(
+    candidates: &[Candidate],
+    cache: &mut FrontCache<'_>,
+    subset: &[usize],
+    y: &[bool],
+    groups: Option<&[usize]>,
+    k: usize,
+    on_fit: &mut dyn FnMut(),
+) -> Result<(PipelineParams, TuningReport)> {
     let params: Vec<PipelineParams> = candidates.iter().map(|c| c.params.clone()).collect();
-    let g = grid_search_with(&params, epochs, y, groups, k, on_fit)?;
+    let g = grid_search_cached(&params, cache, subset, y, groups, k, on_fit)?;
     let report = TuningReport {
         chosen: candidates[g.best].label.clone(),
         candidates: candidates
@@ -451,6 +596,49 @@ mod tests {
                 assert_eq!(g.fold_auc[j][f], auc, "candidate {j}, fold {f}");
             }
         }
+    }
+
+    /// One cache shared by several presets' searches on different subsets (as nested
+    /// cross-validation shares it across outer folds and presets) gives exactly the scores of
+    /// searches and fits that compute everything from the subset's own epochs.
+    #[test]
+    fn a_shared_front_cache_changes_no_score() {
+        let (x, y, groups) = synthetic(24 * 4, 5);
+        let mut cache = FrontCache::new(x.view());
+        let outer = cv_folds(&y, Some(&groups), 2).unwrap();
+        for name in ["lda", "paper-knn", "paper-svm", "riemann", "lda+riemann"] {
+            let grid: Vec<PipelineParams> = preset_grid(name, 64.0)
+                .unwrap()
+                .into_iter()
+                .map(|c| c.params)
+                .collect();
+            for f in 0..2 {
+                let (tr, te) = outer.split(f);
+                let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+                let gtr: Vec<usize> = tr.iter().map(|&i| groups[i]).collect();
+                let xtr = x.select(Axis(0), &tr);
+                let cached =
+                    grid_search_cached(&grid, &mut cache, &tr, &ytr, Some(&gtr), 2, &mut || {})
+                        .unwrap();
+                let alone =
+                    grid_search_with(&grid, xtr.view(), &ytr, Some(&gtr), 2, &mut || {}).unwrap();
+                assert_eq!(cached.fold_auc, alone.fold_auc, "{name}, outer fold {f}");
+                let p = &grid[cached.best];
+                let s = p
+                    .fit_score_cached(&mut cache, &tr, &ytr, Some(&gtr), &te)
+                    .unwrap();
+                let m = p.fit_grouped(xtr.view(), &ytr, Some(&gtr)).unwrap();
+                let whole = m.decision_function(x.select(Axis(0), &te).view()).unwrap();
+                assert_eq!(s.scores, whole, "{name}, outer fold {f}");
+                assert!(s.fit_s >= 0.0 && s.score_s >= 0.0);
+            }
+        }
+        // Amplitude bins of 2 and 3 samples (64/25 and 64/20 both round to 3) and the paper's
+        // features: three fronts, each computed once; riemann's xDAWN learns and is never cached.
+        assert_eq!(cache.len(), 3);
+        // The paper presets' scaler + PCA: one per split (2 outer folds × (2 inner + 1)), the
+        // ones paper-knn fitted reused by paper-svm's six grid points.
+        assert_eq!(cache.n_necks(), 6);
     }
 
     #[test]

@@ -17,6 +17,8 @@
 
 pub mod fusion;
 
+use std::sync::Arc;
+
 use ndarray::{Array1, ArrayView2, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
@@ -145,19 +147,7 @@ impl SingleParams {
     /// Fits every step on `epochs` labelled `y`.
     pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Single> {
         let (n_epochs, n_channels, n_times) = epochs.dim();
-        if y.len() != n_epochs {
-            return Err(DecodeError::LabelCount {
-                n_samples: n_epochs,
-                n_labels: y.len(),
-            });
-        }
-        let n_targets = y.iter().filter(|&&t| t).count();
-        if n_targets == 0 || n_targets == n_epochs {
-            return Err(DecodeError::NeedBothClasses {
-                n_targets,
-                n_nontargets: n_epochs - n_targets,
-            });
-        }
+        check_labels(n_epochs, y)?;
         let (front, x) = self.fit_front(epochs, y)?;
         let n_front = front.n_channels(n_channels);
         let Front { channels, features } = front;
@@ -211,6 +201,59 @@ impl SingleParams {
     /// Fits the steps after the features (scaler, PCA, classifier) on features `x` of epochs
     /// with `n_channels` channels (after channel selection).
     pub(crate) fn fit_head(&self, x: FeatureData, y: &[bool], n_channels: usize) -> Result<Head> {
+        let (neck, x) = self.fit_neck(x)?;
+        self.fit_classifier(neck, x, y, n_channels)
+    }
+
+    /// Whether `other` has the same front, scaler and PCA (so one fitted neck serves both:
+    /// the grid points of an SVM's `C` and `γ`, or the paper's three presets).
+    pub(crate) fn same_neck(&self, other: &Self) -> bool {
+        self.same_front(other) && self.scaler == other.scaler && self.pca == other.pca
+    }
+
+    /// Whether a neck is fitted at all (a scaler or a PCA).
+    pub(crate) fn has_neck(&self) -> bool {
+        self.scaler.is_some() || self.pca.is_some()
+    }
+
+    /// The neck fitted on `xtr`, and both parts through it, timed.
+    pub(crate) fn neck_split(&self, xtr: FeatureData, xte: FeatureData) -> Result<Necked> {
+        let t0 = std::time::Instant::now();
+        let (neck, xtr) = self.fit_neck(xtr)?;
+        let fit_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let xte = neck.transform(xte)?;
+        Ok(Necked {
+            xtr,
+            xte,
+            fit_s,
+            transform_s: t1.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Fits the classifier on necked training features and scores the necked test features;
+    /// the scores, and the seconds the fit and the scoring took.
+    pub(crate) fn classifier_scores(
+        &self,
+        necked: &Necked,
+        y: &[bool],
+        n_channels: usize,
+    ) -> Result<(Array1<f64>, f64, f64)> {
+        let t0 = std::time::Instant::now();
+        let classifier = with_gamma_factor(
+            &self.classifier,
+            necked.xtr.view(),
+            self.svm_gamma_scale,
+        )?
+        .fit(necked.xtr.view(), y, n_channels)?;
+        let fit_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let scores = classifier.scorer().decision_function(necked.xte.view())?;
+        Ok((scores, fit_s, t1.elapsed().as_secs_f64()))
+    }
+
+    /// Fits the scaler and the PCA on features `x`; returns them with `x` through them.
+    pub(crate) fn fit_neck(&self, x: FeatureData) -> Result<(Neck, FeatureData)> {
         let mut x = x;
         let scaler = match &self.scaler {
             Some(p) => {
@@ -230,14 +273,25 @@ impl SingleParams {
             }
             None => None,
         };
+        Ok((Neck { scaler, pca }, x))
+    }
+
+    /// Fits the classifier on features `x` already through `neck`.
+    pub(crate) fn fit_classifier(
+        &self,
+        neck: Neck,
+        x: FeatureData,
+        y: &[bool],
+        n_channels: usize,
+    ) -> Result<Head> {
         let classifier = with_gamma_factor(&self.classifier, x.view(), self.svm_gamma_scale)?.fit(
             x.view(),
             y,
             n_channels,
         )?;
         Ok(Head {
-            scaler,
-            pca,
+            scaler: neck.scaler,
+            pca: neck.pca,
             classifier,
         })
     }
@@ -257,6 +311,222 @@ impl SingleParams {
                 .and_then(|f| f.transform(epochs)),
         )
     }
+}
+
+/// Features of every epoch of one data set for the fronts that learn nothing (no channel
+/// selection, a stateless feature map: amplitude bins, the paper's EMD + Hilbert + wavelet
+/// features), each computed once and shared by every fold, grid point and preset with that
+/// front. A subset's rows are selected, never recomputed — the same rows the front gives the
+/// subset's epochs alone, since it learns nothing from them. Fronts that learn (channel
+/// selection, xDAWN) are never cached: they must be fitted inside each training split.
+#[derive(Debug)]
+pub struct FrontCache<'a> {
+    epochs: ArrayView3<'a, f64>,
+    /// Each front's features of all epochs and the seconds per epoch they took.
+    entries: Vec<(SingleParams, FeatureData, f64)>,
+    /// Features of a cached front through a scaler and PCA fitted on one split's training
+    /// part: (settings, training indices, test indices, result).
+    necks: Vec<NeckEntry>,
+}
+
+/// A cached neck: its settings, the split's training and test indices, the result.
+type NeckEntry = (SingleParams, Vec<usize>, Vec<usize>, Arc<Necked>);
+
+/// Most necked splits a [`FrontCache`] keeps (nested cross-validation of the paper's three
+/// presets needs outer folds × (inner folds + 1), 30 at 5 × 5).
+const MAX_NECKS: usize = 512;
+
+/// One split's features through a neck fitted on its training part, and the seconds the fit
+/// and the test part's transform took.
+#[derive(Debug)]
+pub(crate) struct Necked {
+    pub(crate) xtr: FeatureData,
+    pub(crate) xte: FeatureData,
+    pub(crate) fit_s: f64,
+    pub(crate) transform_s: f64,
+}
+
+/// Scores from [`PipelineParams::fit_score_cached`] and the seconds fitting and scoring took; a
+/// cached front's share is its measured seconds per epoch times the epochs of each part.
+#[derive(Debug, Clone)]
+pub struct CachedScores {
+    pub scores: Array1<f64>,
+    pub fit_s: f64,
+    pub score_s: f64,
+}
+
+impl<'a> FrontCache<'a> {
+    /// An empty cache over `epochs` `(n_epochs, n_channels, n_times)`.
+    pub fn new(epochs: ArrayView3<'a, f64>) -> Self {
+        Self {
+            epochs,
+            entries: Vec::new(),
+            necks: Vec::new(),
+        }
+    }
+
+    /// The cached neck of `p` for the split (`train`, `test`), indices into the cache's epochs.
+    pub(crate) fn necked(
+        &self,
+        p: &SingleParams,
+        train: &[usize],
+        test: &[usize],
+    ) -> Option<Arc<Necked>> {
+        self.necks
+            .iter()
+            .find(|(q, tr, te, _)| q.same_neck(p) && tr == train && te == test)
+            .map(|(_, _, _, n)| n.clone())
+    }
+
+    /// Keeps a neck fitted on a cached front's features (up to [`MAX_NECKS`]).
+    pub(crate) fn keep_necked(
+        &mut self,
+        p: &SingleParams,
+        train: Vec<usize>,
+        test: Vec<usize>,
+        necked: Arc<Necked>,
+    ) {
+        if self.necks.len() < MAX_NECKS && self.necked(p, &train, &test).is_none() {
+            self.necks.push((p.clone(), train, test, necked));
+        }
+    }
+
+    /// The epochs the cache serves.
+    pub fn epochs(&self) -> ArrayView3<'a, f64> {
+        self.epochs
+    }
+
+    /// The features `p`'s front gives the epochs at `subset` (computed for all epochs on first
+    /// use); `None` when the front learns from its training data.
+    pub(crate) fn rows(
+        &mut self,
+        p: &SingleParams,
+        subset: &[usize],
+    ) -> Option<Result<FeatureData>> {
+        self.rows_timed(p, subset).map(|r| r.map(|(x, _)| x))
+    }
+
+    /// [`Self::rows`] and the seconds per epoch the front's features took.
+    fn rows_timed(
+        &mut self,
+        p: &SingleParams,
+        subset: &[usize],
+    ) -> Option<Result<(FeatureData, f64)>> {
+        if let Some((_, x, s)) = self.entries.iter().find(|(q, _, _)| q.same_front(p)) {
+            return Some(Ok((x.select(subset), *s)));
+        }
+        let t0 = std::time::Instant::now();
+        match p.stateless_features(self.epochs)? {
+            Ok(x) => {
+                let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
+                let rows = x.select(subset);
+                self.entries.push((p.clone(), x, per_epoch));
+                Some(Ok((rows, per_epoch)))
+            }
+            Err(e) => Some(Err(e)),
+        }
+    }
+
+    /// Splits whose scaler and PCA are cached so far.
+    pub fn n_necks(&self) -> usize {
+        self.necks.len()
+    }
+
+    /// Fronts cached so far.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether nothing is cached yet.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}
+
+impl PipelineParams {
+    /// Scores of the epochs at `test` by this pipeline fitted on the epochs at `train` (indices
+    /// into `cache`'s epochs, labels `y_train`, groups for a stack's inner folds). A single
+    /// pipeline whose front learns nothing takes its features from `cache`; any other is fitted
+    /// whole — the scores are the same either way.
+    pub fn fit_score_cached(
+        &self,
+        cache: &mut FrontCache<'_>,
+        train: &[usize],
+        y_train: &[bool],
+        groups: Option<&[usize]>,
+        test: &[usize],
+    ) -> Result<CachedScores> {
+        if self.fused.is_empty() {
+            let idx: Vec<usize> = train.iter().chain(test).copied().collect();
+            if let Some(x) = cache.rows_timed(&self.main, &idx) {
+                let (x, per_epoch) = x?;
+                let n = train.len();
+                let tr: Vec<usize> = (0..n).collect();
+                let te: Vec<usize> = (n..idx.len()).collect();
+                check_labels(n, y_train)?;
+                let n_channels = cache.epochs().dim().1;
+                if self.main.has_neck() {
+                    let necked = match cache.necked(&self.main, train, test) {
+                        Some(k) => k,
+                        None => {
+                            let k = Arc::new(self.main.neck_split(x.select(&tr), x.select(&te))?);
+                            cache.keep_necked(&self.main, train.to_vec(), test.to_vec(), k.clone());
+                            k
+                        }
+                    };
+                    let (scores, clf_fit_s, clf_score_s) =
+                        self.main.classifier_scores(&necked, y_train, n_channels)?;
+                    let fit_s = clf_fit_s + necked.fit_s + per_epoch * n as f64;
+                    let score_s = clf_score_s + necked.transform_s + per_epoch * te.len() as f64;
+                    return Ok(CachedScores {
+                        scores,
+                        fit_s,
+                        score_s,
+                    });
+                }
+                let t0 = std::time::Instant::now();
+                let head = self.main.fit_head(x.select(&tr), y_train, n_channels)?;
+                let fit_s = t0.elapsed().as_secs_f64() + per_epoch * n as f64;
+                let t1 = std::time::Instant::now();
+                let scores = head.decision_function(x.select(&te))?;
+                let score_s = t1.elapsed().as_secs_f64() + per_epoch * te.len() as f64;
+                return Ok(CachedScores {
+                    scores,
+                    fit_s,
+                    score_s,
+                });
+            }
+        }
+        let epochs = cache.epochs();
+        let t0 = std::time::Instant::now();
+        let model = self.fit_grouped(epochs.select(Axis(0), train).view(), y_train, groups)?;
+        let fit_s = t0.elapsed().as_secs_f64();
+        let t1 = std::time::Instant::now();
+        let scores = model.decision_function(epochs.select(Axis(0), test).view())?;
+        Ok(CachedScores {
+            scores,
+            fit_s,
+            score_s: t1.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// The checks [`SingleParams::fit`] makes before fitting: one label per epoch, both classes.
+fn check_labels(n_epochs: usize, y: &[bool]) -> Result<()> {
+    if y.len() != n_epochs {
+        return Err(DecodeError::LabelCount {
+            n_samples: n_epochs,
+            n_labels: y.len(),
+        });
+    }
+    let n_targets = y.iter().filter(|&&t| t).count();
+    if n_targets == 0 || n_targets == n_epochs {
+        return Err(DecodeError::NeedBothClasses {
+            n_targets,
+            n_nontargets: n_epochs - n_targets,
+        });
+    }
+    Ok(())
 }
 
 /// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
@@ -321,6 +591,20 @@ impl Front {
             Some(c) => self.features.transform(c.transform(epochs)?.view()),
             None => self.features.transform(epochs),
         }
+    }
+}
+
+/// The fitted scaler and PCA of a pipeline: what lies between its features and its classifier.
+#[derive(Debug, Clone)]
+pub(crate) struct Neck {
+    scaler: Option<StandardScaler>,
+    pca: Option<Pca>,
+}
+
+impl Neck {
+    /// Features `x` through the scaler and the PCA.
+    pub(crate) fn transform(&self, x: FeatureData) -> Result<FeatureData> {
+        scale_and_project(self.scaler.as_ref(), self.pca.as_ref(), x)
     }
 }
 

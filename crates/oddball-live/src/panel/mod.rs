@@ -1,9 +1,16 @@
-//! The stimulus panel a person looks at: a web page served by the binary (assets embedded),
-//! live over a WebSocket.
+//! The stimulus panel: two web pages served by the binary (assets embedded), live over
+//! WebSockets ([`protocol`] is the one home of the paths and messages).
 //!
-//! The page draws the four bulbs, the countdown with the cue, the flashes on the schedule the
-//! session sends ahead of time, the decision, and the arm with its pen trace (plus the task's
-//! targets or planned shape). A flash is stamped when the page actually draws it: the page
+//! The subject view (`/`) fills the screen (and goes full screen on a click or the F key) with
+//! nothing but the task: the four bulbs and the arm scaled to the viewport, the countdown with
+//! the cue, the flashes on the schedule the session sends ahead of time, the last decision, the
+//! arm with its pen trace (plus the task's targets or planned shape), and when the session is
+//! over, that it is. The operator view (`/operator`) shows what the person must not be
+//! distracted by: progress ("calibration decision 3 of 40"), flash timing and clock figures,
+//! per-channel signal quality (epochs rejected as NaN, flat or saturated, noisy), the decisions
+//! with their confidence, and pause / resume / abort buttons. A pause holds the session before
+//! its next trial ([`oddball_session::roles::Presenter::hold`]); an abort stops it as SIGTERM
+//! does. A flash is stamped when the subject page actually draws it: the page
 //! keeps the offset of its clock (`performance.now()`) to the server's session clock from
 //! ping/pong pairs (the one with the shortest round trip wins) and reports each flash's
 //! on and off frames (requestAnimationFrame times) on the server clock. The session turns those
@@ -17,10 +24,19 @@
 pub mod protocol;
 mod server;
 
-pub use protocol::{ClientMsg, PanelConfig, ProtocolError, ServerMsg, MAX_CLIENT_MESSAGE};
+pub use protocol::{
+    ChannelQuality, ClientMsg, Control, PanelConfig, ProtocolError, Role, ServerMsg,
+    MAX_CLIENT_MESSAGE,
+};
 pub use server::{DrawnReport, PanelServer, PanelStats};
 
-/// The page, embedded in the binary.
+/// The subject view, embedded in the binary.
 pub const INDEX_HTML: &str = include_str!("../../assets/index.html");
 /// Its script.
 pub const PANEL_JS: &str = include_str!("../../assets/panel.js");
+/// The operator view.
+pub const OPERATOR_HTML: &str = include_str!("../../assets/operator.html");
+/// Its script.
+pub const OPERATOR_JS: &str = include_str!("../../assets/operator.js");
+/// What both scripts share: the WebSocket connection and the bulbs' labels.
+pub const COMMON_JS: &str = include_str!("../../assets/common.js");

@@ -1,4 +1,10 @@
-//! The panel's WebSocket messages, JSON with a `"t"` tag.
+//! The panel's WebSocket messages, JSON with a `"t"` tag: the one home of the protocol both
+//! pages speak.
+//!
+//! Two pages connect: the subject view (`/`, WebSocket [`SUBJECT_WS`]) draws and stamps the
+//! flashes; the operator view (`/operator`, WebSocket [`OPERATOR_WS`]) watches (timing,
+//! progress, channel quality, decisions) and sends [`ClientMsg::Control`]. Each socket accepts
+//! only its own page's messages ([`Role::accepts`]). Every server message goes to both.
 //!
 //! Times are milliseconds on the server's session clock ([`crate::clock::Clock`]); the page
 //! keeps its own clock offset from ping/pong pairs and converts both ways. Client messages are
@@ -6,10 +12,61 @@
 //! is rejected with a [`ProtocolError`] naming what was wrong (and counted by the server; the
 //! connection stays up).
 
+use oddball_session::online::ChannelFaults;
 use serde::{Deserialize, Serialize};
 
 /// Largest client message accepted, bytes.
 pub const MAX_CLIENT_MESSAGE: usize = 1024;
+
+/// The subject view's page and WebSocket paths.
+pub const SUBJECT_PAGE: &str = "/";
+pub const SUBJECT_WS: &str = "/ws";
+/// The operator view's page and WebSocket paths.
+pub const OPERATOR_PAGE: &str = "/operator";
+pub const OPERATOR_WS: &str = "/ws/operator";
+
+/// Which page a socket serves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// The person's screen: draws and stamps flashes.
+    Subject,
+    /// The operator's screen: watches and controls.
+    Operator,
+}
+
+impl Role {
+    /// Whether a page of this role may send `msg` (the subject page cannot pause or abort,
+    /// the operator page cannot stamp flashes).
+    pub fn accepts(self, msg: &ClientMsg) -> bool {
+        match msg {
+            ClientMsg::Ping { .. } => true,
+            ClientMsg::On { .. }
+            | ClientMsg::Off { .. }
+            | ClientMsg::Hello { .. }
+            | ClientMsg::Clock { .. } => self == Role::Subject,
+            ClientMsg::Control { .. } => self == Role::Operator,
+        }
+    }
+}
+
+/// What the operator asks of the session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Control {
+    /// Hold before the next trial (a trial under way finishes first).
+    Pause,
+    Resume,
+    /// Stop the session as SIGTERM does: the recording closed, the summary written.
+    Abort,
+}
+
+/// One channel's signal quality: epochs its faults cost, in the last trial and in all.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ChannelQuality {
+    pub name: String,
+    pub last: ChannelFaults,
+    pub total: ChannelFaults,
+}
 
 /// Static facts the page needs to draw: sent on connect.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -22,6 +79,8 @@ pub struct PanelConfig {
     pub board_m: [f64; 4],
     /// The arm's base, metres.
     pub base_m: [f64; 2],
+    /// The arm's pose before it first moves: elbow and pen, metres.
+    pub pose_m: [[f64; 2]; 2],
     /// The task: targets to reach (metres), and the planned shape (a polyline, metres).
     pub targets_m: Vec<[f64; 2]>,
     pub plan_m: Vec<[f64; 2]>,
@@ -40,6 +99,8 @@ impl PanelConfig {
         title: String,
     ) -> Self {
         let board = arm.workspace().board;
+        let elbow = arm.plant().elbow_position(&arm.state().q);
+        let pen = arm.pen();
         Self {
             bulbs: paradigm
                 .bulbs
@@ -50,6 +111,7 @@ impl PanelConfig {
             countdown_s: paradigm.countdown_s,
             board_m: [board.x_min_m, board.x_max_m, board.z_min_m, board.z_max_m],
             base_m: [arm.plant().base()[0], arm.plant().base()[1]],
+            pose_m: [[elbow[0], elbow[1]], [pen[0], pen[1]]],
             targets_m,
             plan_m,
             title,
@@ -63,10 +125,13 @@ impl PanelConfig {
 pub enum ServerMsg {
     Config(PanelConfig),
     /// A trial's countdown starts at `at_ms`; the person is cued to attend `cue` (`None`:
-    /// nothing; calibration and copy tasks show it).
+    /// nothing; calibration and copy tasks show it). It is number `number` (from 1) of its
+    /// phase, of `of` when the session knows how many there will be.
     Trial {
         trial: usize,
         phase: String,
+        number: usize,
+        of: Option<usize>,
         cue: Option<u32>,
         at_ms: f64,
         countdown_s: f64,
@@ -89,6 +154,8 @@ pub enum ServerMsg {
         code: Option<u32>,
         intended: Option<u32>,
         posterior: Vec<f64>,
+        /// The posterior of the decided bulb (abstaining: of the best one).
+        confidence: f64,
         rounds: usize,
         refused: Option<String>,
     },
@@ -98,14 +165,29 @@ pub enum ServerMsg {
         elbow_m: [f64; 2],
         pen_m: [f64; 2],
     },
-    /// Server-side timing figures for the diagnostics panel.
+    /// Server-side timing figures for the operator's diagnostics.
     Diag {
         text: String,
+    },
+    /// Per channel, the epochs rejected because of it (after every trial).
+    Quality {
+        channels: Vec<ChannelQuality>,
+    },
+    /// The session holds between trials (`true`, the operator paused it) or runs on.
+    Paused {
+        paused: bool,
+        at_ms: f64,
     },
     Pong {
         id: u64,
         page_ms: f64,
         server_ms: f64,
+    },
+    /// Pages connected now: subject views and operator views (sent on every connect and
+    /// disconnect).
+    Pages {
+        subject: usize,
+        operator: usize,
     },
     /// The session is over.
     End {
@@ -125,6 +207,11 @@ pub enum ClientMsg {
     Off { id: u64, off_ms: f64 },
     /// The page's refresh interval as measured (ms) and its user agent.
     Hello { frame_ms: f64, agent: String },
+    /// The page's clock sync: its offset to the server clock (server − page, ms) and the round
+    /// trip of the ping that set it (ms), sent when it improves.
+    Clock { offset_ms: f64, rtt_ms: f64 },
+    /// The operator pauses, resumes or aborts the session.
+    Control { action: Control },
 }
 
 /// Why a client message was rejected.
@@ -186,6 +273,18 @@ pub fn parse_client(text: &str) -> Result<ClientMsg, ProtocolError> {
         }
         ClientMsg::Off { off_ms, .. } => finite("off_ms", *off_ms)?,
         ClientMsg::Hello { frame_ms, .. } => finite("frame_ms", *frame_ms)?,
+        ClientMsg::Clock { offset_ms, rtt_ms } => {
+            finite("offset_ms", *offset_ms)?;
+            finite("rtt_ms", *rtt_ms)?;
+            if *rtt_ms < 0.0 {
+                return Err(ProtocolError::BadValue {
+                    field: "rtt_ms",
+                    value: rtt_ms.to_string(),
+                    reason: "a round trip cannot be negative",
+                });
+            }
+        }
+        ClientMsg::Control { .. } => {}
     }
     Ok(msg)
 }
@@ -209,6 +308,12 @@ mod tests {
                 id: 7,
                 code: 2,
                 on_ms: 1000.0
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"t":"control","action":"pause"}"#).unwrap(),
+            ClientMsg::Control {
+                action: Control::Pause
             }
         );
         assert_eq!(
@@ -238,16 +343,39 @@ mod tests {
             r#"{"t":"ping","id":-1,"page_ms":0}"#,
             r#"{"t":"ping","id":1,"page_ms":0,"extra":1}"#,
             r#"{"t":"on","id":1,"code":2}"#,
+            r#"{"t":"control","action":"explode"}"#,
+            r#"{"t":"control"}"#,
         ] {
             assert!(
                 matches!(parse_client(bad), Err(ProtocolError::Malformed { .. })),
                 "{bad}"
             );
         }
+        let e = parse_client(r#"{"t":"clock","offset_ms":5,"rtt_ms":-1}"#).unwrap_err();
+        assert!(e.to_string().contains("rtt_ms = -1"), "{e}");
         let e = parse_client(r#"{"t":"on","id":1,"code":0,"on_ms":5}"#).unwrap_err();
         assert!(e.to_string().contains("code = 0"), "{e}");
         // serde_json refuses NaN literals, and 1e999 overflows to infinity: both refused.
         assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":NaN}"#).is_err());
         assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":1e999}"#).is_err());
+    }
+
+    #[test]
+    fn each_page_sends_only_its_own_messages() {
+        let on = ClientMsg::On {
+            id: 1,
+            code: 2,
+            on_ms: 5.0,
+        };
+        let pause = ClientMsg::Control {
+            action: Control::Pause,
+        };
+        let ping = ClientMsg::Ping {
+            id: 1,
+            page_ms: 0.0,
+        };
+        assert!(Role::Subject.accepts(&on) && !Role::Operator.accepts(&on));
+        assert!(Role::Operator.accepts(&pause) && !Role::Subject.accepts(&pause));
+        assert!(Role::Subject.accepts(&ping) && Role::Operator.accepts(&ping));
     }
 }

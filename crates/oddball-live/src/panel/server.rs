@@ -1,7 +1,9 @@
-//! The panel's HTTP/WebSocket server (axum on a one-worker tokio runtime, on its own thread).
+//! The panel's HTTP/WebSocket server (axum on a one-worker tokio runtime, on its own thread):
+//! the subject view and the operator view, each page with its own socket.
 
 use std::net::{SocketAddr, TcpListener};
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, LazyLock, Mutex};
 use std::time::{Duration, Instant};
 
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -12,8 +14,11 @@ use axum::routing::get;
 use axum::Router;
 use tokio::sync::{broadcast, watch};
 
-use super::protocol::{parse_client, ClientMsg, PanelConfig, ServerMsg, MAX_CLIENT_MESSAGE};
-use super::{INDEX_HTML, PANEL_JS};
+use super::protocol::{
+    parse_client, ClientMsg, Control, PanelConfig, Role, ServerMsg, MAX_CLIENT_MESSAGE,
+    OPERATOR_PAGE, OPERATOR_WS, SUBJECT_PAGE, SUBJECT_WS,
+};
+use super::{COMMON_JS, INDEX_HTML, OPERATOR_HTML, OPERATOR_JS, PANEL_JS};
 use crate::clock::Clock;
 use crate::LiveError;
 
@@ -36,15 +41,25 @@ pub enum DrawnReport {
 /// What the server saw of its clients.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PanelStats {
+    /// Subject pages connected now, ever, and gone.
     pub connected: usize,
     pub connections: usize,
     pub disconnects: usize,
+    /// Operator views connected now, and ever.
+    pub operators: usize,
+    pub operator_connections: usize,
+    /// Pause, resume and abort requests received from operator views.
+    pub controls: usize,
     /// Client messages refused (malformed, oversized, binary), with the last reason.
     pub rejected: usize,
     pub last_rejection: Option<String>,
     /// The page's refresh interval as it measured it, ms, and its user agent.
     pub frame_ms: Option<f64>,
     pub agent: Option<String>,
+    /// The page's clock offset to the server's (server − page, ms) and the round trip that
+    /// set it (ms).
+    pub clock_offset_ms: Option<f64>,
+    pub clock_rtt_ms: Option<f64>,
 }
 
 #[derive(Debug)]
@@ -55,6 +70,9 @@ struct Shared {
     backlog: Mutex<Backlog>,
     drawn: Mutex<Vec<DrawnReport>>,
     stats: Mutex<PanelStats>,
+    /// The operator's requests: hold before the next trial; stop the session.
+    pause: AtomicBool,
+    abort: AtomicBool,
 }
 
 #[derive(Debug, Default)]
@@ -63,6 +81,10 @@ struct Backlog {
     trial: Option<Arc<str>>,
     decisions: Vec<Arc<str>>,
     arm: Vec<Arc<str>>,
+    diag: Option<Arc<str>>,
+    quality: Option<Arc<str>>,
+    paused: Option<Arc<str>>,
+    pages: Option<Arc<str>>,
     end: Option<Arc<str>>,
 }
 
@@ -121,6 +143,8 @@ impl PanelServer {
             backlog: Mutex::new(Backlog::default()),
             drawn: Mutex::new(Vec::new()),
             stats: Mutex::new(PanelStats::default()),
+            pause: AtomicBool::new(false),
+            abort: AtomicBool::new(false),
         });
         let (shutdown, shutdown_rx) = watch::channel(false);
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -133,10 +157,14 @@ impl PanelServer {
                 reason: format!("cannot start the server runtime: {e}"),
             })?;
         let app = Router::new()
-            .route("/", get(index))
+            .route(SUBJECT_PAGE, get(index))
             .route("/panel.js", get(script))
+            .route(OPERATOR_PAGE, get(operator))
+            .route("/operator.js", get(operator_script))
+            .route("/common.js", get(common_script))
             .route("/favicon.ico", get(no_icon))
-            .route("/ws", get(ws_upgrade))
+            .route(SUBJECT_WS, get(subject_ws))
+            .route(OPERATOR_WS, get(operator_ws))
             .with_state((shared.clone(), shutdown_rx.clone()));
         let thread = std::thread::Builder::new()
             .name("oddball-panel-server".into())
@@ -195,8 +223,12 @@ impl PanelServer {
                     }
                     b.arm.push(text.clone());
                 }
+                ServerMsg::Diag { .. } => b.diag = Some(text.clone()),
+                ServerMsg::Quality { .. } => b.quality = Some(text.clone()),
+                ServerMsg::Paused { .. } => b.paused = Some(text.clone()),
+                ServerMsg::Pages { .. } => b.pages = Some(text.clone()),
                 ServerMsg::End { .. } => b.end = Some(text.clone()),
-                _ => {}
+                ServerMsg::Flash { .. } | ServerMsg::Cancel { .. } | ServerMsg::Pong { .. } => {}
             }
         }
         // No receiver (no page yet) is not an error.
@@ -210,6 +242,16 @@ impl PanelServer {
 
     pub fn stats(&self) -> PanelStats {
         lock(&self.shared.stats).clone()
+    }
+
+    /// Whether the operator asked to pause (and has not resumed since).
+    pub fn pause_requested(&self) -> bool {
+        self.shared.pause.load(Ordering::SeqCst)
+    }
+
+    /// Whether the operator asked to abort the session.
+    pub fn abort_requested(&self) -> bool {
+        self.shared.abort.load(Ordering::SeqCst)
     }
 
     /// Waits until a page is connected (and has synchronised its clock: its hello arrived);
@@ -246,32 +288,89 @@ async fn index() -> Html<&'static str> {
     Html(INDEX_HTML)
 }
 
-async fn script() -> Response {
+fn javascript(text: &'static str) -> Response {
     (
         [(header::CONTENT_TYPE, "text/javascript; charset=utf-8")],
-        PANEL_JS,
+        text,
     )
         .into_response()
+}
+
+async fn script() -> Response {
+    javascript(PANEL_JS)
+}
+
+async fn operator() -> Html<&'static str> {
+    Html(OPERATOR_HTML)
+}
+
+async fn operator_script() -> Response {
+    javascript(OPERATOR_JS)
+}
+
+/// The shared script, headed by the socket paths of [`super::protocol`] (their one home).
+static COMMON: LazyLock<String> = LazyLock::new(|| {
+    format!(
+        "// Generated by the server from oddball_live::panel::protocol.\n\
+         const ODDBALL_WS = {{ subject: {SUBJECT_WS:?}, operator: {OPERATOR_WS:?} }};\n{COMMON_JS}"
+    )
+});
+
+async fn common_script() -> Response {
+    javascript(COMMON.as_str())
 }
 
 async fn no_icon() -> axum::http::StatusCode {
     axum::http::StatusCode::NO_CONTENT
 }
 
-async fn ws_upgrade(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
+async fn subject_ws(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
+    upgrade(ws, state, Role::Subject)
+}
+
+async fn operator_ws(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
+    upgrade(ws, state, Role::Operator)
+}
+
+fn upgrade(ws: WebSocketUpgrade, state: AppState, role: Role) -> Response {
     // Frames beyond 16 × the protocol's limit close the connection; anything between is
     // refused message by message.
     ws.max_message_size(16 * MAX_CLIENT_MESSAGE)
         .max_frame_size(16 * MAX_CLIENT_MESSAGE)
-        .on_upgrade(move |socket| client(socket, state))
+        .on_upgrade(move |socket| client(socket, state, role))
 }
 
-async fn client(mut socket: WebSocket, (shared, mut stop): AppState) {
+/// Tells every page how many pages are connected.
+fn announce_pages(shared: &Shared) {
+    let msg = {
+        let s = lock(&shared.stats);
+        ServerMsg::Pages {
+            subject: s.connected,
+            operator: s.operators,
+        }
+    };
+    let text: Arc<str> = serde_json::to_string(&msg)
+        .expect("server messages serialise")
+        .into();
+    lock(&shared.backlog).pages = Some(text.clone());
+    let _ = shared.tx.send(text);
+}
+
+async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role) {
     {
         let mut s = lock(&shared.stats);
-        s.connected += 1;
-        s.connections += 1;
+        match role {
+            Role::Subject => {
+                s.connected += 1;
+                s.connections += 1;
+            }
+            Role::Operator => {
+                s.operators += 1;
+                s.operator_connections += 1;
+            }
+        }
     }
+    announce_pages(&shared);
     let mut rx = shared.tx.subscribe();
     let backlog: Vec<Arc<str>> = {
         let b = lock(&shared.backlog);
@@ -280,6 +379,10 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState) {
             .chain(b.decisions.iter())
             .chain(b.arm.iter())
             .chain(b.trial.iter())
+            .chain(b.diag.iter())
+            .chain(b.quality.iter())
+            .chain(b.paused.iter())
+            .chain(b.pages.iter())
             .chain(b.end.iter())
             .cloned()
             .collect()
@@ -296,11 +399,19 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState) {
         }
     }
     while alive {
-        alive = serve_one(&mut socket, &shared, &mut rx, &mut stop).await;
+        alive = serve_one(&mut socket, &shared, &mut rx, &mut stop, role).await;
     }
-    let mut s = lock(&shared.stats);
-    s.connected -= 1;
-    s.disconnects += 1;
+    {
+        let mut s = lock(&shared.stats);
+        match role {
+            Role::Subject => {
+                s.connected -= 1;
+                s.disconnects += 1;
+            }
+            Role::Operator => s.operators -= 1,
+        }
+    }
+    announce_pages(&shared);
 }
 
 /// Forwards one broadcast or handles one client message; `false` when the connection is over.
@@ -309,6 +420,7 @@ async fn serve_one(
     shared: &Shared,
     rx: &mut broadcast::Receiver<Arc<str>>,
     stop: &mut watch::Receiver<bool>,
+    role: Role,
 ) -> bool {
     tokio::select! {
         out = rx.recv() => match out {
@@ -317,7 +429,7 @@ async fn serve_one(
             Err(broadcast::error::RecvError::Closed) => false,
         },
         inc = socket.recv() => match inc {
-            Some(Ok(Message::Text(text))) => match handle(shared, text.as_str()) {
+            Some(Ok(Message::Text(text))) => match handle(shared, text.as_str(), role) {
                 Some(reply) => {
                     let reply = serde_json::to_string(&reply).expect("server messages serialise");
                     socket.send(Message::Text(reply.into())).await.is_ok()
@@ -350,9 +462,13 @@ fn reject(shared: &Shared, reason: String) {
     s.last_rejection = Some(reason);
 }
 
-/// Handles one client message; returns the reply, if any.
-fn handle(shared: &Shared, text: &str) -> Option<ServerMsg> {
+/// Handles one client message from a page of `role`; returns the reply, if any.
+fn handle(shared: &Shared, text: &str, role: Role) -> Option<ServerMsg> {
     match parse_client(text) {
+        Ok(msg) if !role.accepts(&msg) => {
+            reject(shared, format!("a {role:?} page may not send {msg:?}"));
+            None
+        }
         Ok(ClientMsg::Ping { id, page_ms }) => Some(ServerMsg::Pong {
             id,
             page_ms,
@@ -375,6 +491,21 @@ fn handle(shared: &Shared, text: &str) -> Option<ServerMsg> {
             let mut s = lock(&shared.stats);
             s.frame_ms = Some(frame_ms);
             s.agent = Some(agent);
+            None
+        }
+        Ok(ClientMsg::Clock { offset_ms, rtt_ms }) => {
+            let mut s = lock(&shared.stats);
+            s.clock_offset_ms = Some(offset_ms);
+            s.clock_rtt_ms = Some(rtt_ms);
+            None
+        }
+        Ok(ClientMsg::Control { action }) => {
+            lock(&shared.stats).controls += 1;
+            match action {
+                Control::Pause => shared.pause.store(true, Ordering::SeqCst),
+                Control::Resume => shared.pause.store(false, Ordering::SeqCst),
+                Control::Abort => shared.abort.store(true, Ordering::SeqCst),
+            }
             None
         }
         Err(e) => {
