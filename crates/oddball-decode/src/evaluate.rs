@@ -15,6 +15,7 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
+use crate::decision::{DecisionModel, DecisionRule, ScoreModelParams};
 use crate::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash};
 use crate::pipeline::FrontCache;
 use crate::pipeline::{Pipeline, PipelineParams};
@@ -177,16 +178,30 @@ fn pooled(recs: &[EpochedRecording]) -> Result<(Epochs, Vec<bool>, Option<Vec<us
 #[derive(Debug, Clone)]
 pub struct Trained {
     pub pipeline: Pipeline,
+    /// The settings it was fitted with (the tuned ones with tuning).
+    pub params: PipelineParams,
     /// With tuning: the choice and every candidate's cross-validated AUC.
     pub tuning: Option<TuningReport>,
+    /// How its scores become decisions in a session: the score model fitted on the
+    /// out-of-fold scores of the training epochs (as a session fits it after calibration), the
+    /// paper's rule (5 fixed rounds; a session sets its own).
+    pub decision: DecisionModel,
+    /// ROC-AUC of those out-of-fold scores, and the folds they came from.
+    pub cv_auc: f64,
+    pub cv_folds: usize,
     pub fit_s: f64,
     pub n_epochs: usize,
     pub n_targets: usize,
     pub sfreq: f64,
 }
 
+/// Folds of the out-of-fold scores [`train`] fits the decision model on (without `--tune`).
+pub const DECISION_FOLDS: usize = 5;
+
 /// Fits `preset` on all epochs of `recs`; with `tune_folds`, its hyper-parameters are first
-/// chosen by that many folds of cross-validation (speller characters kept whole).
+/// chosen by that many folds of cross-validation (speller characters kept whole). The decision
+/// model is fitted on out-of-fold scores of the chosen settings (`tune_folds` folds, else
+/// [`DECISION_FOLDS`]), so its evidence is not over-confident.
 pub fn train(
     preset: &str,
     recs: &[EpochedRecording],
@@ -194,12 +209,12 @@ pub fn train(
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
     let (epochs, y, groups) = pooled(recs)?;
+    let folds = cv_folds(&y, groups.as_deref(), tune_folds.unwrap_or(DECISION_FOLDS))?;
     let (params, tuning) = match tune_folds {
         Some(k) => {
             let grid = preset_grid(preset, epochs.sfreq())?;
-            let folds = cv_folds(&y, groups.as_deref(), k)?;
             on(Progress::Plan {
-                fits: grid.len() * folds.n_folds(),
+                fits: (grid.len() + 1) * folds.n_folds(),
                 cross_validation: None,
             });
             let (params, report) = tune(
@@ -222,19 +237,91 @@ pub fn train(
             });
             (params, Some(report))
         }
-        None => (PipelineParams::preset(preset, epochs.sfreq())?, None),
+        None => {
+            on(Progress::Plan {
+                fits: folds.n_folds(),
+                cross_validation: None,
+            });
+            (PipelineParams::preset(preset, epochs.sfreq())?, None)
+        }
+    };
+    let mut trained = fit_with_decision(&params, &epochs, &y, groups.as_deref(), &folds, on)?;
+    trained.tuning = tuning;
+    Ok(trained)
+}
+
+/// Fits `params` (already chosen) on all epochs of `recs` with its decision model from
+/// `k`-fold out-of-fold scores (speller characters kept whole): what [`train`] does after
+/// tuning, e.g. for the same settings on differently pre-processed epochs.
+pub fn train_with(
+    params: &PipelineParams,
+    recs: &[EpochedRecording],
+    k: usize,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Trained> {
+    let (epochs, y, groups) = pooled(recs)?;
+    let folds = cv_folds(&y, groups.as_deref(), k)?;
+    on(Progress::Plan {
+        fits: folds.n_folds(),
+        cross_validation: None,
+    });
+    fit_with_decision(params, &epochs, &y, groups.as_deref(), &folds, on)
+}
+
+fn fit_with_decision(
+    params: &PipelineParams,
+    epochs: &Epochs,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    folds: &Folds,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Trained> {
+    let oof = out_of_fold_scores(params, epochs, y, groups, folds, on)?;
+    let cv_auc = roc_auc(&oof, y)?;
+    let decision = DecisionModel {
+        scores: ScoreModelParams::default().fit(&oof, y)?,
+        rule: DecisionRule::Fixed { rounds: 5 },
     };
     let t0 = Instant::now();
-    let pipeline = params.fit_grouped(epochs.data().view(), &y, groups.as_deref())?;
+    let pipeline = params.fit_grouped(epochs.data().view(), y, groups)?;
     let fit_s = t0.elapsed().as_secs_f64();
     Ok(Trained {
         pipeline,
-        tuning,
+        params: params.clone(),
+        tuning: None,
+        decision,
+        cv_auc,
+        cv_folds: folds.n_folds(),
         fit_s,
         n_epochs: epochs.n_epochs(),
         n_targets: y.iter().filter(|&&t| t).count(),
         sfreq: epochs.sfreq(),
     })
+}
+
+/// Every epoch's score by `params` fitted on the other folds (`groups` kept together in the
+/// fits, as in the final fit).
+pub fn out_of_fold_scores(
+    params: &PipelineParams,
+    data: &Epochs,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    folds: &Folds,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Vec<f64>> {
+    let mut oof = vec![0.0; y.len()];
+    for f in 0..folds.n_folds() {
+        let (tr, te) = folds.split(f);
+        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+        let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
+        let model = params.fit_grouped(data.select(&tr).data().view(), &ytr, gtr.as_deref())?;
+        on(Progress::Fit);
+        let s = model.decision_function(data.select(&te).data().view())?;
+        for (&i, &v) in te.iter().zip(s.iter()) {
+            oof[i] = v;
+        }
+    }
+    Ok(oof)
 }
 
 /// Scores every preset of `params`: fitted on `train` and scored on `test`, or by k-fold

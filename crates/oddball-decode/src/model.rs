@@ -22,11 +22,20 @@ type Result<T> = std::result::Result<T, DecodeError>;
 /// [`READABLE_MODEL_VERSIONS`] is refused at load. Version 2 added score fusion (a model of
 /// version 1 reads the same under 2; a binary that knows only 1 refuses a fused model rather
 /// than scoring half of it). Version 3 added stacked fusion (weights, centres, intercept) and the
-/// block-Toeplitz LDA; older files read the same under 3.
-pub const MODEL_FORMAT_VERSION: u32 = 3;
+/// block-Toeplitz LDA; older files read the same under 3. Version 4: a model trained offline
+/// (`oddball train`) carries its decision model too, fitted on cross-validated training scores,
+/// so it runs in a session; older files read the same under 4 (one without a decision model is
+/// refused by a session with [`NO_DECISION_MODEL`]).
+pub const MODEL_FORMAT_VERSION: u32 = 4;
 
 /// Saved-model versions this build reads.
-pub const READABLE_MODEL_VERSIONS: [u32; 3] = [1, 2, 3];
+pub const READABLE_MODEL_VERSIONS: [u32; 4] = [1, 2, 3, 4];
+
+/// Why a model without a decision model cannot run a session, and what fixes it (one home for
+/// every command that says it).
+pub const NO_DECISION_MODEL: &str = "the model has no decision model (score → posterior), which \
+     models saved before format version 4 lack: train it again with `oddball train` (which fits \
+     one from cross-validated training scores), or calibrate in the session (--calibrate)";
 
 /// A trained model as saved to disk: the pipeline plus everything needed to feed it.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -38,13 +47,21 @@ pub struct Model {
     /// Channel names, in the order the pipeline expects.
     pub ch_names: Vec<String>,
     pub pipeline: Pipeline,
-    /// How scores become choices in a session (absent for models trained offline).
+    /// How scores become choices in a session: fitted on cross-validated scores of the
+    /// training epochs (a session's calibration, or `oddball train` from format version 4 on).
     #[serde(default)]
     pub decision: Option<crate::decision::DecisionModel>,
     /// How the pipeline's settings were chosen by cross-validation on the training data
     /// (`oddball train --tune`); absent when the preset's defaults were used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tuning: Option<crate::tuning::TuningReport>,
+    /// What a session runs when this model's band-pass is zero-phase (`oddball train`, from
+    /// format version 4): the same settings fitted on the same files' epochs band-passed
+    /// causally, as a session cuts them, with its own decision model. A session cannot filter
+    /// backward in time, and a model fitted on zero-phase epochs but fed causal ones loses
+    /// accuracy (phase shifts), so both fits travel in one file. See [`Model::for_session`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub live: Option<Box<Model>>,
 }
 
 impl Model {
@@ -62,6 +79,23 @@ impl Model {
             pipeline,
             decision: None,
             tuning: None,
+            live: None,
+        }
+    }
+
+    /// The model a session runs: this one when its band-pass is causal, else its
+    /// [`Model::live`] fit; a zero-phase model without one runs its own band causally
+    /// ([`crate::pipeline::Preprocess::as_causal`]; its epochs then differ from its training's).
+    pub fn for_session(self) -> Model {
+        if self.preprocess.causal {
+            return self;
+        }
+        match self.live {
+            Some(live) => *live,
+            None => Model {
+                preprocess: self.preprocess.as_causal(),
+                ..self
+            },
         }
     }
 
@@ -124,6 +158,23 @@ impl Model {
         if let Some(d) = &self.decision {
             d.validate()?;
         }
+        if let Some(live) = &self.live {
+            let why = if !live.preprocess.causal {
+                Some("its band-pass is not causal")
+            } else if live.live.is_some() {
+                Some("it holds a live fit of its own")
+            } else if live.ch_names != self.ch_names || live.sfreq != self.sfreq {
+                Some("its channels or rate differ from the model's")
+            } else if live.decision.is_none() {
+                Some("it has no decision model")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(bad(format!("live fit: {why}")));
+            }
+            live.check().map_err(|e| bad(format!("live fit: {e}")))?;
+        }
         Ok(())
     }
 
@@ -155,12 +206,26 @@ impl Model {
 }
 
 /// Where each of `wanted` is among `present`, by name: `order[k]` is the index in `present` of
-/// `wanted[k]`. Every missing name is listed in the [`DecodeError::LayoutMismatch`].
+/// `wanted[k]`; the exact name, else the one name equal to it but for ASCII case (EEG labels
+/// are written both ways: `PO7`, `Po7`), as `Raw::channel_index` finds. Every missing name is
+/// listed in the [`DecodeError::LayoutMismatch`].
 pub fn match_channels(wanted: &[String], present: &[String]) -> Result<Vec<usize>> {
     let mut order = Vec::with_capacity(wanted.len());
     let mut missing = Vec::new();
+    let find = |w: &String| {
+        present.iter().position(|p| p == w).or_else(|| {
+            let mut same = present
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| p.eq_ignore_ascii_case(w));
+            match (same.next(), same.next()) {
+                (Some((i, _)), None) => Some(i),
+                _ => None,
+            }
+        })
+    };
     for w in wanted {
-        match present.iter().position(|p| p == w) {
+        match find(w) {
             Some(i) => order.push(i),
             None => missing.push(w.as_str()),
         }

@@ -66,6 +66,16 @@ impl Preprocess {
         }
     }
 
+    /// This pre-processing as a session runs it: the same band and window with the band-pass
+    /// causal (online there are no later samples to filter backward from). A model trained
+    /// offline (zero-phase) runs online, and its session is re-evaluated offline, under this.
+    pub fn as_causal(self) -> Self {
+        Self {
+            causal: true,
+            ..self
+        }
+    }
+
     /// Samples of an epoch at `sfreq` as (first offset from the onset, count): round(tmin·sfreq)
     /// ..= round(tmax·sfreq), or up to but not including round(tmax·sfreq) when `end_exclusive`.
     /// An invalid window (tmin after tmax, not finite) is empty.

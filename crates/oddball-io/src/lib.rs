@@ -46,6 +46,7 @@ mod error;
 pub mod events;
 pub mod manifest;
 pub mod mat;
+pub mod montage;
 pub mod nic;
 pub mod read_options;
 pub mod speller;

@@ -18,8 +18,13 @@ pub struct ReadOptions {
     /// The sampling rate, Hz: for CSV (instead of the time column's estimate) and MAT (instead
     /// of the file's rate variable or the competitions' 240 Hz).
     pub sfreq: Option<f64>,
-    /// CSV: the EEG columns, in this order; MAT: the names of the signal's columns.
+    /// CSV: the EEG columns, in this order; MAT: the names of the signal's columns; any other
+    /// format: the channels kept, in this order (matched by name, case aside).
     pub channels: Option<Vec<String>>,
+    /// A montage file naming the file's channels in order (an EEGLAB `.loc`, e.g. BCI2000's
+    /// `eeg64.loc`, see [`crate::montage`]); applied before `channels` picks.
+    #[serde(default)]
+    pub montage: Option<std::path::PathBuf>,
     /// CSV: the time column (seconds).
     pub time_column: Option<String>,
     /// CSV: the marker column; MAT: the per-sample stimulus code variable.
@@ -55,9 +60,65 @@ pub fn read_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Record
     if options.is_empty() {
         return crate::read(path);
     }
-    let unsupported = |what: &str| IoError::Unsupported {
+    let Some(montage) = &options.montage else {
+        return read_tabular(path, options);
+    };
+    let names = crate::montage::read_montage(montage)?;
+    // The montage names the file's channels first; `channels` then picks among those names.
+    let mut rec = read_tabular(
+        path,
+        &ReadOptions {
+            montage: None,
+            channels: None,
+            ..options.clone()
+        },
+    )?;
+    let n = rec.raw.n_channels();
+    if names.len() != n {
+        return Err(IoError::Unsupported {
+            path: path.to_path_buf(),
+            what: format!(
+                "the montage {} names {} channels, the file holds {n}",
+                montage.display(),
+                names.len()
+            ),
+        });
+    }
+    rec.raw = rec
+        .raw
+        .with_ch_names(names)
+        .map_err(|source| IoError::Signal {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    if let Some(ch) = &options.channels {
+        rec.raw = pick(&rec.raw, ch, path)?;
+    }
+    Ok(rec)
+}
+
+/// `raw`'s channels named `names`, in that order.
+fn pick(
+    raw: &oddball_signal::Raw,
+    names: &[String],
+    path: &Path,
+) -> Result<oddball_signal::Raw, IoError> {
+    raw.pick_channels(names).map_err(|source| IoError::Signal {
         path: path.to_path_buf(),
-        what: format!("{what} (reading options apply to .csv and .mat files)"),
+        source,
+    })
+}
+
+/// [`read_with`] without a montage.
+fn read_tabular(path: &Path, options: &ReadOptions) -> Result<Recording, IoError> {
+    if options.is_empty() {
+        return crate::read(path);
+    }
+    let unsupported = |what: &str| {
+        IoError::Unsupported {
+        path: path.to_path_buf(),
+        what: format!("{what} (reading options other than --channels and --montage apply to .csv and .mat files)"),
+    }
     };
     if let Err(why) = options.check() {
         return Err(unsupported(&why));
@@ -92,7 +153,6 @@ pub fn read_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Record
             let mut given = Vec::new();
             for (set, name) in [
                 (options.sfreq.is_some(), "a sampling rate"),
-                (options.channels.is_some(), "channel columns"),
                 (options.time_column.is_some(), "a time column"),
                 (options.events.is_some(), "an events column or variable"),
                 (options.data.is_some(), "a data variable"),
@@ -101,10 +161,20 @@ pub fn read_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<Record
                     given.push(name);
                 }
             }
-            Err(unsupported(&format!(
-                "{} given for a file that records its own layout",
-                given.join(", ")
-            )))
+            if !given.is_empty() {
+                return Err(unsupported(&format!(
+                    "{} given for a file that records its own layout",
+                    given.join(", ")
+                )));
+            }
+            let rec = crate::read(path)?;
+            match &options.channels {
+                Some(ch) => {
+                    let raw = pick(&rec.raw, ch, path)?;
+                    Ok(Recording { raw, ..rec })
+                }
+                None => Ok(rec),
+            }
         }
     }
 }

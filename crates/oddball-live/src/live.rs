@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 
 use ndarray::Array2;
 use oddball_arm::ArmSim;
+use oddball_io::xdf::session_markers;
 use oddball_session::engine::{Phase, TrialOutcome, TrialRecord};
 use oddball_session::online::ChannelFaults;
 use oddball_session::paradigm::FourBulbParams;
@@ -375,11 +376,17 @@ impl<S: EegSource> LiveSubject<S> {
     }
 
     fn marker(&mut self, text: &str, ms: f64) -> Result<(), LiveError> {
+        self.marker_recorded(text, text, ms)
+    }
+
+    /// A marker whose recorded text says more than the live stream's (see
+    /// [`oddball_io::xdf::session_markers`]).
+    fn marker_recorded(&mut self, text: &str, recorded: &str, ms: f64) -> Result<(), LiveError> {
         if let Some(m) = &mut self.markers {
             m.marker(text, ms);
         }
         if let Some(r) = &mut self.recorder {
-            r.marker(text, ms)?;
+            r.marker(recorded, ms)?;
         }
         Ok(())
     }
@@ -387,7 +394,11 @@ impl<S: EegSource> LiveSubject<S> {
     /// A flash seen at sample `onset`: the simulated brain, the marker stream, the recording.
     fn seen(&mut self, a: Announced, onset: u64, on_ms: f64) -> Result<(), LiveError> {
         self.source.saw(onset, a.code, a.attended)?;
-        self.marker(&format!("flash {}", a.code), on_ms)?;
+        self.marker_recorded(
+            &format!("flash {}", a.code),
+            &session_markers::flash_marker(a.code, a.attended),
+            on_ms,
+        )?;
         self.drawn.push(Drawn {
             planned: a.planned,
             code: a.code,
@@ -607,7 +618,12 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
                 countdown_s: self.paradigm.countdown_s,
             });
         }
-        Ok(self.marker(&format!("cue {}", intended.unwrap_or(0)), at_ms)?)
+        let code = intended.unwrap_or(0);
+        Ok(self.marker_recorded(
+            &format!("cue {code}"),
+            &session_markers::cue_marker(code, phase == Phase::Calibration),
+            at_ms,
+        )?)
     }
 }
 

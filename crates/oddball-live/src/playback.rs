@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use ndarray::{s, Array2};
+use oddball_session::record::{calibration_part, CalibrationPart};
 use oddball_signal::Event;
 
 use crate::clock::Clock;
@@ -31,6 +32,7 @@ pub struct PlaybackSource {
     sfreq: f64,
     ch_names: Vec<String>,
     events: Vec<Event>,
+    calibration: Option<CalibrationPart>,
     clock: Clock,
     start_ms: f64,
     position: usize,
@@ -42,6 +44,7 @@ impl PlaybackSource {
     pub fn open(path: impl AsRef<Path>, clock: Clock) -> Result<Self, LiveError> {
         let path = path.as_ref();
         let rec = oddball_io::read(path)?;
+        let calibration = calibration_part(&rec);
         let (data, sfreq, ch_names, events) = rec.raw.into_parts();
         if data.ncols() == 0 {
             return Err(LiveError::InvalidParameter {
@@ -56,10 +59,34 @@ impl PlaybackSource {
             sfreq,
             ch_names,
             events: events.into_vec(),
+            calibration,
             start_ms: clock.now_ms(),
             clock,
             position: 0,
             paced: true,
+        })
+    }
+
+    /// The file resampled to `sfreq` Hz before it plays (polyphase, events moved with it:
+    /// [`oddball_signal::resample::resample_raw`]), so a model at another rate can replay it.
+    pub fn resampled(self, sfreq: f64) -> Result<Self, LiveError> {
+        let raw = oddball_signal::Raw::new(
+            self.data,
+            self.sfreq,
+            self.ch_names,
+            oddball_signal::Events::new(self.events),
+        )
+        .and_then(|raw| oddball_signal::resample::resample_raw(&raw, sfreq))
+        .map_err(oddball_session::SessionError::from)?;
+        let (data, sfreq, ch_names, events) = raw.into_parts();
+        // A recorded session's trial samples no longer hold at another rate.
+        Ok(Self {
+            data,
+            sfreq,
+            ch_names,
+            events: events.into_vec(),
+            calibration: None,
+            ..self
         })
     }
 
@@ -72,6 +99,12 @@ impl PlaybackSource {
     /// Samples in the file.
     pub fn n_times(&self) -> usize {
         self.data.ncols()
+    }
+
+    /// The calibration a session recording begins with (see
+    /// [`oddball_session::engine::Session::pass_calibration`]).
+    pub fn calibration(&self) -> Option<CalibrationPart> {
+        self.calibration
     }
 
     /// The file's events (flash markers become events of the flash's code).

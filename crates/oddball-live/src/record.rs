@@ -2,7 +2,9 @@
 //! streams on the session clock (seconds):
 //!
 //! * `EEG`: the raw samples as received, float32 µV, at the nominal rate;
-//! * `Markers`: `cue C`, `flash C` (at the onset the page drew), `decision C`, `abstain`;
+//! * `Markers`: `cue C [calibration]`, `flash C target|nontarget` (at the onset the page drew),
+//!   `decision C`, `abstain` ([`oddball_io::xdf::session_markers`]: each flash's code and flag,
+//!   so the file trains and evaluates like any labelled recording);
 //! * `Decisions`: each online decision as JSON (the session's `TrialRecord`);
 //! * `Arm`: pen x, z (m) and joint angles θ1, θ2 (rad) after every block.
 //!

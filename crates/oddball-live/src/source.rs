@@ -131,6 +131,88 @@ pub enum AnySource {
     Playback(PlaybackSource),
     #[cfg(feature = "lsl")]
     Lsl(crate::lsl_live::LslSource),
+    /// Another source at another rate ([`AnySource::resampled`]).
+    Resampled(Box<Resampled>),
+}
+
+impl AnySource {
+    /// This source resampled to `sfreq` Hz as it streams (polyphase,
+    /// [`oddball_signal::resample::StreamResampler`]): for a model at another rate than the
+    /// amplifier's. The session then runs, and records, at `sfreq`.
+    pub fn resampled(self, sfreq: f64) -> Result<AnySource, LiveError> {
+        let (up, down) = oddball_signal::resample::ratio(self.sfreq(), sfreq)
+            .map_err(oddball_session::SessionError::from)?;
+        let r = oddball_signal::resample::StreamResampler::new(self.ch_names().len(), up, down)
+            .map_err(oddball_session::SessionError::from)?;
+        Ok(AnySource::Resampled(Box::new(Resampled {
+            inner: self,
+            resampler: r,
+            sfreq,
+            ratio: down as f64 / up as f64,
+            pulled: 0,
+        })))
+    }
+}
+
+/// A source resampled as it streams: sample `k` here is at the source's sample `k · down / up`.
+#[derive(Debug)]
+pub struct Resampled {
+    inner: AnySource,
+    resampler: oddball_signal::resample::StreamResampler,
+    sfreq: f64,
+    /// Source samples per sample here (`down / up`).
+    ratio: f64,
+    /// Source samples taken in.
+    pulled: usize,
+}
+
+impl Resampled {
+    /// The source's rate.
+    pub fn source_sfreq(&self) -> f64 {
+        self.inner.sfreq()
+    }
+}
+
+impl EegSource for Resampled {
+    fn sfreq(&self) -> f64 {
+        self.sfreq
+    }
+    fn ch_names(&self) -> &[String] {
+        self.inner.ch_names()
+    }
+    fn wait(&mut self, n: usize) -> Result<(), LiveError> {
+        let need = self.resampler.input_needed(n);
+        if need > self.pulled {
+            self.inner.wait(need - self.pulled)?;
+            let x = self.inner.take(need - self.pulled)?;
+            self.resampler.push(x.view());
+            self.pulled = need;
+        }
+        Ok(())
+    }
+    fn take(&mut self, n: usize) -> Result<ndarray::Array2<f64>, LiveError> {
+        self.wait(n)?;
+        Ok(self.resampler.take(n))
+    }
+    fn time_of(&self, sample: u64) -> f64 {
+        let pos = sample as f64 * self.ratio;
+        let i = pos.floor();
+        let (a, b) = (
+            self.inner.time_of(i as u64),
+            self.inner.time_of(i as u64 + 1),
+        );
+        a + (pos - i) * (b - a)
+    }
+    fn saw(&mut self, onset: u64, code: u32, attended: bool) -> Result<(), LiveError> {
+        self.inner
+            .saw((onset as f64 * self.ratio).round() as u64, code, attended)
+    }
+    fn start_now(&mut self) {
+        self.inner.start_now()
+    }
+    fn health(&self) -> Option<String> {
+        self.inner.health()
+    }
 }
 
 impl SourceSpec {
@@ -221,6 +303,7 @@ macro_rules! each {
             AnySource::Playback($s) => $e,
             #[cfg(feature = "lsl")]
             AnySource::Lsl($s) => $e,
+            AnySource::Resampled($s) => $e,
         }
     };
 }

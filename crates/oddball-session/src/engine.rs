@@ -313,6 +313,11 @@ pub struct Session<S: Subject> {
     adaptation: Option<Adaptation>,
     /// The stopping rule chosen from the calibration, with its expected performance.
     stopping: Option<Expected>,
+    /// Rows of the subject's channels the epocher takes, in the model's order (a model set
+    /// with other or reordered channels, see [`Session::set_model`]); `None`: all, as they are.
+    pick: Option<Vec<usize>>,
+    /// The channels' names: the subject's, or a montage's ([`Session::name_channels`]).
+    ch_names: Vec<String>,
 }
 
 /// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
@@ -391,6 +396,7 @@ impl<S: Subject> Session<S> {
             subject.sfreq(),
             subject.ch_names().len(),
         )?;
+        let ch_names = subject.ch_names().to_vec();
         Ok(Self {
             rng: ChaCha8Rng::seed_from_u64(params.seed),
             raw: vec![Vec::new(); subject.ch_names().len()],
@@ -407,6 +413,8 @@ impl<S: Subject> Session<S> {
             unlabelled: None,
             adaptation: None,
             stopping: None,
+            pick: None,
+            ch_names,
         })
     }
 
@@ -444,7 +452,7 @@ impl<S: Subject> Session<S> {
         params: UncalibratedParams,
         model: Model,
     ) -> Result<(), SessionError> {
-        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        model.check_layout(&self.ch_names, self.subject.sfreq())?;
         if model.preprocess != self.params.preprocess {
             return Err(SessionError::InvalidParameter {
                 name: "transfer model preprocess",
@@ -578,23 +586,76 @@ impl<S: Subject> Session<S> {
         self.model.as_ref()
     }
 
-    /// Uses a model trained elsewhere (it must carry a decision model).
+    /// Names the subject's channels in order (a montage: the stream's own names are not the
+    /// model's), before the session's first sample: models are matched to these names,
+    /// calibration fits and the session's log carry them.
+    pub fn name_channels(&mut self, names: Vec<String>) -> Result<(), SessionError> {
+        let taken = self.raw.first().map_or(0, Vec::len);
+        if taken > 0 {
+            return Err(SessionError::TooLate {
+                what: "a montage",
+                n_times: taken,
+            });
+        }
+        if names.len() != self.ch_names.len() {
+            return Err(SessionError::InvalidParameter {
+                name: "montage",
+                value: format!("{} names", names.len()),
+                reason: format!(
+                    "the EEG has {} channels ({:?})",
+                    self.ch_names.len(),
+                    self.ch_names
+                ),
+            });
+        }
+        oddball_signal::check_unique_names(&names)?;
+        self.ch_names = names;
+        Ok(())
+    }
+
+    /// Uses a model trained elsewhere, before the session's first sample: a session's, or one
+    /// `oddball train` fitted offline (it must carry a decision model, as format 4 on does).
+    /// Its channels are matched by name (the subject may have more, in any order: the session
+    /// epochs only the model's, in the model's order). A model trained offline (zero-phase
+    /// band-pass) runs its causal fit ([`Model::for_session`]); the model kept, and saved, is
+    /// the one that ran, so re-evaluating the session reproduces its decisions.
     pub fn set_model(&mut self, model: Model) -> Result<(), SessionError> {
-        model.check_layout(self.subject.ch_names(), self.subject.sfreq())?;
+        let model = model.for_session();
         if model.decision.is_none() {
-            return Err(SessionError::InvalidParameter {
-                name: "model",
-                value: model.pipeline.name().to_string(),
-                reason: "the model has no decision model (train it in a session)".into(),
+            return Err(SessionError::NoDecisionModel {
+                pipeline: model.pipeline.name().to_string(),
             });
         }
-        if model.preprocess != self.params.preprocess {
-            return Err(SessionError::InvalidParameter {
-                name: "model.preprocess",
-                value: format!("{:?}", model.preprocess),
-                reason: "differs from the session's pre-processing".into(),
+        let sfreq = self.subject.sfreq();
+        if (sfreq - model.sfreq).abs() > 1e-9 * model.sfreq {
+            return Err(SessionError::ModelRate {
+                model_sfreq: model.sfreq,
+                stream_sfreq: sfreq,
             });
         }
+        let order = model.channel_order(&self.ch_names, sfreq).map_err(|_| {
+            SessionError::ModelChannels {
+                missing: model
+                    .ch_names
+                    .iter()
+                    .filter(|w| !self.ch_names.iter().any(|h| h.eq_ignore_ascii_case(w)))
+                    .cloned()
+                    .collect(),
+                have: self.ch_names.clone(),
+            }
+        })?;
+        let taken = self.raw.first().map_or(0, Vec::len);
+        if taken > 0 {
+            return Err(SessionError::TooLate {
+                what: "a model",
+                n_times: taken,
+            });
+        }
+        self.epocher = OnlineEpocher::new(&model.preprocess, self.subject.sfreq(), order.len())?;
+        self.params.preprocess = model.preprocess;
+        let identity =
+            order.len() == self.ch_names.len() && order.iter().enumerate().all(|(i, &o)| i == o);
+        self.pick = (!identity).then_some(order);
         self.model = Some(model);
         Ok(())
     }
@@ -610,7 +671,7 @@ impl<S: Subject> Session<S> {
 
     /// Channels that cost epochs, as text (`P3: 12 flat`), or `None` when all were clean.
     pub fn channel_report(&self) -> Option<String> {
-        let names = self.subject.ch_names();
+        let names = &self.ch_names;
         let parts: Vec<String> = self
             .channel_faults()
             .iter()
@@ -670,7 +731,7 @@ impl<S: Subject> Session<S> {
             x,
             self.subject.sfreq(),
             self.params.preprocess.tmin,
-            self.subject.ch_names().to_vec(),
+            self.ch_names.clone(),
             events,
         )?)
     }
@@ -683,6 +744,34 @@ impl<S: Subject> Session<S> {
     /// Seconds of EEG so far.
     pub fn time_s(&self) -> f64 {
         self.subject.position() as f64 / self.subject.sfreq()
+    }
+
+    /// Passes over a recorded calibration of `n_trials` trials ending at sample `until` (a
+    /// replayed session recording, with a model set): its samples are filtered but no flash is
+    /// shown and nothing decided, and the flash orders are drawn as the calibration drew them,
+    /// so with the recording's seed every later flash falls where the recorded session's did.
+    pub fn pass_calibration(&mut self, n_trials: usize, until: u64) -> Result<(), SessionError> {
+        if n_trials % 4 != 0 {
+            return Err(SessionError::InvalidParameter {
+                name: "recorded calibration trials",
+                value: n_trials.to_string(),
+                reason: "a calibration has as many trials for each of the four bulbs".into(),
+            });
+        }
+        let mut intended: Vec<u32> = (1..=4)
+            .flat_map(|c| std::iter::repeat_n(c, n_trials / 4))
+            .collect();
+        intended.shuffle(&mut self.rng);
+        for _ in &intended {
+            self.params
+                .paradigm
+                .trial(&mut self.rng, self.params.paradigm.n_rounds);
+        }
+        while self.subject.position() < until {
+            let n = (until - self.subject.position()).min(self.params.chunk as u64);
+            self.advance(n as usize)?;
+        }
+        Ok(())
     }
 
     /// Runs the calibration trials and trains the model.
@@ -736,7 +825,7 @@ impl<S: Subject> Session<S> {
             self.params.rule,
             self.params.cv_folds,
             sfreq,
-            self.subject.ch_names(),
+            &self.ch_names,
             &x,
             y,
             &groups,
@@ -806,7 +895,7 @@ impl<S: Subject> Session<S> {
         (
             SessionLog {
                 sfreq: self.subject.sfreq(),
-                ch_names: self.subject.ch_names().to_vec(),
+                ch_names: self.ch_names,
                 raw,
                 flashes: self.flashes,
                 trials: self.trials,
@@ -825,7 +914,12 @@ impl<S: Subject> Session<S> {
         for d in self.subject.drawn() {
             self.retime(d)?;
         }
-        let ready = self.epocher.push_samples(data.view())?;
+        let ready = match &self.pick {
+            Some(rows) => self
+                .epocher
+                .push_samples(data.select(Axis(0), rows).view())?,
+            None => self.epocher.push_samples(data.view())?,
+        };
         if let (Some(arm), true) = (&mut self.arm, self.arm_running) {
             arm.run_for(n as f64 / self.subject.sfreq())?;
             self.subject.arm_state(self.subject.position(), arm)?;

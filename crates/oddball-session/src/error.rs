@@ -25,6 +25,25 @@ pub enum SessionError {
     MarkerTooLate { onset: u64, oldest_kept: u64 },
     #[error("the session has no model yet: calibrate first or load a model")]
     NotCalibrated,
+    /// A model without the decision model a session decides with.
+    #[error("model {pipeline}: {}", oddball_decode::model::NO_DECISION_MODEL)]
+    NoDecisionModel { pipeline: String },
+    /// A model at another rate than the EEG the session receives (the command line resamples
+    /// a stream to its model's rate first: `oddball_live::source::AnySource::resampled`).
+    #[error("the EEG arrives at {stream_sfreq} Hz and the model runs at {model_sfreq} Hz: resample the EEG to the model's rate before the session")]
+    ModelRate { model_sfreq: f64, stream_sfreq: f64 },
+    /// The EEG lacks channels the model needs (matched by name, case aside).
+    #[error("the EEG has no channel named {missing:?} that the model needs (its channels: {have:?}): name its channels in order with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc)")]
+    ModelChannels {
+        missing: Vec<String>,
+        have: Vec<String>,
+    },
+    /// A model or montage given after the session already took samples (its filter would
+    /// start late, its names change midway).
+    #[error(
+        "{what} is set before the session's first sample; {n_times} samples were already taken"
+    )]
+    TooLate { what: &'static str, n_times: usize },
     #[error(
         "{path} is not a P300-speller recording (no TargetDefinitions): it cannot be replayed"
     )]

@@ -23,6 +23,7 @@ use std::path::Path;
 use oddball_arm::Command;
 use oddball_decode::decision::Verdict;
 use oddball_decode::pipeline::Model;
+use oddball_io::xdf::session_markers;
 use oddball_io::{
     stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary, Recording,
     StateColumn,
@@ -30,7 +31,7 @@ use oddball_io::{
 use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome};
+use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome, TrialRecord};
 use crate::online::offline_epochs;
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
@@ -125,9 +126,15 @@ pub struct SavedSession {
     pub trials: Vec<SavedTrial>,
 }
 
-/// Whether a recording is an oddball four-bulb session file (BCI2000 or `.easy`).
+/// Whether a recording is an oddball four-bulb session file (BCI2000, `.easy`, or the XDF a
+/// live session records, whose flashes carry their flags).
 pub fn is_session(rec: &Recording) -> bool {
-    rec.bci2000()
+    rec.xdf().is_some_and(|x| {
+        x.markers
+            .iter()
+            .any(|m| session_markers::parse_flash_marker(&m.text).is_some())
+    }) || rec
+        .bci2000()
         .and_then(|b| b.parameters.get("Paradigm"))
         .and_then(|p| p.as_str())
         == Some("four-bulb")
@@ -141,6 +148,9 @@ pub fn is_session(rec: &Recording) -> bool {
 pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
     if rec.easy().is_some() {
         return read_session_easy(rec);
+    }
+    if let Some(x) = rec.xdf() {
+        return read_session_xdf(rec, x);
     }
     let path = rec.path.display().to_string();
     let missing = |what: &str| SessionError::NotASession {
@@ -213,6 +223,95 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
     Ok(SavedSession { bulbs, trials })
 }
 
+/// The online trials of a live session's XDF recording (`oddball_live::record`): each
+/// decision's trial record (the `oddball-decisions` stream, JSON) with the flagged flashes
+/// inside it. The recording does not name the bulbs' commands: the paper's are assumed.
+fn read_session_xdf(
+    rec: &Recording,
+    x: &oddball_io::xdf::XdfInfo,
+) -> Result<SavedSession, SessionError> {
+    let path = rec.path.display().to_string();
+    if !is_session(rec) {
+        return Err(SessionError::NotASession {
+            path,
+            missing: "flash markers with target flags (`flash C target`)".into(),
+        });
+    }
+    let events = rec.raw.events().as_slice();
+    let mut trials = Vec::new();
+    for m in &x.markers {
+        if !m.text.starts_with('{') {
+            continue;
+        }
+        let t: TrialRecord =
+            serde_json::from_str(&m.text).map_err(|e| SessionError::NotASession {
+                path: path.clone(),
+                missing: format!("a readable trial record ({e})"),
+            })?;
+        let flashes = events_in(events, t.start, t.end)
+            .iter()
+            .map(|e| SavedFlash {
+                onset: e.onset as u64,
+                code: e.code,
+                attended: e.target == Some(true),
+            })
+            .collect();
+        trials.push(SavedTrial {
+            number: trials.len() + 1,
+            phase: t.phase,
+            start: t.start,
+            end: t.end,
+            intended: t.intended,
+            recorded: t.decided(),
+            flashes,
+        });
+    }
+    check_trials(&path, &trials, rec.raw.n_times())?;
+    Ok(SavedSession {
+        bulbs: FourBulbParams::paper().bulbs,
+        trials,
+    })
+}
+
+/// The calibration a session recording begins with: what a replay with a model passes over
+/// ([`crate::engine::Session::pass_calibration`]) rather than playing it as commands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CalibrationPart {
+    /// Calibration trials recorded.
+    pub n_trials: usize,
+    /// The sample where control starts (the first online trial's start, or the end of the
+    /// recording when it holds none).
+    pub end: u64,
+}
+
+/// The calibration part of a session recording (`.dat`, `.easy` or a live session's XDF);
+/// `None` for other recordings and sessions without calibration.
+pub fn calibration_part(rec: &Recording) -> Option<CalibrationPart> {
+    if !is_session(rec) {
+        return None;
+    }
+    let saved = read_session(rec).ok()?;
+    let end = saved
+        .trials
+        .iter()
+        .find(|t| t.phase == Phase::Online)
+        .map_or(rec.raw.n_times() as u64, |t| t.start);
+    let n_trials = match rec.xdf() {
+        // The XDF keeps online trial records only; its cues say which trials calibrated.
+        Some(x) => x
+            .markers
+            .iter()
+            .filter(|m| session_markers::parse_cue_marker(&m.text).is_some_and(|(_, cal)| cal))
+            .count(),
+        None => saved
+            .trials
+            .iter()
+            .filter(|t| t.phase == Phase::Calibration)
+            .count(),
+    };
+    (n_trials > 0).then_some(CalibrationPart { n_trials, end })
+}
+
 /// The events with onsets in `start..end` (events are sorted by onset: a binary search, so
 /// reading a session is linear in its trials and events).
 fn events_in(events: &[Event], start: u64, end: u64) -> &[Event] {
@@ -275,15 +374,28 @@ impl Redecision {
 }
 
 /// Recomputes every online decision of a session file with `model` (which must carry its
-/// decision model, as session-trained models do).
+/// decision model), as a session runs it ([`Model::for_session`]): the model's channels
+/// picked by name, its band-pass causal.
 pub fn reevaluate(
     rec: &Recording,
     saved: &SavedSession,
     model: &Model,
 ) -> Result<Vec<Redecision>, SessionError> {
-    let raw = &rec.raw;
-    model.check_layout(raw.ch_names(), raw.sfreq())?;
-    let decision = model.decision.ok_or(SessionError::NotCalibrated)?;
+    let model = &model.clone().for_session();
+    model.channel_order(rec.raw.ch_names(), rec.raw.sfreq())?;
+    let picked;
+    let raw = if rec.raw.ch_names() == model.ch_names.as_slice() {
+        &rec.raw
+    } else {
+        picked = rec.raw.pick_channels(&model.ch_names)?;
+        &picked
+    };
+    let decision = model
+        .decision
+        .ok_or_else(|| SessionError::NoDecisionModel {
+            pipeline: model.pipeline.name().to_string(),
+        })?;
+    let preprocess = model.preprocess;
     let online: Vec<&SavedTrial> = saved
         .trials
         .iter()
@@ -293,8 +405,8 @@ pub fn reevaluate(
         .iter()
         .flat_map(|t| t.flashes.iter().map(|f| f.onset))
         .collect();
-    let epochs = offline_epochs(&model.preprocess, raw, &onsets)?;
-    let (first, n_times) = model.preprocess.window(raw.sfreq());
+    let epochs = offline_epochs(&preprocess, raw, &onsets)?;
+    let (first, n_times) = preprocess.window(raw.sfreq());
     let mut out = Vec::new();
     let mut i = 0;
     for t in online {
@@ -349,12 +461,12 @@ pub fn reevaluate(
     Ok(out)
 }
 
-/// `.info` key naming the paradigm of a session `.easy`.
-const EASY_PARADIGM: &str = "Oddball paradigm";
+/// `.info` key naming the paradigm of a session `.easy` (the reader's, which labels its flashes).
+const EASY_PARADIGM: &str = oddball_io::easy::ODDBALL_PARADIGM_KEY;
 /// `.info` key of the bulbs' commands.
 const EASY_BULBS: &str = "Oddball bulb commands";
 /// Trigger offset of attended flashes in a session `.easy` (NIC triggers carry one number).
-pub const EASY_ATTENDED_OFFSET: u32 = 10;
+pub const EASY_ATTENDED_OFFSET: u32 = oddball_io::easy::ODDBALL_ATTENDED_OFFSET;
 
 /// Writes a session as NIC `.easy` + `.info`: samples in nV (the values a NIC stream
 /// delivers come back exactly), each flash's bulb code in the trigger column at its onset
@@ -466,12 +578,9 @@ fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
             .iter()
             .map(|e| SavedFlash {
                 onset: e.onset as u64,
-                code: if e.code > EASY_ATTENDED_OFFSET {
-                    e.code - EASY_ATTENDED_OFFSET
-                } else {
-                    e.code
-                },
-                attended: e.code > EASY_ATTENDED_OFFSET,
+                // The reader took the attended offset off and set the flag.
+                code: e.code,
+                attended: e.target == Some(true),
             })
             .collect();
         trials.push(SavedTrial {

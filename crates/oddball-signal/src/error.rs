@@ -42,6 +42,10 @@ pub enum SignalError {
     InvalidOrder { order: usize, max: usize },
     #[error("signal of {n_times} samples is too short: zero-phase filtering pads {padlen} samples at each end and needs more than that")]
     SignalTooShort { n_times: usize, padlen: usize },
+    #[error("resampling from {from} Hz to {to} Hz: the rates must be whole thousandths of a hertz whose ratio reduces to factors of at most {max}", max = crate::resample::MAX_FACTOR)]
+    ResampleRatio { from: f64, to: f64 },
+    #[error("resampling factors up {up}, down {down}: each must be 1 to {max}", max = crate::resample::MAX_FACTOR)]
+    ResampleFactors { up: u64, down: u64 },
     #[error("decimation factor {q} must be at least 1")]
     InvalidDecimation { q: usize },
     #[error("chunk has {got} channels but the filter was set up for {expected}")]

@@ -7,6 +7,8 @@
 //!   [`filter::StreamingFilter`] for online use.
 //! * [`detrend`], [`decimate`], and [`epochs`]: cutting, baseline correction, amplitude-threshold
 //!   and flat-channel rejection and averaging of repetitions.
+//! * [`resample`]: polyphase resampling by `up / down` (scipy's `resample_poly`), and a
+//!   recording moved to another rate with its events.
 //! * [`preprocess`]: the one path from continuous EEG to epochs (held non-finite samples, detrend,
 //!   band-pass, cut, rejection), MNE's `Epochs(raw, events, tmin, tmax, reject, flat)`.
 //!
@@ -40,6 +42,7 @@ pub mod epochs;
 mod error;
 pub mod filter;
 pub mod preprocess;
+pub mod resample;
 mod types;
 
 pub use error::SignalError;

@@ -287,6 +287,21 @@ impl Raw {
         })
     }
 
+    /// The same recording with its channels named `ch_names`, in order (a montage naming a
+    /// file's channels, or a model's spelling of matched names); as many unique names as
+    /// channels.
+    pub fn with_ch_names(mut self, ch_names: Vec<String>) -> Result<Raw, SignalError> {
+        if ch_names.len() != self.data.nrows() {
+            return Err(SignalError::ChannelCountMismatch {
+                names: ch_names.len(),
+                n_channels: self.data.nrows(),
+            });
+        }
+        check_unique_names(&ch_names)?;
+        self.ch_names = ch_names;
+        Ok(self)
+    }
+
     /// Splits into its parts: data `(n_channels, n_times)` µV, sfreq, channel names, events.
     pub fn into_parts(self) -> (Array2<f64>, f64, Vec<String>, Events) {
         (self.data, self.sfreq, self.ch_names, self.events)

@@ -10,6 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
 use oddball_decode::decision::DecisionRule;
+use oddball_decode::pipeline::Model;
 use oddball_io::nic::{NicFormat, NicMode};
 use oddball_live::clock::Clock;
 use oddball_live::panel::{PanelConfig, PanelServer};
@@ -207,6 +208,17 @@ pub struct SessionOptions {
     /// unsupervised decoder, which then adapts it to this session without labels.
     #[arg(long, value_name = "MODEL")]
     pub transfer: Option<PathBuf>,
+    /// Decide with this saved model instead of calibrating: `oddball train`'s (e.g. `oddball
+    /// train out/demo/session.dat -o m.json`), or the model.json of a `demo`, `task` or
+    /// `online` session. Its channels are matched by name (the EEG may have more, in any order);
+    /// a model trained offline runs its band-pass causally.
+    #[arg(long, value_name = "FILE")]
+    pub model: Option<PathBuf>,
+    /// Names the EEG's channels in order (an EEGLAB .loc montage, e.g. BCI2000's eeg64.loc), for
+    /// a stream or replayed file whose own names are not the model's; the session's recording
+    /// and model carry these names.
+    #[arg(long, value_name = "FILE")]
+    pub montage: Option<PathBuf>,
     /// After the labelled calibration (`lda` pipeline), adapt the model online: after each
     /// decision its class means take in the decision's epochs, labelled by the decision, through
     /// incremental statistics; decisions with a posterior below 0.9 are left out, and an update
@@ -455,6 +467,7 @@ impl SessionOptions {
         let pen_start = arm.pen();
         let mut session = Session::new(self.params(rule), subject, Some(arm))
             .context("setting up the session")?;
+        self.name_channels(&mut session)?;
         if self.calibration == CalibrationSpec::None {
             let params = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;
@@ -465,6 +478,13 @@ impl SessionOptions {
                     params.abstain_below
                 );
             }
+            return Ok((session, CalibrationReport::none(), pen_start));
+        }
+        if let Some(model) = self.session_model(rule)? {
+            if verbose {
+                println!("{}", model_line(&model, self.model.as_deref()));
+            }
+            session.set_model(model).context("using --model")?;
             return Ok((session, CalibrationReport::none(), pen_start));
         }
         let calibration = if verbose {
@@ -514,6 +534,36 @@ impl SessionOptions {
         Ok(())
     }
 
+    /// The `--model` to decide with instead of calibrating (read and checked), its decision
+    /// rule replaced by this session's `rule`.
+    pub fn session_model(&self, rule: DecisionRule) -> Result<Option<Model>> {
+        let Some(path) = &self.model else {
+            return Ok(None);
+        };
+        let mut model = crate::load::load_model(path)?;
+        match &mut model.decision {
+            // The stopping rule is this session's choice, not the training's.
+            Some(d) => d.rule = rule,
+            None => bail!(
+                "--model {}: {}",
+                path.display(),
+                oddball_decode::model::NO_DECISION_MODEL
+            ),
+        }
+        Ok(Some(model))
+    }
+
+    /// Names the session's channels from `--montage`, if given.
+    pub fn name_channels<S: Subject>(&self, session: &mut Session<S>) -> Result<()> {
+        if let Some(path) = &self.montage {
+            let names = oddball_io::montage::read_montage(path)?;
+            session.name_channels(names).with_context(|| {
+                format!("naming the channels with --montage {}", path.display())
+            })?;
+        }
+        Ok(())
+    }
+
     /// The arm the session drives (recording its trace), with `--step`.
     pub fn arm(&self) -> Result<ArmSim> {
         recording_arm(self.step)
@@ -529,6 +579,26 @@ impl SessionOptions {
 
     /// Checks option combinations before any session starts.
     pub fn check(&self) -> Result<()> {
+        if self.model.is_some() {
+            if self.calibration == CalibrationSpec::None {
+                bail!("--calibration none starts without a model: not with --model");
+            }
+            if self.adapt {
+                bail!(
+                    "--adapt adapts a calibration made in this session (--calibrate), not --model"
+                );
+            }
+            if self.optimise_stopping {
+                bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+            }
+            if let SubjectSpec::Replay(file) = &self.subject {
+                bail!(
+                    "--subject replay:{} calibrates on the recording's calibration file, not --model; to replay a recording with a model: oddball online --source replay:{} --model MODEL --fast",
+                    file.display(),
+                    file.display()
+                );
+            }
+        }
         self.arm()?;
         if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
             bail!("--transfer starts an uncalibrated session: it needs --calibration none");
@@ -597,6 +667,25 @@ impl SessionOptions {
             params,
         })
     }
+}
+
+/// What a session says of the model it decides with instead of calibrating.
+pub fn model_line(model: &Model, path: Option<&Path>) -> String {
+    format!(
+        "model: {}{}, {} channels at {} Hz, epochs {}–{} s{}: no calibration",
+        model.pipeline.name(),
+        path.map(|p| format!(" from {}", p.display()))
+            .unwrap_or_default(),
+        model.ch_names.len(),
+        model.sfreq,
+        model.preprocess.tmin,
+        model.preprocess.tmax,
+        match (model.preprocess.causal, &model.live) {
+            (true, _) => "",
+            (false, Some(_)) => " (its causal fit, as a session filters)",
+            (false, None) => " (trained zero-phase, run causally: expect lower accuracy)",
+        }
+    )
 }
 
 /// The arm every session drives, recording its trace.

@@ -106,12 +106,18 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         }
         (None, preset) => {
             println!(
-                "oddball demo: {} simulated subject (seed {}), pipeline {}, {}; calibration: {} decisions per bulb",
+                "oddball demo: {} simulated subject (seed {}), pipeline {}, {}; {}",
                 preset.expect("a simulated preset when not replaying"),
                 opts.seed,
                 opts.pipeline,
                 rule_label,
-                opts.calibration_per_bulb
+                match &opts.model {
+                    Some(m) => format!("model {}", m.display()),
+                    None => format!(
+                        "calibration: {} decisions per bulb",
+                        opts.calibration_per_bulb
+                    ),
+                }
             );
             if let SourceSpec::Nic(addr) = &args.source.source {
                 println!(

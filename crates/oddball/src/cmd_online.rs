@@ -11,7 +11,6 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use oddball_arm::{planned_path, Command};
-use oddball_decode::pipeline::Model;
 use oddball_live::clock::Clock;
 use oddball_live::live::{EegSource, LiveSubject, Summary};
 use oddball_live::online::{
@@ -34,10 +33,6 @@ use crate::args::{
 pub struct OnlineArgs {
     #[command(flatten)]
     pub source: SourceArgs,
-    /// A model trained in a session (`oddball demo` writes one: out/demo/model.json); one of
-    /// --model, --calibrate and --calibration none is needed.
-    #[arg(long, value_name = "FILE")]
-    pub model: Option<PathBuf>,
     /// Calibrate live first (calibration-per-bulb decisions per bulb) instead of loading a model
     /// (`--calibration none`: no calibration at all, the decoder learns from the session).
     #[arg(long, conflicts_with = "model")]
@@ -64,25 +59,15 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     let (_, rule) = args.session.rules()?;
     args.session.check_commands(&args.commands)?;
     let uncalibrated = args.session.calibration == CalibrationSpec::None;
-    match (&args.model, args.calibrate, uncalibrated) {
-        (None, false, false) => {
-            bail!(
-                "give --model FILE, --calibrate (labelled calibration first) or --calibration none"
-            )
-        }
-        (Some(_), _, true) => bail!("--calibration none starts without a model: not with --model"),
-        (Some(_), _, _) if args.session.adapt => {
-            bail!("--adapt adapts a calibration made in this session (--calibrate), not --model")
-        }
-        _ => {}
-    }
-    if args.session.optimise_stopping && args.model.is_some() {
-        bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
+    if (args.session.model.is_none(), args.calibrate, uncalibrated) == (true, false, false) {
+        bail!("give --model FILE, --calibrate (labelled calibration first) or --calibration none");
     }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
     }
+    // The model read and checked before any EEG work.
+    let model = args.session.session_model(rule)?;
     let clock = Clock::new();
     let sim = args.session.simulated()?;
     let (source, markers) = args
@@ -102,7 +87,31 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         _ if markers.is_some() => println!("marker outlet: {}", args.source.markers),
         _ => {}
     }
-    run_with(args, source, markers, clock, rule, &args.commands)
+    // A file at another rate than the model's is resampled to it (polyphase).
+    let source = match (source, &model) {
+        (AnySource::Playback(p), Some(m)) if (p.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
+            println!(
+                "resampling the file from {} Hz to the model's {} Hz (polyphase)",
+                p.sfreq(),
+                m.sfreq
+            );
+            AnySource::Playback(
+                p.resampled(m.sfreq)
+                    .context("resampling the replayed file")?,
+            )
+        }
+        // A live stream is resampled as it streams.
+        (s, Some(m)) if (s.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
+            println!(
+                "resampling the stream from {} Hz to the model's {} Hz as it streams (polyphase)",
+                s.sfreq(),
+                m.sfreq
+            );
+            s.resampled(m.sfreq).context("resampling the stream")?
+        }
+        (s, _) => s,
+    };
+    run_with(args, source, markers, clock, (rule, model), &args.commands)
 }
 
 fn run_with(
@@ -110,26 +119,15 @@ fn run_with(
     source: AnySource,
     markers: Option<Box<dyn oddball_live::live::MarkerSink>>,
     clock: Clock,
-    rule: oddball_decode::decision::DecisionRule,
+    (rule, model): (
+        oddball_decode::decision::DecisionRule,
+        Option<oddball_decode::pipeline::Model>,
+    ),
     commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let paradigm = args.session.paradigm();
     let arm = args.session.arm()?;
-    let model = match &args.model {
-        Some(path) => {
-            let text =
-                fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            let mut m =
-                Model::from_json(&text).with_context(|| format!("loading {}", path.display()))?;
-            // The stopping rule is this session's choice, not the training session's.
-            if let Some(d) = &mut m.decision {
-                d.rule = rule;
-            }
-            Some(m)
-        }
-        None => None,
-    };
     let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
         &record_path,
@@ -178,6 +176,7 @@ fn run_with(
     subject.source_mut().start_now();
     let mut session = Session::new(args.session.params(rule), subject, Some(arm))
         .context("setting up the session")?;
+    args.session.name_channels(&mut session)?;
     // The operator view's progress: "calibration decision 3 of 40", "decision 2 of 6".
     let calibrating = model.is_none() && args.session.calibration != CalibrationSpec::None;
     let n_calibration = calibrating.then(|| session.params().calibration_trials());
@@ -188,7 +187,31 @@ fn run_with(
     // writes the summary (with no decisions).
     let mut ended = None;
     match model {
-        Some(m) => session.set_model(m).context("using the model")?,
+        Some(m) => {
+            println!(
+                "{}",
+                crate::args::model_line(&m, args.session.model.as_deref())
+            );
+            session.set_model(m).context("using --model")?;
+            // A replayed recording's calibration is passed over, not played as commands.
+            let recorded = match session.subject().source() {
+                AnySource::Playback(p) => p.calibration(),
+                _ => None,
+            };
+            if let Some(c) = recorded {
+                println!(
+                    "passing over the recording's calibration: {} trials, {:.1} s (filtered, nothing decided)",
+                    c.n_trials,
+                    c.end as f64 / session.sfreq()
+                );
+                session
+                    .pass_calibration(c.n_trials, c.end)
+                    .context("passing over the recorded calibration")?;
+            }
+            if let Some(m) = session.model() {
+                oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
+            }
+        }
         None if args.session.calibration == CalibrationSpec::None => {
             let p = UncalibratedParams::for_sfreq(session.sfreq())
                 .context("setting up the uncalibrated decoder")?;

@@ -34,9 +34,19 @@ pub struct EventArgs {
     #[arg(long, value_name = "HZ")]
     pub sfreq: Option<f64>,
     /// CSV: the EEG columns to read, comma-separated (e.g. TP9,AF7,AF8,TP10); MAT: the names of
-    /// the signal's columns.
+    /// the signal's columns; other formats: the channels kept, in this order (e.g. Cz,Pz).
     #[arg(long, value_name = "NAMES", value_delimiter = ',')]
     pub channels: Option<Vec<String>>,
+    /// Names the channels of files that hold no names (or other ones), in order: an EEGLAB .loc
+    /// montage, e.g. BCI2000's eeg64.loc for eeg2_1.dat (64 channels). --channels then picks among
+    /// those names.
+    #[arg(long, value_name = "FILE")]
+    pub montage: Option<PathBuf>,
+    /// Resample every file to this rate (Hz, polyphase as MNE's resample) before anything else
+    /// (e.g. to train a model at an amplifier's rate); files are otherwise resampled only to
+    /// meet a model's or the first training file's rate.
+    #[arg(long, value_name = "HZ")]
+    pub resample: Option<f64>,
     /// CSV: the time column (seconds).
     #[arg(long, value_name = "COLUMN")]
     pub time_column: Option<String>,
@@ -67,6 +77,7 @@ impl EventArgs {
         let o = ReadOptions {
             sfreq: self.sfreq,
             channels: self.channels.clone(),
+            montage: self.montage.clone(),
             time_column: self.time_column.clone(),
             events: self.events_from.clone(),
             data: self.data_from.clone(),
@@ -98,8 +109,8 @@ pub fn read_mapped(
 
 /// The channels (by name, in order) and the rate every recording of a run must have: a model's,
 /// or the first training file's. Recordings are matched to it by channel name (any order, extra
-/// channels left out) before anything is filtered; a missing channel or another rate is an
-/// error naming it.
+/// channels left out) and resampled to its rate (`oddball_signal::resample`, polyphase) before
+/// anything is filtered; a missing channel is an error naming it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Layout {
     pub ch_names: Vec<String>,
@@ -135,20 +146,41 @@ impl Layout {
                 self.of
             )
         };
-        if (raw.sfreq() - self.sfreq).abs() > 1e-9 * self.sfreq {
-            anyhow::bail!(
-                "{} is sampled at {} Hz, {} at {} Hz",
+        if raw.ch_names() != self.ch_names.as_slice() {
+            let order = oddball_decode::model::match_channels(&self.ch_names, raw.ch_names())
+                .with_context(|| {
+                    format!(
+                        "{}; name the file's channels with --montage FILE (an EEGLAB .loc, e.g. \
+                         eeg64.loc) or --channels",
+                        what()
+                    )
+                })?;
+            let names: Vec<&str> = order.iter().map(|&i| raw.ch_names()[i].as_str()).collect();
+            rec.raw = raw
+                .pick_channels(&names)
+                .and_then(|r| r.with_ch_names(self.ch_names.clone()))
+                .with_context(what)?;
+        }
+        let from = rec.raw.sfreq();
+        if (from - self.sfreq).abs() > 1e-9 * self.sfreq {
+            // Another rate is resampled (polyphase, as MNE's resample), not refused.
+            rec.raw = oddball_signal::resample::resample_raw(&rec.raw, self.sfreq).with_context(
+                || {
+                    format!(
+                        "{} is sampled at {from} Hz, {} at {} Hz; resampling it",
+                        rec.path.display(),
+                        self.of,
+                        self.sfreq
+                    )
+                },
+            )?;
+            eprintln!(
+                "{}: resampled from {from} Hz to {} Hz (polyphase) to match {}",
                 rec.path.display(),
-                raw.sfreq(),
-                self.of,
-                self.sfreq
+                self.sfreq,
+                self.of
             );
         }
-        if raw.ch_names() == self.ch_names.as_slice() {
-            return Ok(rec);
-        }
-        oddball_decode::model::match_channels(&self.ch_names, raw.ch_names()).with_context(what)?;
-        rec.raw = raw.pick_channels(&self.ch_names).with_context(what)?;
         Ok(rec)
     }
 }
@@ -195,6 +227,14 @@ pub fn load_epochs_in(
                 read: Some(&read),
             };
             let mut rec = dataset::read_labelled(p, how)?;
+            if let Some(f) = events.resample {
+                if (rec.raw.sfreq() - f).abs() > 1e-9 * f {
+                    rec.raw =
+                        oddball_signal::resample::resample_raw(&rec.raw, f).with_context(|| {
+                            format!("resampling {} to --resample {f} Hz", p.display())
+                        })?;
+                }
+            }
             rec = match &layout {
                 Some(l) => l.fit(rec)?,
                 None => {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use oddball_decode::decision::DecisionRule;
 use oddball_live::clock::Clock;
-use oddball_live::live::LiveSubject;
+use oddball_live::live::{EegSource, LiveSubject};
 use oddball_live::pilot::decisions_csv;
 pub use oddball_live::pilot::{AnyPilot, Prepared};
 use oddball_live::source::{AnySource, SourceSpec};
@@ -28,6 +28,22 @@ pub fn live_subject(
         .source
         .open(source.open_options(sim, paced)?, clock)
         .with_context(|| format!("--source {}", source.source))?;
+    // A model at another rate than the EEG's: the stream is resampled to it as it streams.
+    let eeg = match &opts.model {
+        Some(path) => {
+            let sfreq = crate::load::load_model(path)?.sfreq;
+            if (eeg.sfreq() - sfreq).abs() > 1e-9 * sfreq {
+                println!(
+                    "resampling the EEG from {} Hz to the model's {sfreq} Hz as it streams (polyphase)",
+                    eeg.sfreq()
+                );
+                eeg.resampled(sfreq).context("resampling the EEG")?
+            } else {
+                eeg
+            }
+        }
+        None => eeg,
+    };
     let mut subject = LiveSubject::new(eeg, opts.paradigm(), clock);
     if let Some(m) = markers {
         subject = subject.with_markers(m);

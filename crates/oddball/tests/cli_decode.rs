@@ -65,8 +65,9 @@ fn speller_forward_split_spells_6mk_and_a_saved_model_scores_the_same() {
         field(r, "speller_accuracy")
     );
 
-    // A model of another layout is refused with the reason (the rate, checked before the
-    // channels are matched by name).
+    // A file without the model's channel names is refused naming them and the option that
+    // fixes it; named by BCI2000's montage, its channels are picked and it is resampled from
+    // 160 to 256 Hz (polyphase) to meet the model.
     let (ok, _, err) = oddball(&[
         "evaluate",
         "--model",
@@ -76,9 +77,24 @@ fn speller_forward_split_spells_6mk_and_a_saved_model_scores_the_same() {
     ]);
     assert!(!ok);
     assert!(
-        err.contains("sampled at 160 Hz") && err.contains("at 256 Hz"),
+        err.contains("without [\"Fz\", \"Cz\"") && err.contains("--montage"),
         "{err}"
     );
+    let (ok, out, err) = oddball(&[
+        "evaluate",
+        "--model",
+        model.to_str().unwrap(),
+        "--test",
+        d.join("eeg2_1.dat").to_str().unwrap(),
+        "--montage",
+        d.join("eeg64.loc").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("resampled from 160 Hz to 256 Hz (polyphase)"),
+        "{err}"
+    );
+    assert!(out.contains("AUC"), "{out}");
     let _ = std::fs::remove_dir_all(tmp);
 }
 

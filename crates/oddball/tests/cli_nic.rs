@@ -59,6 +59,15 @@ fn a_demo_over_nic_from_another_process_draws_the_g() {
         ]);
         assert!(ok, "{err}");
         assert!(out.contains("20 online decisions: 20 identical"), "{out}");
+        // The .easy reads as a labelled recording (attended triggers are targets): 40
+        // calibration and 20 online trials of 5 rounds of 4 flashes.
+        let (ok, out, err) =
+            common::oddball(&["inspect", dir.join("session.easy").to_str().unwrap()]);
+        assert!(ok, "{err}");
+        assert!(
+            out.contains("targets    300 target, 900 non-target"),
+            "{out}"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -121,7 +121,10 @@ use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
 use info::normalize_key;
-pub use read::{estimate_sfreq, info_path_for, parse_easy, read_easy, read_easy_with};
+pub use read::{
+    estimate_sfreq, info_path_for, parse_easy, read_easy, read_easy_with, ODDBALL_ATTENDED_OFFSET,
+    ODDBALL_PARADIGM_KEY,
+};
 pub use write::{timestamp_ms, write_easy, EasyWriteOptions, EasyWriteSummary};
 
 /// The EEG channel counts of Neuroelectrics devices, used to find the layout of a file read

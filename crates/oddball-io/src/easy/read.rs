@@ -31,7 +31,50 @@ pub fn read_easy_with(path: impl AsRef<Path>, options: &EasyOptions) -> Result<R
     };
     let info_bytes = info_path.as_deref().map(read_file).transpose()?;
     let info = info_path.as_deref().zip(info_bytes.as_deref());
-    parse_easy(&bytes, path, info.map(|(p, b)| (b, p)), options)
+    let mut rec = parse_easy(&bytes, path, info.map(|(p, b)| (b, p)), options)?;
+    label_oddball_session(&mut rec)?;
+    Ok(rec)
+}
+
+/// `.info` key naming the paradigm of an oddball session's `.easy` (`four-bulb`).
+pub const ODDBALL_PARADIGM_KEY: &str = "Oddball paradigm";
+/// Trigger offset of attended flashes in an oddball session's `.easy` (NIC triggers carry one
+/// number: bulb `C` attended is `C + 10`).
+pub const ODDBALL_ATTENDED_OFFSET: u32 = 10;
+
+/// An oddball session's `.easy` (its `.info` names the paradigm) reads as a labelled recording:
+/// a trigger `C + 10` is bulb `C` attended (target), `C` not; other files are left as they are.
+fn label_oddball_session(rec: &mut Recording) -> Result<(), IoError> {
+    let session = rec
+        .easy()
+        .and_then(|e| e.info_value(ODDBALL_PARADIGM_KEY))
+        .is_some_and(|v| v == "four-bulb");
+    if !session {
+        return Ok(());
+    }
+    let events: Vec<Event> = rec
+        .raw
+        .events()
+        .iter()
+        .map(|e| {
+            let attended = e.code > ODDBALL_ATTENDED_OFFSET;
+            Event {
+                code: if attended {
+                    e.code - ODDBALL_ATTENDED_OFFSET
+                } else {
+                    e.code
+                },
+                target: Some(attended),
+                ..e.clone()
+            }
+        })
+        .collect();
+    rec.raw
+        .set_events(oddball_signal::Events::new(events))
+        .map_err(|source| IoError::Signal {
+            path: rec.path.clone(),
+            source,
+        })
 }
 
 /// The `.info` file that belongs to a `.easy` file: same stem, extension `.info`.

@@ -100,6 +100,7 @@
 mod chunk;
 mod read;
 mod recording;
+pub mod session_markers;
 mod writer;
 mod xml;
 

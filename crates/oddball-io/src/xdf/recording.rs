@@ -371,9 +371,17 @@ pub fn parse_xdf_with(
             XdfValues::Numeric(_) => {}
         }
     }
+    // An oddball session's recording: its flashes carry their code and flag, and its other
+    // markers (cues, decisions, trial records) are not stimuli (kept as markers, not events).
+    let session = raw_markers
+        .iter()
+        .any(|m| super::session_markers::parse_flash_marker(&m.text).is_some());
     let parsed: Vec<Option<crate::edf::EventText>> = raw_markers
         .iter()
         .map(|m| {
+            if let Some((code, attended)) = super::session_markers::parse_flash_marker(&m.text) {
+                return Some((code, Some(attended), Some(m.text.clone())));
+            }
             crate::edf::parse_event_text(&m.text)
                 .or_else(|| trailing_code(&m.text).map(|c| (c, None, Some(m.text.clone()))))
         })
@@ -407,7 +415,8 @@ pub fn parse_xdf_with(
             });
         }
         let sample = nearest_sample(eeg_times, monotonic, sfreq, m.synced);
-        if let Some(onset) = sample {
+        let stimulus = !session || target.is_some();
+        if let (Some(onset), true) = (sample, stimulus) {
             events.push(Event {
                 onset,
                 code,
