@@ -591,11 +591,11 @@ impl SessionOptions {
             if self.optimise_stopping {
                 bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
             }
-            if let SubjectSpec::Replay(file) = &self.subject {
+            if let SubjectSpec::Replay(files) = &self.subject {
                 bail!(
                     "--subject replay:{} calibrates on the recording's calibration file, not --model; to replay a recording with a model: oddball online --source replay:{} --model MODEL --fast",
-                    file.display(),
-                    file.display()
+                    join_paths(files),
+                    files.first().map(|f| f.display().to_string()).unwrap_or_default()
                 );
             }
         }
