@@ -197,14 +197,7 @@ pub fn read_session(rec: &Recording) -> Result<SavedSession, SessionError> {
         while t < trial_no.len() && trial_no[t] == no {
             t += 1;
         }
-        let flashes = events_in(events, start as u64, t as u64)
-            .iter()
-            .map(|e| SavedFlash {
-                onset: e.onset as u64,
-                code: e.code,
-                attended: e.target == Some(true),
-            })
-            .collect();
+        let flashes = flashes_in(events, start as u64, t as u64);
         trials.push(SavedTrial {
             number: no as usize,
             phase: if calib[start] != 0 {
@@ -248,14 +241,7 @@ fn read_session_xdf(
                 path: path.clone(),
                 missing: format!("a readable trial record ({e})"),
             })?;
-        let flashes = events_in(events, t.start, t.end)
-            .iter()
-            .map(|e| SavedFlash {
-                onset: e.onset as u64,
-                code: e.code,
-                attended: e.target == Some(true),
-            })
-            .collect();
+        let flashes = flashes_in(events, t.start, t.end);
         trials.push(SavedTrial {
             number: trials.len() + 1,
             phase: t.phase,
@@ -312,12 +298,20 @@ pub fn calibration_part(rec: &Recording) -> Option<CalibrationPart> {
     (n_trials > 0).then_some(CalibrationPart { n_trials, end })
 }
 
-/// The events with onsets in `start..end` (events are sorted by onset: a binary search, so
-/// reading a session is linear in its trials and events).
-fn events_in(events: &[Event], start: u64, end: u64) -> &[Event] {
+/// The flashes among `events` with onsets in `start..end`, attended when the reader flagged them
+/// as targets (it took any attended offset off the code). Events are sorted by onset: a binary
+/// search, so reading a session is linear in its trials and events.
+fn flashes_in(events: &[Event], start: u64, end: u64) -> Vec<SavedFlash> {
     let a = events.partition_point(|e| (e.onset as u64) < start);
     let b = events.partition_point(|e| (e.onset as u64) < end);
-    &events[a..b.max(a)]
+    events[a..b.max(a)]
+        .iter()
+        .map(|e| SavedFlash {
+            onset: e.onset as u64,
+            code: e.code,
+            attended: e.target == Some(true),
+        })
+        .collect()
 }
 
 /// Trials read back must make sense: inside the recording, in order without overlap, with
@@ -574,15 +568,7 @@ fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {
             "online" => Phase::Online,
             _ => return Err(bad()),
         };
-        let flashes = events_in(events, start, end)
-            .iter()
-            .map(|e| SavedFlash {
-                onset: e.onset as u64,
-                // The reader took the attended offset off and set the flag.
-                code: e.code,
-                attended: e.target == Some(true),
-            })
-            .collect();
+        let flashes = flashes_in(events, start, end);
         trials.push(SavedTrial {
             number,
             phase,
