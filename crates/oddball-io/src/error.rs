@@ -241,7 +241,7 @@ pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, IoError> {
 }
 
 /// The formats [`crate::read`] knows, for messages.
-pub const KNOWN_FORMATS: &str =
+const KNOWN_FORMATS: &str =
     ".dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7)";
 
 fn extension_text(extension: &Option<String>) -> String {

@@ -180,6 +180,9 @@ impl Recording {
     }
 }
 
+/// The extensions [`read`] dispatches on (any case), as `IoError::UnknownFormat` lists them.
+pub const RECORDING_EXTENSIONS: [&str; 7] = ["dat", "csv", "edf", "bdf", "easy", "xdf", "mat"];
+
 /// Refuses, before any reading, a path that does not exist or is a directory (naming the
 /// recordings inside it).
 pub fn check_file(path: &Path) -> Result<(), IoError> {
@@ -200,10 +203,12 @@ pub fn check_file(path: &Path) -> Result<(), IoError> {
                     .filter_map(|e| e.ok())
                     .map(|e| e.file_name().to_string_lossy().into_owned())
                     .filter(|name| {
-                        let lower = name.to_ascii_lowercase();
-                        [".dat", ".csv", ".edf", ".bdf", ".easy", ".xdf", ".mat"]
-                            .iter()
-                            .any(|ext| lower.ends_with(ext))
+                        std::path::Path::new(name)
+                            .extension()
+                            .and_then(|e| e.to_str())
+                            .is_some_and(|e| {
+                                RECORDING_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
+                            })
                     })
                     .collect()
             })

@@ -727,7 +727,7 @@ pub fn calibration_progress() -> impl FnMut(oddball_session::engine::Calibration
 }
 
 /// "7 s", "2 min 05 s".
-pub fn minutes_seconds(s: f64) -> String {
+fn minutes_seconds(s: f64) -> String {
     let s = s.max(0.0).round() as u64;
     if s < 60 {
         format!("{s} s")

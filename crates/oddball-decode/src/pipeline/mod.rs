@@ -403,28 +403,25 @@ impl<'a> FrontCache<'a> {
         p: &SingleParams,
         subset: &[usize],
     ) -> Option<Result<FeatureData>> {
-        self.rows_timed(p, subset).map(|r| r.map(|(x, _)| x))
+        let i = match self.entry(p)? {
+            Ok(i) => i,
+            Err(e) => return Some(Err(e)),
+        };
+        Some(Ok(self.entries[i].1.select(subset)))
     }
 
-    /// [`Self::rows`] and the seconds per epoch the front's features took.
-    fn rows_timed(
-        &mut self,
-        p: &SingleParams,
-        subset: &[usize],
-    ) -> Option<Result<(FeatureData, f64)>> {
-        if let Some((_, x, s)) = self.entries.iter().find(|(q, _, _)| q.same_front(p)) {
-            return Some(Ok((x.select(subset), *s)));
+    /// The index of `p`'s front among the cached ones, computing its features of all epochs
+    /// (timed) on first use; `None` when the front learns from its training data.
+    fn entry(&mut self, p: &SingleParams) -> Option<Result<usize>> {
+        if let Some(i) = self.entries.iter().position(|(q, _, _)| q.same_front(p)) {
+            return Some(Ok(i));
         }
         let t0 = std::time::Instant::now();
-        match p.stateless_features(self.epochs)? {
-            Ok(x) => {
-                let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
-                let rows = x.select(subset);
-                self.entries.push((p.clone(), x, per_epoch));
-                Some(Ok((rows, per_epoch)))
-            }
-            Err(e) => Some(Err(e)),
-        }
+        Some(p.stateless_features(self.epochs)?.map(|x| {
+            let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
+            self.entries.push((p.clone(), x, per_epoch));
+            self.entries.len() - 1
+        }))
     }
 
     /// Splits whose scaler and PCA are cached so far.
@@ -457,43 +454,29 @@ impl PipelineParams {
         test: &[usize],
     ) -> Result<CachedScores> {
         if self.fused.is_empty() {
-            let idx: Vec<usize> = train.iter().chain(test).copied().collect();
-            if let Some(x) = cache.rows_timed(&self.main, &idx) {
-                let (x, per_epoch) = x?;
-                let n = train.len();
-                let tr: Vec<usize> = (0..n).collect();
-                let te: Vec<usize> = (n..idx.len()).collect();
-                check_labels(n, y_train)?;
-                let n_channels = cache.epochs().dim().1;
-                if self.main.has_neck() {
-                    let necked = match cache.necked(&self.main, train, test) {
-                        Some(k) => k,
-                        None => {
-                            let k = Arc::new(self.main.neck_split(x.select(&tr), x.select(&te))?);
+            if let Some(i) = cache.entry(&self.main) {
+                let i = i?;
+                check_labels(train.len(), y_train)?;
+                let per_epoch = cache.entries[i].2;
+                // A neck (scaler, PCA) fitted on this split by another preset is reused.
+                let necked = match cache.necked(&self.main, train, test) {
+                    Some(k) => k,
+                    None => {
+                        let x = &cache.entries[i].1;
+                        let k = Arc::new(self.main.neck_split(x.select(train), x.select(test))?);
+                        if self.main.has_neck() {
                             cache.keep_necked(&self.main, train.to_vec(), test.to_vec(), k.clone());
-                            k
                         }
-                    };
-                    let (scores, clf_fit_s, clf_score_s) =
-                        self.main.classifier_scores(&necked, y_train, n_channels)?;
-                    let fit_s = clf_fit_s + necked.fit_s + per_epoch * n as f64;
-                    let score_s = clf_score_s + necked.transform_s + per_epoch * te.len() as f64;
-                    return Ok(CachedScores {
-                        scores,
-                        fit_s,
-                        score_s,
-                    });
-                }
-                let t0 = std::time::Instant::now();
-                let head = self.main.fit_head(x.select(&tr), y_train, n_channels)?;
-                let fit_s = t0.elapsed().as_secs_f64() + per_epoch * n as f64;
-                let t1 = std::time::Instant::now();
-                let scores = head.decision_function(x.select(&te))?;
-                let score_s = t1.elapsed().as_secs_f64() + per_epoch * te.len() as f64;
+                        k
+                    }
+                };
+                let n_channels = cache.epochs().dim().1;
+                let (scores, clf_fit_s, clf_score_s) =
+                    self.main.classifier_scores(&necked, y_train, n_channels)?;
                 return Ok(CachedScores {
                     scores,
-                    fit_s,
-                    score_s,
+                    fit_s: clf_fit_s + necked.fit_s + per_epoch * train.len() as f64,
+                    score_s: clf_score_s + necked.transform_s + per_epoch * test.len() as f64,
                 });
             }
         }
@@ -629,14 +612,6 @@ fn scale_and_project(
         x = FeatureData::Rows(p.transform(x.into_rows("PCA")?.view())?);
     }
     Ok(x)
-}
-
-impl Head {
-    /// Scores of features `x`.
-    pub(crate) fn decision_function(&self, x: FeatureData) -> Result<Array1<f64>> {
-        let x = scale_and_project(self.scaler.as_ref(), self.pca.as_ref(), x)?;
-        self.classifier.scorer().decision_function(x.view())
-    }
 }
 
 /// One fitted pipeline (no fusion).
