@@ -573,8 +573,7 @@ impl SessionOptions {
     pub fn check_commands(&self, commands: &[Command]) -> Result<()> {
         oddball_session::task::check_path(&self.arm()?, commands, "the commands")
             .map(|_| ())
-            .map_err(|e| with_step_hint(e.into()))
-            .context("checking --commands")
+            .map_err(|e| off_board(e, "--commands", "fewer commands"))
     }
 
     /// Checks option combinations before any session starts.
@@ -736,19 +735,21 @@ fn minutes_seconds(s: f64) -> String {
     }
 }
 
-/// Adds which option fixes a path that leaves the board: `--step` with the largest step that fits.
-pub fn with_step_hint(e: anyhow::Error) -> anyhow::Error {
-    let hint = match e.downcast_ref::<oddball_session::SessionError>() {
-        Some(oddball_session::SessionError::PathOffBoard {
+/// A path that leaves the board as one line naming the option at fault (`option`) and what
+/// fixes it: `--step` with the largest step that fits, or `less` (shorter text, fewer
+/// commands); the library's facts follow as the cause.
+pub fn off_board(e: oddball_session::SessionError, option: &str, less: &str) -> anyhow::Error {
+    let hint = match &e {
+        oddball_session::SessionError::PathOffBoard {
             max_step_m: Some(m),
             ..
-        }) => format!("use --step {} (metres) or less, or draw less", m),
-        Some(oddball_session::SessionError::PathOffBoard { .. }) => {
-            "draw less: no step fits from the pen's start".to_string()
+        } => format!("use --step {m} (metres) or less, or {less}"),
+        oddball_session::SessionError::PathOffBoard { .. } => {
+            format!("no step fits from the pen's start: {less}")
         }
-        _ => return e,
+        _ => return anyhow::Error::new(e).context(format!("checking {option}")),
     };
-    e.context(hint)
+    anyhow::Error::new(e).context(format!("checking {option}: it leaves the board; {hint}"))
 }
 
 /// A replayed subject's files: those played back and those calibrated on, each in order.

@@ -223,9 +223,9 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
     let wall = Instant::now();
     // Before calibrating: the text must fit the board at this step.
     args.session.rules()?;
-    check_drawing(&args.session.arm()?, &args.text)
-        .map_err(|e| crate::args::with_step_hint(e.into()))
-        .with_context(|| format!("checking --draw {:?}", args.text))?;
+    check_drawing(&args.session.arm()?, &args.text).map_err(|e| {
+        crate::args::off_board(e, &format!("--draw {:?}", args.text), "shorter text")
+    })?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
     let mut prep = prepare_task(&args.session, &args.source, "draw", &args.panel, |arm| {
         Ok(TaskView {
