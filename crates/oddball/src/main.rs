@@ -43,6 +43,7 @@ enum Command {
     #[command(after_help = "Examples:
   oddball demo                                   # simulated subject, report in out/demo
   oddball demo --subject hard --dynamic-stopping --out out/hard
+  oddball demo --model m.json                    # no calibration: a model from `oddball train`
   oddball demo --subject replay:../shared/data/bci2000-samplefiles-p300/eeg3_2.dat
   D=../shared/data/bci-competition-ii-iib   # BCI II IIb: test runs, training runs, their texts
   oddball demo --subject replay:$D/AAS012R03.mat,$D/AAS012R04.mat \\
