@@ -6,6 +6,11 @@
 //! [`write_atomic`] and [`AtomicFile`] are the one way every output of oddball is written
 //! (models, JSON, CSV, pictures, recordings' final files): the recording writers here, the
 //! binary's reports and `oddball-plot`'s pictures all go through them.
+//!
+//! A target that exists and is not a regular file (`/dev/null`, `/dev/stdout`, a named pipe)
+//! is written in place: renaming a temporary file over it would replace the device with a
+//! regular file (as root, `-o /dev/null` once turned `/dev/null` into a file that every later
+//! program read and wrote).
 
 use std::fs::File;
 use std::io::Write;
@@ -20,7 +25,8 @@ use crate::IoError;
 #[derive(Debug)]
 pub(crate) struct TempFile {
     pub(crate) path: PathBuf,
-    temp: tempfile::TempPath,
+    /// `None` when the target is a device or pipe written in place (see the module doc).
+    temp: Option<tempfile::TempPath>,
 }
 
 impl TempFile {
@@ -33,6 +39,19 @@ impl TempFile {
             action: "create",
             source,
         };
+        if is_special(target) {
+            let file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(target)
+                .map_err(|source| err(target, source))?;
+            return Ok((
+                Self {
+                    path: target.to_path_buf(),
+                    temp: None,
+                },
+                file,
+            ));
+        }
         let name = target.file_name().ok_or_else(|| {
             err(
                 target,
@@ -64,15 +83,18 @@ impl TempFile {
         Ok((
             Self {
                 path: temp.to_path_buf(),
-                temp,
+                temp: Some(temp),
             },
             file,
         ))
     }
 
-    /// Renames the (closed) file to `target`.
+    /// Renames the (closed) file to `target` (nothing to do for a target written in place).
     pub(crate) fn persist(self, target: &Path) -> Result<(), IoError> {
-        self.temp.persist(target).map_err(|e| IoError::Io {
+        let Some(temp) = self.temp else {
+            return Ok(());
+        };
+        temp.persist(target).map_err(|e| IoError::Io {
             path: target.to_path_buf(),
             action: "rename",
             source: e.error,
@@ -123,7 +145,7 @@ impl AtomicFile {
 
     /// Syncs the temporary file and renames it to the target.
     pub fn commit(self) -> Result<(), IoError> {
-        self.file.sync_all().map_err(|source| IoError::Io {
+        sync(&self.file).map_err(|source| IoError::Io {
             path: self.temp.path.clone(),
             action: "write",
             source,
@@ -155,6 +177,22 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<(
             source,
         })?;
     f.commit()
+}
+
+/// `fsync` for a regular file; nothing for a device or pipe written in place (`fsync` on one
+/// fails with `EINVAL`).
+pub(crate) fn sync(file: &File) -> std::io::Result<()> {
+    if file.metadata()?.is_file() {
+        file.sync_all()
+    } else {
+        Ok(())
+    }
+}
+
+/// Whether `target` exists and is not a regular file or a directory (a device, pipe or socket;
+/// symbolic links followed).
+fn is_special(target: &Path) -> bool {
+    std::fs::metadata(target).is_ok_and(|m| !m.is_file() && !m.is_dir())
 }
 
 /// Makes a rename inside `target`'s directory durable (best effort: not every file system lets

@@ -350,7 +350,7 @@ pub fn write_bci2000(
         w.write_all(&record).map_err(write_err)?;
     }
     let file = w.into_inner().map_err(|e| write_err(e.into_error()))?;
-    file.sync_all().map_err(write_err)?;
+    crate::writing::sync(&file).map_err(write_err)?;
     drop(file);
     tmp.persist(path)?;
     Ok(Bci2000WriteSummary {

@@ -204,12 +204,12 @@ pub fn write_easy(
     let file = w
         .into_inner()
         .map_err(|e| write_err(&easy_tmp.path, e.into_error()))?;
-    file.sync_all().map_err(|e| write_err(&easy_tmp.path, e))?;
+    crate::writing::sync(&file).map_err(|e| write_err(&easy_tmp.path, e))?;
     drop(file);
 
     let (info_tmp, mut file) = TempFile::create(&info_path)?;
     file.write_all(info.as_bytes())
-        .and_then(|()| file.sync_all())
+        .and_then(|()| crate::writing::sync(&file))
         .map_err(|e| write_err(&info_tmp.path, e))?;
     drop(file);
     info_tmp.persist(&info_path)?;

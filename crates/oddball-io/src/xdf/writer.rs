@@ -422,7 +422,7 @@ impl XdfWriter {
     /// Asks the operating system to put the written bytes on the disk (`fsync`).
     pub fn sync(&mut self) -> Result<(), IoError> {
         if let Some(f) = self.file.as_mut() {
-            f.sync_data().map_err(|source| IoError::Io {
+            crate::writing::sync(f).map_err(|source| IoError::Io {
                 path: self.path.clone(),
                 action: "write",
                 source,
