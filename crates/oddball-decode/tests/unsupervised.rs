@@ -6,7 +6,7 @@
 use ndarray::{Array2, Array3};
 use oddball_decode::amplitude::AmplitudeFeatures;
 use oddball_decode::unsupervised::{
-    replay, Constraint, Init, UnsupervisedError, UnsupervisedParams,
+    replay, replay_from, Constraint, Init, UnsupervisedError, UnsupervisedParams,
 };
 use proptest::prelude::*;
 use serde::Deserialize;
@@ -235,6 +235,86 @@ fn synthetic_four_bulb_trials_are_recovered_without_labels() {
         r.model.choices(),
         m.choices(),
         "post hoc equals the one-shot fit"
+    );
+}
+
+/// The synthetic bump's own time course as the prior: an epoch's inner product with it.
+fn bump_scores(x: &Array3<f64>) -> Vec<f64> {
+    let w: Vec<f64> = (0..64)
+        .map(|i| (-((i as f64 / 64.0 - 0.3) / 0.05).powi(2)).exp())
+        .collect();
+    x.outer_iter()
+        .map(|e| {
+            e.rows()
+                .into_iter()
+                .map(|r| r.dot(&ndarray::arr1(&w)))
+                .sum()
+        })
+        .collect()
+}
+
+#[test]
+fn a_prior_starts_em_alone_until_there_are_as_many_epochs_as_features() {
+    let (x, codes, trials, attended) = four_bulb(12, 5, 3.0, 5);
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    // 4 channels × 32 bins = 128 features; 20 epochs per trial.
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::bin_mean(2).unwrap(),
+        ..UnsupervisedParams::for_sfreq(64.0).unwrap()
+    };
+    let feats = params.features.transform(x.view()).unwrap();
+    let prior = bump_scores(&x);
+    let fit = |n: usize| {
+        params
+            .fit_features_from(
+                feats.slice(ndarray::s![..n, ..]),
+                &codes[..n],
+                &trials[..n],
+                &constraint,
+                None,
+                Some(&prior[..n]),
+            )
+            .unwrap()
+    };
+    // 3 trials (60 epochs < 128 features): the prior is the only start.
+    let few = fit(60);
+    assert_eq!(few.init().1.len(), 1, "{:?}", few.init());
+    assert_eq!(few.init().0, Init::Given);
+    // 7 trials (140 epochs): the random starts join, the likeliest kept.
+    let many = fit(140);
+    assert_eq!(many.init().1.len(), 1 + params.n_inits);
+    // From the prior, the first trials are already decided right.
+    let r = replay_from(
+        &params,
+        x.view(),
+        &codes,
+        &trials,
+        &constraint,
+        Some(&prior),
+        &mut |_, _| {},
+    )
+    .unwrap();
+    let right = r
+        .online
+        .iter()
+        .zip(&attended)
+        .filter(|(c, &a)| c.codes[0] == a)
+        .count();
+    assert!(right >= 11, "{right}/12 online from the prior");
+    // A prior of the wrong length is named.
+    let err = params
+        .fit_features_from(
+            feats.view(),
+            &codes,
+            &trials,
+            &constraint,
+            None,
+            Some(&prior[..10]),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(err, UnsupervisedError::InitLength { n_scores: 10, .. }),
+        "{err}"
     );
 }
 

@@ -34,7 +34,9 @@ use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Ve
 use oddball_decode::metrics::roc_auc;
 use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
 use oddball_decode::stopping::{Expected, StoppingSearch};
-use oddball_decode::unsupervised::{Constraint, Unsupervised, UnsupervisedParams};
+use oddball_decode::unsupervised::{
+    Constraint, MatchedTemplate, P300Template, Unsupervised, UnsupervisedParams,
+};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -380,7 +382,10 @@ struct Unlabelled {
     model: Option<Unsupervised>,
     /// A model from other recordings ([`Session::start_transfer`]) and its score of every epoch.
     transfer: Option<Model>,
+    /// Each epoch's score by `transfer`, or (without one) by the [`P300Template`] as this
+    /// session's band-pass shows it: where every refit's EM starts.
     transfer_scores: Vec<f64>,
+    template: MatchedTemplate,
 }
 
 impl<S: Subject> Session<S> {
@@ -420,7 +425,8 @@ impl<S: Subject> Session<S> {
 
     /// Controls without calibration: the first decision comes from the first trial's epochs,
     /// and after every decision the unsupervised decoder is refitted (EM over "one bulb per
-    /// trial", warm-started from the last fit) on all online epochs so far — no label is used.
+    /// trial", started from the [`P300Template`]'s score of every epoch) on all online epochs so
+    /// far — no label is used.
     pub fn start_uncalibrated(&mut self, params: UncalibratedParams) -> Result<(), SessionError> {
         if !(params.abstain_below > 0.0 && params.abstain_below <= 1.0) {
             return Err(SessionError::InvalidParameter {
@@ -439,6 +445,8 @@ impl<S: Subject> Session<S> {
             model: None,
             transfer: None,
             transfer_scores: Vec::new(),
+            template: P300Template::default()
+                .matched(&self.params.preprocess, self.subject.sfreq())?,
         });
         Ok(())
     }
@@ -949,6 +957,8 @@ impl<S: Subject> Session<S> {
                             let score = t.pipeline.score_epoch(e.data.view())?;
                             u.transfer_scores.push(score);
                             f.score = Some(score);
+                        } else {
+                            u.transfer_scores.push(u.template.score(e.data.view())?);
                         }
                         if let Some(m) = &u.model {
                             f.score = Some(m.decision_function_features(row.view())?[0]);
@@ -1135,8 +1145,10 @@ impl<S: Subject> Session<S> {
                 reason: e.to_string(),
             }
         })?;
+        // EM from a transferred model's scores of every epoch so far; or from the P300
+        // template's, the last fit and (once there are as many epochs as features) random
+        // starts, the likeliest kept.
         let fit = match (&u.transfer, &u.model) {
-            // From a transferred model: EM from its scores of every epoch so far.
             (Some(_), _) => u.params.decoder.fit_from_scores(
                 x,
                 &u.codes,
@@ -1144,11 +1156,14 @@ impl<S: Subject> Session<S> {
                 &u.constraint,
                 &u.transfer_scores,
             ),
-            (None, warm) => {
-                u.params
-                    .decoder
-                    .fit_features(x, &u.codes, &u.trials, &u.constraint, warm.as_ref())
-            }
+            (None, warm) => u.params.decoder.fit_features_from(
+                x,
+                &u.codes,
+                &u.trials,
+                &u.constraint,
+                warm.as_ref(),
+                Some(&u.transfer_scores),
+            ),
         };
         let fitted = match fit {
             Ok(m) => m,

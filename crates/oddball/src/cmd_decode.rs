@@ -59,6 +59,12 @@ pub struct EvaluateArgs {
     /// final model; the labels only score the result.
     #[arg(long, requires = "test", conflicts_with_all = ["train", "model", "tune", "plot"])]
     pub unsupervised: bool,
+    /// With --unsupervised: where each refit's EM starts — `template`, every epoch's score by a
+    /// P300 template (a positive wave at 350 ms, sd 80 ms, seen through the band-pass), as a
+    /// session without calibration starts; or `random`, the last fit and 8 random starts, the
+    /// likeliest kept.
+    #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
+    pub em_start: EmStart,
     /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
     /// oddball session files (`session.dat` of `oddball demo`) get every online decision
     /// recomputed.
@@ -428,16 +434,29 @@ fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> R
     Ok(())
 }
 
+/// Where an unsupervised replay's EM starts (`--em-start`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum EmStart {
+    Template,
+    Random,
+}
+
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    use oddball_decode::unsupervised::{evaluate::evaluate_unsupervised, UnsupervisedParams};
+    use oddball_decode::unsupervised::{
+        evaluate::evaluate_unsupervised, P300Template, UnsupervisedParams,
+    };
 
     let pre = Preprocess::peer();
     let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
     let sfreq = test.first().map_or(0.0, |r| r.epochs.sfreq());
     let params = UnsupervisedParams::for_sfreq(sfreq)?;
+    let template = match args.em_start {
+        EmStart::Template => Some(P300Template::default().matched(&pre, sfreq)?),
+        EmStart::Random => None,
+    };
     let mut bar: Option<ProgressBar> = None;
-    let r = evaluate_unsupervised(&params, &test, &mut |k, n| {
+    let r = evaluate_unsupervised(&params, &test, template.as_ref(), &mut |k, n| {
         let b = bar.get_or_insert_with(|| {
             let b = ProgressBar::new(n as u64);
             b.set_style(

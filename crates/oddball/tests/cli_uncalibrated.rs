@@ -29,9 +29,10 @@ fn an_uncalibrated_demo_learns_within_ten_decisions() {
     assert_eq!(rows.len(), 40);
     let right = |r: &serde_json::Value| r["decided"] == r["intended"] && !r["decided"].is_null();
     let late = rows[10..].iter().filter(|r| right(r)).count();
-    // The aim is 27/30 (90 %); this seed reaches 24/30 (seeds 2, 4 and 5 reach 27–29).
+    // The aim: 27/30 (90 %). With EM started from the P300 template seeds 1–5 reach
+    // 28, 30, 28, 28, 28 (from random starts alone: 28, 29, 26, 28, 29).
     assert!(
-        late >= 24,
+        late >= 27,
         "{late}/30 right after the first 10 decisions:\n{text}"
     );
     // The report shows the accuracy over time, 1–10, 11–20, …
@@ -53,6 +54,40 @@ fn an_uncalibrated_demo_learns_within_ten_decisions() {
         serde_json::from_str(&std::fs::read_to_string(out.join("model.json")).unwrap()).unwrap();
     assert!(model["coef"]["data"].as_array().unwrap().len() > 10);
     assert_eq!(model["trials"].as_array().unwrap().len(), 40);
+}
+
+#[test]
+fn an_uncalibrated_session_draws_the_papers_g_from_the_first_trial() {
+    // No calibration, no other person's model: EM starts from the P300 template.
+    let tmp = tmp_dir("cli-uncalibrated-g");
+    let out = tmp.join("g");
+    let (ok, text, err) = oddball(&[
+        "demo",
+        "--calibration",
+        "none",
+        "--commands",
+        "paper-g",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let rows = s["decisions"].as_array().unwrap();
+    let wrong = rows
+        .iter()
+        .filter(|r| !r["decided"].is_null() && r["decided"] != r["intended"])
+        .count();
+    let right = rows
+        .iter()
+        .filter(|r| r["decided"] == r["intended"])
+        .count();
+    // The aim: at least 5 of the 6 strokes right (abstentions allowed). Seeds 1–4 draw
+    // 6/6; seed 5 gets its first two wrong (4/6).
+    assert!(
+        right >= 5 && wrong <= 1,
+        "{right} right, {wrong} wrong:\n{text}"
+    );
 }
 
 #[test]

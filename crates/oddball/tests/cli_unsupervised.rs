@@ -103,5 +103,7 @@ fn bci_competition_iib_six_runs_as_one_unlabelled_session() {
     let posthoc = u["posthoc_chars_by_reps"].as_array().unwrap();
     let last = posthoc.last().unwrap().as_f64().unwrap();
     assert!(last * 18.0 >= 17.0 - 1e-9, "post hoc {last}: {out}");
-    assert!(right(u) >= 15, "online {} of 18: {out}", right(u));
+    // The aim is 15/18; EM started from the P300 template gets 17/18 (from random
+    // starts and the last fit alone, `--em-start random`: 15/18).
+    assert!(right(u) >= 17, "online {} of 18: {out}", right(u));
 }

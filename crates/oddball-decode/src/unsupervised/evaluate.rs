@@ -6,7 +6,7 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use super::{replay, Constraint, UnsupervisedError, UnsupervisedParams};
+use super::{replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams};
 use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
 use crate::metrics::roc_auc;
 
@@ -62,10 +62,13 @@ pub struct UnsupervisedResult {
 }
 
 /// Plays `recs` (speller recordings, every flash epoched) one after the other as one session
-/// whose labels the decoder never sees; `on_character(k, n)` after each online decision.
+/// whose labels the decoder never sees; every refit starts from `template`'s scores of the
+/// epochs when given, else from the warm start and random initialisations ([`replay_from`]);
+/// `on_character(k, n)` after each online decision.
 pub fn evaluate_unsupervised(
     params: &UnsupervisedParams,
     recs: &[EpochedRecording],
+    template: Option<&MatchedTemplate>,
     on_character: &mut dyn FnMut(usize, usize),
 ) -> Result<UnsupervisedResult, ReplayError> {
     let first = recs.first().ok_or(ReplayError::Empty)?;
@@ -107,12 +110,21 @@ pub fn evaluate_unsupervised(
     let parts: Vec<Epochs> = recs.iter().map(|r| r.epochs.clone()).collect();
     let all = Epochs::concatenate(&parts)?;
     // The decoder sees epochs, codes and characters only.
-    let r = replay(
+    let start = template
+        .map(|t| {
+            all.data()
+                .outer_iter()
+                .map(|e| t.score(e))
+                .collect::<std::result::Result<Vec<f64>, _>>()
+        })
+        .transpose()?;
+    let r = replay_from(
         params,
         all.data().view(),
         &codes,
         &trials,
         &constraint,
+        start.as_deref(),
         on_character,
     )?;
 

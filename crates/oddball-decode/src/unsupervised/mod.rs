@@ -25,7 +25,8 @@
 //! Both steps are exact, so the penalised log-likelihood (marginal over the unknown choices)
 //! never decreases ([`Unsupervised::objective`]). EM finds a local maximum: a fit starts from
 //! several initialisations (random projections of the standardised features, and optionally a
-//! previous model) and keeps the one of highest likelihood — no label is ever used, and the API
+//! previous model) and keeps the one of highest likelihood, or from one given score per epoch
+//! ([`UnsupervisedParams::fit_from_scores`]: another model's, or the [`P300Template`]'s) — no label is ever used, and the API
 //! takes none: epochs, stimulus codes and the trial of each epoch only. [`replay`] decodes a
 //! recording as a live session would: each trial with the model fitted on the trials so far,
 //! then every trial re-decoded by the final model.
@@ -39,6 +40,7 @@
 mod em;
 pub mod evaluate;
 mod replay;
+mod template;
 
 use std::collections::BTreeMap;
 
@@ -49,7 +51,8 @@ use serde::{Deserialize, Serialize};
 use crate::amplitude::AmplitudeFeatures;
 use crate::DecodeError;
 
-pub use replay::{replay, OnlineChoice, Replay};
+pub use replay::{replay, replay_from, OnlineChoice, Replay};
+pub use template::{unit_spread, MatchedTemplate, P300Template};
 
 /// Why an unsupervised fit could not run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -235,15 +238,45 @@ impl UnsupervisedParams {
         constraint: &Constraint,
         warm: Option<&Unsupervised>,
     ) -> Result<Unsupervised> {
+        self.fit_features_from(x, codes, trials, constraint, warm, None)
+    }
+
+    /// [`Self::fit_features`] with `prior`, a score per epoch (e.g. the [`P300Template`]'s), as
+    /// one more initialisation (at [`unit_spread`]). With a prior, the random initialisations
+    /// join only once there are at least as many epochs as features: before that the likeliest
+    /// fit is as often noise as not, and the prior is what the decoder has to go on.
+    pub fn fit_features_from(
+        &self,
+        x: ArrayView2<f64>,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        warm: Option<&Unsupervised>,
+        prior: Option<&[f64]>,
+    ) -> Result<Unsupervised> {
         self.validate()?;
         let prep = em::Prepared::new(x)?;
         let mut inits: Vec<(Init, Vec<f64>)> = Vec::new();
+        if let Some(s) = prior {
+            if s.len() != x.nrows() {
+                return Err(UnsupervisedError::InitLength {
+                    n_epochs: x.nrows(),
+                    n_scores: s.len(),
+                });
+            }
+            inits.push((Init::Given, unit_spread(s)));
+        }
         if let Some(w) = warm {
             let s = w.decision_function_features(x)?;
             inits.push((Init::Warm, s.to_vec()));
         }
         let mut rng = rand_mt::Mt::new(self.seed);
-        for k in 0..self.n_inits {
+        let n_random = if prior.is_none() || prep.n >= prep.p {
+            self.n_inits
+        } else {
+            0
+        };
+        for k in 0..n_random {
             inits.push((Init::Random(k), random_projection(&prep, &mut rng)));
         }
         self.fit_prepared(&prep, codes, trials, constraint, inits)

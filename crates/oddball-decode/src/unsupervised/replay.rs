@@ -1,6 +1,7 @@
 //! A recording decoded as a live session without calibration would decode it: after each trial's
-//! last epoch the model is refitted (EM, warm-started from the previous model, plus the random
-//! initialisations) on every epoch so far and the trial is decided with it ("online"); the final
+//! last epoch the model is refitted on every epoch so far — EM from a given score per epoch
+//! (the [`super::P300Template`]'s, as a session starts), or warm-started from the previous model
+//! plus the random initialisations — and the trial is decided with it ("online"); the final
 //! model re-decides every trial ("post hoc").
 
 use ndarray::{s, ArrayView3};
@@ -27,7 +28,8 @@ pub struct Replay {
 }
 
 /// Replays `epochs` (in the order they were recorded, each trial's epochs contiguous) with their
-/// stimulus `codes` and `trials`; `on_trial(k, n)` is told when trial `k` of `n` is decided.
+/// stimulus `codes` and `trials`, every refit from the warm start and random initialisations;
+/// `on_trial(k, n)` is told when trial `k` of `n` is decided.
 pub fn replay(
     params: &UnsupervisedParams,
     epochs: ArrayView3<f64>,
@@ -36,7 +38,29 @@ pub fn replay(
     constraint: &Constraint,
     on_trial: &mut dyn FnMut(usize, usize),
 ) -> Result<Replay> {
+    replay_from(params, epochs, codes, trials, constraint, None, on_trial)
+}
+
+/// [`replay`] with `start`, a score per epoch, as one more initialisation of every refit
+/// ([`UnsupervisedParams::fit_features_from`]).
+pub fn replay_from(
+    params: &UnsupervisedParams,
+    epochs: ArrayView3<f64>,
+    codes: &[u32],
+    trials: &[usize],
+    constraint: &Constraint,
+    start: Option<&[f64]>,
+    on_trial: &mut dyn FnMut(usize, usize),
+) -> Result<Replay> {
     let n = epochs.dim().0;
+    if let Some(s) = start {
+        if s.len() != n {
+            return Err(UnsupervisedError::InitLength {
+                n_epochs: n,
+                n_scores: s.len(),
+            });
+        }
+    }
     if codes.len() != n || trials.len() != n {
         return Err(UnsupervisedError::Length {
             n_epochs: n,
@@ -65,12 +89,13 @@ pub fn replay(
     let mut model: Option<Unsupervised> = None;
     let mut online = Vec::with_capacity(ends.len());
     for (k, &end) in ends.iter().enumerate() {
-        let fitted = params.fit_features(
+        let fitted = params.fit_features_from(
             x.slice(s![..end, ..]),
             &codes[..end],
             &trials[..end],
             constraint,
             model.as_ref(),
+            start.map(|s| &s[..end]),
         )?;
         let last = fitted.trials().last().expect("a trial per end");
         online.push(OnlineChoice {
