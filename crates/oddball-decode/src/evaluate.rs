@@ -167,9 +167,12 @@ pub fn character_groups(recs: &[EpochedRecording]) -> Option<Vec<usize>> {
         .then_some(groups)
 }
 
+/// Epochs of one or more recordings as one set, their labels and speller characters.
+type Pooled<'a> = (Cow<'a, Epochs>, Vec<bool>, Option<Vec<usize>>);
+
 /// The recordings' epochs as one set, their labels and speller characters: one recording's
 /// own epochs (no copy), several concatenated once.
-fn pooled(recs: &[EpochedRecording]) -> Result<(Cow<'_, Epochs>, Vec<bool>, Option<Vec<usize>>)> {
+fn pooled(recs: &[EpochedRecording]) -> Result<Pooled<'_>> {
     let epochs = match recs {
         [one] => Cow::Borrowed(&one.epochs),
         _ => Cow::Owned(Epochs::concatenate(
