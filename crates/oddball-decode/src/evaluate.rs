@@ -8,6 +8,7 @@
 //! Both report what they do through a [`Progress`] callback (fits made, tuning tables, each
 //! preset's [`PipelineResult`]) and print nothing.
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use ndarray::Array1;
@@ -166,10 +167,18 @@ pub fn character_groups(recs: &[EpochedRecording]) -> Option<Vec<usize>> {
         .then_some(groups)
 }
 
-/// The recordings' epochs as one set, their labels and speller characters.
-fn pooled(recs: &[EpochedRecording]) -> Result<(Epochs, Vec<bool>, Option<Vec<usize>>)> {
-    let parts: Vec<Epochs> = recs.iter().map(|r| r.epochs.clone()).collect();
-    let epochs = Epochs::concatenate(&parts)?;
+/// Epochs of one or more recordings as one set, their labels and speller characters.
+type Pooled<'a> = (Cow<'a, Epochs>, Vec<bool>, Option<Vec<usize>>);
+
+/// The recordings' epochs as one set, their labels and speller characters: one recording's
+/// own epochs (no copy), several concatenated once.
+fn pooled(recs: &[EpochedRecording]) -> Result<Pooled<'_>> {
+    let epochs = match recs {
+        [one] => Cow::Borrowed(&one.epochs),
+        _ => Cow::Owned(Epochs::concatenate(
+            &recs.iter().map(|r| &r.epochs).collect::<Vec<_>>(),
+        )?),
+    };
     let y = labels(&epochs)?;
     Ok((epochs, y, character_groups(recs)))
 }
@@ -310,13 +319,17 @@ pub fn out_of_fold_scores(
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Vec<f64>> {
     let mut oof = vec![0.0; y.len()];
+    // A front that learns nothing is computed once for every fold, and no fold copies the
+    // epochs of a cached front (other fronts are fitted on a copy of the fold's epochs).
+    let mut cache = FrontCache::new(data.data().view());
     for f in 0..folds.n_folds() {
         let (tr, te) = folds.split(f);
         let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
         let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
-        let model = params.fit_grouped(data.select(&tr).data().view(), &ytr, gtr.as_deref())?;
+        let s = params
+            .fit_score_cached(&mut cache, &tr, &ytr, gtr.as_deref(), &te)?
+            .scores;
         on(Progress::Fit);
-        let s = model.decision_function(data.select(&te).data().view())?;
         for (&i, &v) in te.iter().zip(s.iter()) {
             oof[i] = v;
         }

@@ -340,6 +340,11 @@ impl SosFilter {
                 init_state(&mut state, &zi, &buf[(n_ext - 1) * LANES..]);
                 run_kernel(&self.sections, &mut state, &mut buf, true);
                 scatter(&buf[padlen * LANES..(padlen + n_times) * LANES], &mut rows);
+                // A whole recording's buffer (four channels' worth, per thread) is not kept
+                // after it is filtered: it would outlive the recording.
+                if buf.len() > SCRATCH_KEPT {
+                    *buf = Vec::new();
+                }
             })
         };
         let block_len = LANES * n_times;
@@ -358,9 +363,14 @@ impl SosFilter {
     }
 }
 
+/// Samples of the largest [`SCRATCH`] kept between calls (8 MB): chunks, epochs and short
+/// recordings reuse it; a longer recording's is freed when it is filtered.
+const SCRATCH_KEPT: usize = 1 << 20;
+
 thread_local! {
-    /// Interleaved work buffer of `sosfiltfilt`, kept between calls: a fresh multi-megabyte
-    /// allocation per call costs more in page faults than the filtering itself.
+    /// Interleaved work buffer of `sosfiltfilt`, kept between calls up to [`SCRATCH_KEPT`]
+    /// samples: a fresh multi-megabyte allocation per call costs more in page faults than the
+    /// filtering itself.
     static SCRATCH: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 

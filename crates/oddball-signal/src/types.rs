@@ -462,10 +462,11 @@ impl Epochs {
         self.data.mean_axis(Axis(0))
     }
 
-    /// Concatenates epochs of the same layout (channels, sfreq, tmin, n_times).
-    pub fn concatenate(parts: &[Epochs]) -> Result<Epochs, SignalError> {
-        let first = parts.first().ok_or(SignalError::NoEpochs)?;
-        for p in &parts[1..] {
+    /// Concatenates epochs of the same layout (channels, sfreq, tmin, n_times): owned epochs
+    /// or references (`&[&Epochs]`, no copy of the parts first).
+    pub fn concatenate<E: std::borrow::Borrow<Epochs>>(parts: &[E]) -> Result<Epochs, SignalError> {
+        let first = parts.first().ok_or(SignalError::NoEpochs)?.borrow();
+        for p in parts[1..].iter().map(E::borrow) {
             if p.ch_names != first.ch_names
                 || p.sfreq != first.sfreq
                 || p.tmin != first.tmin
@@ -480,7 +481,7 @@ impl Epochs {
                 });
             }
         }
-        let views: Vec<_> = parts.iter().map(|p| p.data.view()).collect();
+        let views: Vec<_> = parts.iter().map(|p| p.borrow().data.view()).collect();
         let data =
             ndarray::concatenate(Axis(0), &views).map_err(|e| SignalError::LayoutMismatch {
                 what: e.to_string(),
@@ -490,7 +491,10 @@ impl Epochs {
             sfreq: first.sfreq,
             tmin: first.tmin,
             ch_names: first.ch_names.clone(),
-            events: parts.iter().flat_map(|p| p.events.clone()).collect(),
+            events: parts
+                .iter()
+                .flat_map(|p| p.borrow().events.iter().cloned())
+                .collect(),
         })
     }
 

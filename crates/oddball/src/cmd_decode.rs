@@ -235,6 +235,9 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     );
     report.finish();
     let trained = trained?;
+    let ch_names = recs[0].epochs.ch_names().to_vec();
+    // The zero-phase epochs go before the causal ones come (one set in memory at a time).
+    drop(recs);
     // What a session runs: the same settings on the causally band-passed epochs.
     let live_pre = pre.as_causal();
     let live_recs = load_epochs(&args.files, &live_pre, &args.events, &[])?;
@@ -251,7 +254,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     );
     report.finish();
     let live = live.context("fitting the live (causal) model")?;
-    let ch_names = recs[0].epochs.ch_names().to_vec();
+    drop(live_recs);
     let mut live_model = Model::new(live_pre, live.sfreq, ch_names.clone(), live.pipeline);
     live_model.decision = Some(live.decision);
     let mut model = Model::new(pre, trained.sfreq, ch_names, trained.pipeline);

@@ -107,7 +107,7 @@ pub fn evaluate_unsupervised(
         }
     }
     let constraint = constraint.expect("at least one recording");
-    let parts: Vec<Epochs> = recs.iter().map(|r| r.epochs.clone()).collect();
+    let parts: Vec<&Epochs> = recs.iter().map(|r| &r.epochs).collect();
     let all = Epochs::concatenate(&parts)?;
     // The decoder sees epochs, codes and characters only.
     let start = template

@@ -1,0 +1,209 @@
+//! Peak memory of the library path a command takes — read (EDF+) → label → band-pass and cut
+//! epochs → cross-validated evaluation → training with its decision model — measured by a
+//! counting global allocator (bytes live at once; no timing), against a budget that grows
+//! linearly with the recording (issue #19: "no input makes a run use more than ~3× the memory
+//! of its data plus a fixed margin").
+//!
+//! The data is the recording as `f64`, `D = n_channels × n_times × 8` bytes, and its epochs
+//! `E = n_epochs × n_channels × n_samples × 8`. Epochs of overlapping windows hold the same
+//! samples several times (a flash every 0.25 s with 0.8 s windows: `E ≈ 3.2 D`), so the budget
+//! is `D + E + max(D, E) / 2 + margin`: the recording and its epochs once each (the recording is
+//! filtered in place and the epochs cut from it), half the larger as working space (features,
+//! a fold's share of them), and a fixed margin for what does not grow with the recording (the
+//! classifier's matrices, which depend on channels × window only). That is at most
+//! `2.5 × max(D, E) + margin`; with windows that do not overlap (`E ≤ D`), within the issue's
+//! `3 D + margin`. A second copy of the epochs anywhere (a clone before pooling, a fold's copy
+//! of the epochs) breaks it.
+//!
+//! One test function: the counter is process-wide, so nothing else may allocate meanwhile.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use ndarray::Array2;
+use oddball_decode::dataset::{self, Labelling};
+use oddball_decode::evaluate::{self, EvaluateParams};
+use oddball_decode::preprocess::Preprocess;
+use oddball_signal::{Event, Events, Raw};
+use oddball_testkit::TempDir;
+
+#[derive(Debug)]
+struct Counting;
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grew(by: usize) {
+    let now = LIVE.fetch_add(by, Ordering::SeqCst) + by;
+    PEAK.fetch_max(now, Ordering::SeqCst);
+}
+
+// SAFETY: every call is passed on unchanged to the system allocator; only sizes are counted.
+#[allow(unsafe_code)]
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        LIVE.fetch_sub(layout.size(), Ordering::SeqCst);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            // Both blocks may be live during the move: count the new one before the old goes.
+            grew(new_size);
+            LIVE.fetch_sub(layout.size(), Ordering::SeqCst);
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOC: Counting = Counting;
+
+const MB: f64 = 1024.0 * 1024.0;
+
+/// What does not grow with the recording: the classifier's matrices (LDA's covariance of
+/// 16 channels × 52 samples = 832 features is 5.3 MB, and its decomposition a few more),
+/// features of a fold, labels, names, the EDF reader's record buffer.
+const MARGIN: usize = 16 << 20;
+
+/// `seconds` of 16-channel EEG at 256 Hz with a flash every `every` s, every fifth a target
+/// with a P300-like bump, written as EDF+ to `path`; its `(n_channels, n_times)`.
+fn write_recording(path: &std::path::Path, seconds: f64, every: f64) -> (usize, usize) {
+    let (sfreq, n_ch) = (256.0, 16);
+    let n = (seconds * sfreq) as usize;
+    let mut state: u64 = 11;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 20.0
+    };
+    let mut data = Array2::from_shape_fn((n_ch, n), |_| noise());
+    let step = (every * sfreq) as usize;
+    let mut events = Vec::new();
+    for (k, onset) in (256..n - 256).step_by(step).enumerate() {
+        let target = k % 5 == 2;
+        if target {
+            for c in 0..n_ch {
+                for t in onset + 77..onset + 128 {
+                    data[[c, t]] += 3.0;
+                }
+            }
+        }
+        events.push(Event::new(onset, 1 + u32::from(target)).with_target(target));
+    }
+    let names = (0..n_ch).map(|c| format!("E{c}")).collect();
+    let raw = Raw::new(data, sfreq, names, Events::new(events)).unwrap();
+    oddball_io::write_edf_plus(path, &raw).unwrap();
+    (n_ch, n)
+}
+
+struct Peaks {
+    data: usize,
+    epochs: usize,
+    read: usize,
+    epoch: usize,
+    evaluate: usize,
+    train: usize,
+}
+
+/// The peak bytes above what was live before, of each stage and of the whole path.
+fn run(path: &std::path::Path, n_ch: usize, n_times: usize) -> Peaks {
+    let base = LIVE.load(Ordering::SeqCst);
+    let since = |stage_base: usize| PEAK.swap(stage_base, Ordering::SeqCst) - base;
+    PEAK.store(base, Ordering::SeqCst);
+
+    let rec = dataset::read_labelled(path, Labelling::default()).unwrap();
+    let read = since(LIVE.load(Ordering::SeqCst));
+    let rec = dataset::epoch(rec, &Preprocess::peer()).unwrap();
+    let epoch = since(LIVE.load(Ordering::SeqCst));
+    let epochs = rec.epochs.data().len() * 8;
+    let recs = vec![rec];
+    let params = EvaluateParams {
+        presets: vec!["lda".into()],
+        folds: 5,
+        tune: false,
+    };
+    let results = evaluate::evaluate(&params, &recs, &[], &mut |_| {}).unwrap();
+    let evaluate = since(LIVE.load(Ordering::SeqCst));
+    assert!(
+        results[0].auc > 0.7,
+        "the bump is found: AUC {}",
+        results[0].auc
+    );
+    let trained = evaluate::train("lda", &recs, None, &mut |_| {}).unwrap();
+    let train = since(LIVE.load(Ordering::SeqCst));
+    assert!(trained.cv_auc > 0.7, "AUC {}", trained.cv_auc);
+    Peaks {
+        data: n_ch * n_times * 8,
+        epochs,
+        read,
+        epoch,
+        evaluate,
+        train,
+    }
+}
+
+#[test]
+fn peak_memory_is_linear_in_the_recording_and_its_epochs() {
+    let dir = TempDir::new("memory");
+    // Overlapping windows (E ≈ 3.2 D), then windows 0.2 s apart (E = 0.8 D).
+    for (name, seconds, every) in [("dense.edf", 1200.0, 0.25), ("sparse.edf", 1200.0, 1.0)] {
+        let path = dir.path().join(name);
+        let (n_ch, n_times) = write_recording(&path, seconds, every);
+        let p = run(&path, n_ch, n_times);
+        let budget = p.data + p.epochs + p.data.max(p.epochs) / 2 + MARGIN;
+        let peak = [p.read, p.epoch, p.evaluate, p.train]
+            .into_iter()
+            .max()
+            .unwrap();
+        eprintln!(
+            "{name}: data {:.1} MB, epochs {:.1} MB; peak read {:.1}, epoch {:.1}, evaluate \
+             {:.1}, train {:.1} MB; budget {:.1} MB; peak / data {:.2}, peak / max(data, \
+             epochs) {:.2}",
+            p.data as f64 / MB,
+            p.epochs as f64 / MB,
+            p.read as f64 / MB,
+            p.epoch as f64 / MB,
+            p.evaluate as f64 / MB,
+            p.train as f64 / MB,
+            budget as f64 / MB,
+            peak as f64 / p.data as f64,
+            peak as f64 / p.data.max(p.epochs) as f64,
+        );
+        // The margin must not be what the budget is made of.
+        assert!(
+            p.data > 2 * MARGIN,
+            "{name}: a recording too small to measure"
+        );
+        assert!(
+            peak <= budget,
+            "{name}: peak {:.1} MB over the budget of {:.1} MB (data {:.1} MB, epochs {:.1} MB)",
+            peak as f64 / MB,
+            budget as f64 / MB,
+            p.data as f64 / MB,
+            p.epochs as f64 / MB
+        );
+        // Reading holds the samples once, plus what the reader holds of the file.
+        assert!(
+            p.read <= 2 * p.data + MARGIN,
+            "{name}: reading peaks at {:.1} MB for {:.1} MB of samples",
+            p.read as f64 / MB,
+            p.data as f64 / MB
+        );
+    }
+}
