@@ -36,9 +36,11 @@ use crate::DecodeError;
 type Result<T> = std::result::Result<T, DecodeError>;
 
 mod eigen;
+mod eigen4;
 mod kernels;
 
 pub(crate) use eigen::*;
+pub(crate) use eigen4::spd_eigen4;
 pub(crate) use kernels::*;
 
 /// Relative asymmetry `max |a_ij − a_ji| / max |a_ij|` above which a matrix is refused as not symmetric.
