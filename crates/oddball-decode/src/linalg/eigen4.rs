@@ -32,7 +32,11 @@ pub(crate) type Eigen4 = std::result::Result<[SymEigen; W], [DMatrix<f64>; W]>;
 pub(crate) fn spd_eigen4(what: &str, mats: [DMatrix<f64>; W]) -> Result<[SymEigen; W]> {
     let n = mats[0].nrows();
     let same_shape = mats.iter().all(|m| m.nrows() == n && m.ncols() == n);
-    let finite = same_shape && mats.iter().all(|m| m.iter().all(|v| v.is_finite()));
+    // (no early exit: a branch-free pass over the values)
+    let finite = same_shape
+        && mats
+            .iter()
+            .all(|m| m.iter().fold(true, |ok, v| ok & v.is_finite()));
     let mats = if n > 0 && finite {
         match sym_eigen4(mats) {
             Ok(eigs) => {
@@ -177,24 +181,31 @@ mod avx2 {
     pub(super) fn sym_eigen4(mut mats: [DMatrix<f64>; W]) -> Eigen4 {
         let n = mats[0].nrows();
         // Element (i, j) at a[i + j·n], column-major as in the one-matrix solver.
-        let mut a: Vec<V> = (0..n * n)
-            .map(|x| from(std::array::from_fn(|k| mats[k].as_slice()[x])))
-            .collect();
+        let mut a: Vec<V> = {
+            let [m0, m1, m2, m3] = std::array::from_fn(|k| &mats[k].as_slice()[..n * n]);
+            (0..n * n)
+                .map(|x| _mm256_setr_pd(m0[x], m1[x], m2[x], m3[x]))
+                .collect()
+        };
         let mut d: Vec<V> = vec![splat(0.0); n];
         let mut e: Vec<V> = vec![splat(0.0); n];
         if !decompose(&mut a, &mut d, &mut e, n) {
             return Err(mats);
         }
-        let d: Vec<[f64; W]> = d.into_iter().map(arr).collect();
-        let a: Vec<[f64; W]> = a.into_iter().map(arr).collect();
+        let mut order: Vec<usize> = Vec::with_capacity(n);
         Ok(std::array::from_fn(|k| {
-            let mut order: Vec<usize> = (0..n).collect();
-            order.sort_by(|&x, &y| d[x][k].total_cmp(&d[y][k]));
-            let eigenvalues = DVector::from_iterator(n, order.iter().map(|&o| d[o][k]));
+            let dk = |x: usize| arr(d[x])[k];
+            order.clear();
+            order.extend(0..n);
+            order.sort_by(|&x, &y| dk(x).total_cmp(&dk(y)));
+            let eigenvalues = DVector::from_iterator(n, order.iter().map(|&o| dk(o)));
             let vs = mats[k].as_mut_slice();
             for (c, &o) in order.iter().enumerate() {
-                for r in 0..n {
-                    vs[r + c * n] = a[r + o * n][k];
+                for (v, &x) in vs[c * n..(c + 1) * n]
+                    .iter_mut()
+                    .zip(&a[o * n..(o + 1) * n])
+                {
+                    *v = arr(x)[k];
                 }
             }
             SymEigen {
@@ -209,6 +220,7 @@ mod avx2 {
     #[target_feature(enable = "avx2")]
     fn decompose(a: &mut [V], d: &mut [V], e: &mut [V], n: usize) -> bool {
         let zero = splat(0.0);
+        let mut gs = vec![zero; n];
         for j in 0..n {
             for i in (j + 1)..n {
                 a[j + i * n] = a[i + j * n];
@@ -238,18 +250,21 @@ mod avx2 {
             e[i] = mul(scale, g);
             h = sub(h, mul(f, g));
             d[i - 1] = sub(f, g);
+            // e = A d over the leading i×i block (lower triangle stored): each e[j] summed from
+            // +0 over k ascending, as the one-matrix solver does, but with the k loop outside so
+            // that the i sums advance side by side instead of one long chain after another.
             e[..i].fill(zero);
             for j in 0..i {
-                f = d[j];
-                a[j + i * n] = f;
-                let col = j * n;
-                g = add(e[j], mul(a[col + j], f));
-                for r in (j + 1)..i {
-                    let c = a[col + r];
-                    g = add(g, mul(c, d[r]));
-                    e[r] = add(e[r], mul(c, f));
+                a[j + i * n] = d[j];
+            }
+            for k in 0..i {
+                let dk = d[k];
+                for j in 0..k {
+                    e[j] = add(e[j], mul(a[j * n + k], dk));
                 }
-                e[j] = g;
+                for j in k..i {
+                    e[j] = add(e[j], mul(a[k * n + j], dk));
+                }
             }
             f = zero;
             for j in 0..i {
@@ -283,14 +298,19 @@ mod avx2 {
             for r in 0..=i {
                 d[r] = div(a[next + r], h);
             }
-            for j in 0..=i {
-                let mut g = splat(-0.0);
-                for r in 0..=i {
-                    g = add(g, mul(a[next + r], a[j * n + r]));
+            // gs[j] = column next · column j, each summed from -0 over r ascending (as the
+            // one-matrix solver's `sum`), the i + 1 sums side by side.
+            gs[..=i].fill(splat(-0.0));
+            for r in 0..=i {
+                let x = a[next + r];
+                for (j, gj) in gs[..=i].iter_mut().enumerate() {
+                    *gj = add(*gj, mul(x, a[j * n + r]));
                 }
+            }
+            for (j, &gj) in gs[..=i].iter().enumerate() {
                 for r in 0..=i {
                     let c = &mut a[j * n + r];
-                    *c = sub(*c, mul(g, d[r]));
+                    *c = sub(*c, mul(gj, d[r]));
                 }
             }
             a[next..next + i + 1].fill(zero);
