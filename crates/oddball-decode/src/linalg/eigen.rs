@@ -187,7 +187,6 @@ pub(super) fn tridiagonal_ql_body(
     let mut f = 0.0;
     let mut tst1 = 0.0f64;
     let eps = f64::EPSILON;
-    const MAX_SWEEPS: usize = 60;
     for l in 0..n {
         tst1 = tst1.max(d[l].abs() + e[l].abs());
         let mut m = l;
@@ -284,6 +283,9 @@ pub(super) fn tridiagonal_ql_body(
         eigenvectors,
     })
 }
+
+/// QL sweeps allowed per eigenvalue before [`DecodeError::NoConvergence`].
+pub(super) const MAX_SWEEPS: usize = 60;
 
 /// `sqrt(a² + b²)` without overflow or harmful underflow; much cheaper than libm's `hypot`, which
 /// otherwise dominates the QL iteration's cost.

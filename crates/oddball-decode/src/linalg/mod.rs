@@ -18,7 +18,9 @@
 //! **Two symmetric eigensolvers, on purpose.** Every eigendecomposition in the crate is this
 //! module's [`sym_eigen`] / [`sym_eigenvalues`] (Riemannian means, distances, tangent space and
 //! MDM; xDAWN's generalized problem through [`generalized_eigh`]; shrinkage LDA) except one: PCA
-//! ([`crate::pca`]) diagonalises its Gram matrix with nalgebra's `SymmetricEigen`. They are not
+//! ([`crate::pca`]) diagonalises its Gram matrix with nalgebra's `SymmetricEigen`. (The Riemannian
+//! mean and tangent space run the same solver on four matrices at once, [`spd_eigen4`]: the same
+//! operations lane by lane, the same bits.) They are not
 //! merged because the rule of the project is bit-identical scores unless a disagreement is
 //! fixed, and neither direction keeps the numbers: the two algorithms round differently, so
 //! moving PCA here changes the last bits of every component and with them every score of the
@@ -36,9 +38,11 @@ use crate::DecodeError;
 type Result<T> = std::result::Result<T, DecodeError>;
 
 mod eigen;
+mod eigen4;
 mod kernels;
 
 pub(crate) use eigen::*;
+pub(crate) use eigen4::spd_eigen4;
 pub(crate) use kernels::*;
 
 /// Relative asymmetry `max |a_ij − a_ji| / max |a_ij|` above which a matrix is refused as not symmetric.

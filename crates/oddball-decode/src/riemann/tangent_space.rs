@@ -1,13 +1,16 @@
 //! pyRiemann's tangent space: `upper(log(C_ref^{-1/2} C C_ref^{-1/2}))` and back.
 
 use nalgebra::DMatrix;
-use ndarray::{Array1, Array2, Array3, ArrayView1, ArrayView2, ArrayView3, ArrayViewMut1, Axis};
+use ndarray::{
+    s, Array1, Array2, Array3, ArrayView1, ArrayView2, ArrayView3, ArrayViewMut1, ArrayViewMut2,
+    Axis,
+};
 use serde::{Deserialize, Serialize};
 
 use super::{mean_riemann, MeanRiemannParams, Metric};
 use crate::linalg::{
-    congruence_into, eigen_function, eigen_function_upper, spd_eigen, sym_eigen, symmetric_from,
-    to_array2,
+    congruence_into, eigen_function, eigen_function_upper, spd_eigen, spd_eigen4, sym_eigen,
+    symmetric_from, to_array2, SymEigen,
 };
 use crate::DecodeError;
 
@@ -168,7 +171,33 @@ impl TangentSpace {
         self.check_shape(covs.dim().1, covs.dim().2)?;
         let mut out = Array2::zeros((covs.dim().0, self.n_features()));
         let mut scratch = Scratch::default();
-        for (c, row) in covs.outer_iter().zip(out.axis_iter_mut(Axis(0))) {
+        let mut pool: [DMatrix<f64>; 4] = Default::default();
+        let k = covs.dim().0;
+        let mut start = 0;
+        // Four matrices decomposed at once (the same numbers as one by one); a group with an
+        // input that is not symmetric goes one by one, for the errors in order.
+        while start + 4 <= k {
+            let group = covs.slice(s![start..start + 4, .., ..]);
+            let inputs: Result<Vec<DMatrix<f64>>> = group
+                .outer_iter()
+                .map(|c| symmetric_from("tangent-space input", c))
+                .collect();
+            let mut rows = out.slice_mut(s![start..start + 4, ..]);
+            match inputs {
+                Ok(inputs) => self.vectorize4_into(&inputs, &mut pool, &mut scratch, rows)?,
+                Err(_) => {
+                    for (c, row) in group.outer_iter().zip(rows.axis_iter_mut(Axis(0))) {
+                        self.vectorize_into(c, &mut scratch, row)?;
+                    }
+                }
+            }
+            start += 4;
+        }
+        for (c, row) in covs
+            .slice(s![start.., .., ..])
+            .outer_iter()
+            .zip(out.slice_mut(s![start.., ..]).axis_iter_mut(Axis(0)))
+        {
             self.vectorize_into(c, &mut scratch, row)?;
         }
         Ok(out)
@@ -235,21 +264,52 @@ impl TangentSpace {
         &self,
         c: &DMatrix<f64>,
         s: &mut Scratch,
-        mut out: ArrayViewMut1<f64>,
+        out: ArrayViewMut1<f64>,
     ) -> Result<()> {
         congruence_into(&self.invsqrt_ref, c, &mut s.tmp, &mut s.white);
         let eig = spd_eigen("tangent-space input", std::mem::take(&mut s.white))?;
-        let mut k = 0;
-        eigen_function_upper(&eig, f64::ln, |i, j, v| {
-            out[k] = if i == j {
-                v
-            } else {
-                std::f64::consts::SQRT_2 * v
-            };
-            k += 1;
-        });
+        log_upper_into(&eig, out);
         // The eigenvectors' storage serves the next whitened matrix.
         s.white = eig.eigenvectors;
         Ok(())
     }
+
+    /// Tangent vectors of four exactly symmetric matrices into the four rows of `out`, their
+    /// whitened matrices decomposed at once (`pool`: storage for them, reused).
+    fn vectorize4_into(
+        &self,
+        inputs: &[DMatrix<f64>],
+        pool: &mut [DMatrix<f64>; 4],
+        s: &mut Scratch,
+        mut out: ArrayViewMut2<f64>,
+    ) -> Result<()> {
+        let whites: [DMatrix<f64>; 4] = std::array::from_fn(|k| {
+            let mut w = std::mem::take(&mut pool[k]);
+            congruence_into(&self.invsqrt_ref, &inputs[k], &mut s.tmp, &mut w);
+            w
+        });
+        let eigs = spd_eigen4("tangent-space input", whites)?;
+        for ((eig, row), slot) in eigs
+            .into_iter()
+            .zip(out.axis_iter_mut(Axis(0)))
+            .zip(pool.iter_mut())
+        {
+            log_upper_into(&eig, row);
+            *slot = eig.eigenvectors;
+        }
+        Ok(())
+    }
+}
+
+/// pyRiemann's `upper(log(W))` of `W` given by its eigendecomposition, into `out`.
+fn log_upper_into(eig: &SymEigen, mut out: ArrayViewMut1<f64>) {
+    let mut k = 0;
+    eigen_function_upper(eig, f64::ln, |i, j, v| {
+        out[k] = if i == j {
+            v
+        } else {
+            std::f64::consts::SQRT_2 * v
+        };
+        k += 1;
+    });
 }
