@@ -384,7 +384,7 @@ struct Unlabelled {
     transfer: Option<Model>,
     /// Each epoch's score by `transfer`, or (without one) by the [`P300Template`] as this
     /// session's band-pass shows it: where every refit's EM starts.
-    transfer_scores: Vec<f64>,
+    start_scores: Vec<f64>,
     template: MatchedTemplate,
 }
 
@@ -425,8 +425,9 @@ impl<S: Subject> Session<S> {
 
     /// Controls without calibration: the first decision comes from the first trial's epochs,
     /// and after every decision the unsupervised decoder is refitted (EM over "one bulb per
-    /// trial", started from the [`P300Template`]'s score of every epoch) on all online epochs so
-    /// far — no label is used.
+    /// trial", started from the [`P300Template`]'s score of every epoch, the last fit and, once
+    /// there are as many epochs as features, random starts) on all online epochs so far — no
+    /// label is used.
     pub fn start_uncalibrated(&mut self, params: UncalibratedParams) -> Result<(), SessionError> {
         if !(params.abstain_below > 0.0 && params.abstain_below <= 1.0) {
             return Err(SessionError::InvalidParameter {
@@ -444,7 +445,7 @@ impl<S: Subject> Session<S> {
             trials: Vec::new(),
             model: None,
             transfer: None,
-            transfer_scores: Vec::new(),
+            start_scores: Vec::new(),
             template: P300Template::default()
                 .matched(&self.params.preprocess, self.subject.sfreq())?,
         });
@@ -955,10 +956,10 @@ impl<S: Subject> Session<S> {
                             .transform(e.data.view().insert_axis(Axis(0)))?;
                         if let Some(t) = &u.transfer {
                             let score = t.pipeline.score_epoch(e.data.view())?;
-                            u.transfer_scores.push(score);
+                            u.start_scores.push(score);
                             f.score = Some(score);
                         } else {
-                            u.transfer_scores.push(u.template.score(e.data.view())?);
+                            u.start_scores.push(u.template.score(e.data.view())?);
                         }
                         if let Some(m) = &u.model {
                             f.score = Some(m.decision_function_features(row.view())?[0]);
@@ -1154,7 +1155,7 @@ impl<S: Subject> Session<S> {
                 &u.codes,
                 &u.trials,
                 &u.constraint,
-                &u.transfer_scores,
+                &u.start_scores,
             ),
             (None, warm) => u.params.decoder.fit_features_from(
                 x,
@@ -1162,7 +1163,7 @@ impl<S: Subject> Session<S> {
                 &u.trials,
                 &u.constraint,
                 warm.as_ref(),
-                Some(&u.transfer_scores),
+                Some(&u.start_scores),
             ),
         };
         let fitted = match fit {

@@ -24,12 +24,13 @@
 //!
 //! Both steps are exact, so the penalised log-likelihood (marginal over the unknown choices)
 //! never decreases ([`Unsupervised::objective`]). EM finds a local maximum: a fit starts from
-//! several initialisations (random projections of the standardised features, and optionally a
-//! previous model) and keeps the one of highest likelihood, or from one given score per epoch
-//! ([`UnsupervisedParams::fit_from_scores`]: another model's, or the [`P300Template`]'s) — no label is ever used, and the API
-//! takes none: epochs, stimulus codes and the trial of each epoch only. [`replay`] decodes a
-//! recording as a live session would: each trial with the model fitted on the trials so far,
-//! then every trial re-decoded by the final model.
+//! several initialisations (random projections of the standardised features, optionally a
+//! previous model and a prior score per epoch such as the [`P300Template`]'s,
+//! [`UnsupervisedParams::fit_features_from`]) and keeps the one of highest likelihood, or from
+//! one given score per epoch only ([`UnsupervisedParams::fit_from_scores`]: another model's) —
+//! no label is ever used, and the API takes none: epochs, stimulus codes and the trial of each
+//! epoch only. [`replay`] decodes a recording as a live session would: each trial with the model
+//! fitted on the trials so far, then every trial re-decoded by the final model.
 //!
 //! Written here: no Rust crate (nor scikit-learn, MNE or pyRiemann) has EM over such a
 //! constraint. Checked against a dense numpy implementation that forms the means, scatter,

@@ -114,8 +114,8 @@ impl MatchedTemplate {
 }
 
 /// `scores` less their mean, over their standard deviation (the spread of the random starts):
-/// a start for [`super::UnsupervisedParams::fit_from_scores`] that is as sure of itself whatever
-/// the scores' units.
+/// how [`super::UnsupervisedParams::fit_features_from`] takes a prior, so that it is as sure of
+/// itself whatever the scores' units.
 pub fn unit_spread(scores: &[f64]) -> Vec<f64> {
     let n = scores.len().max(1) as f64;
     let mean = scores.iter().sum::<f64>() / n;
