@@ -20,7 +20,6 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use ndarray::Array2;
 use oddball_decode::dataset::{self, Labelling};
 use oddball_decode::evaluate::{self, EvaluateParams};
 use oddball_decode::preprocess::Preprocess;
@@ -85,27 +84,11 @@ const MARGIN: usize = 16 << 20;
 fn write_recording(path: &std::path::Path, seconds: f64, every: f64) -> (usize, usize) {
     let (sfreq, n_ch) = (256.0, 16);
     let n = (seconds * sfreq) as usize;
-    let mut state: u64 = 11;
-    let mut noise = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 20.0
-    };
-    let mut data = Array2::from_shape_fn((n_ch, n), |_| noise());
-    let step = (every * sfreq) as usize;
-    let mut events = Vec::new();
-    for (k, onset) in (256..n - 256).step_by(step).enumerate() {
-        let target = k % 5 == 2;
-        if target {
-            for c in 0..n_ch {
-                for t in onset + 77..onset + 128 {
-                    data[[c, t]] += 3.0;
-                }
-            }
-        }
-        events.push(Event::new(onset, 1 + u32::from(target)).with_target(target));
-    }
+    let (data, flashes) = oddball_testkit::flash_train(n_ch, n, sfreq, every, 11);
+    let events = flashes
+        .into_iter()
+        .map(|(onset, target)| Event::new(onset, 1 + u32::from(target)).with_target(target))
+        .collect();
     let names = (0..n_ch).map(|c| format!("E{c}")).collect();
     let raw = Raw::new(data, sfreq, names, Events::new(events)).unwrap();
     oddball_io::write_edf_plus(path, &raw).unwrap();

@@ -224,6 +224,51 @@ pub fn synthetic_oddball(n_channels: usize, seed: u64) -> (Array2<f64>, Vec<u32>
     (data, markers, sfreq)
 }
 
+/// A long synthetic flash train at `sfreq`, `(n_channels, n_times)` µV: uniform noise of 20 µV
+/// peak-to-peak from an LCG seeded by `seed` (drawn channel by channel), and a flash every
+/// `every` s from 1 s on until 1 s before the end, every fifth (`k % 5 == 2`) a target with a
+/// 3 µV step 300–500 ms later on every channel. Returns the data and each flash's `(onset sample,
+/// target)` (for measuring memory and speed on recordings of any length; `synthetic_oddball` is
+/// the short one with a shaped bump).
+pub fn flash_train(
+    n_channels: usize,
+    n_times: usize,
+    sfreq: f64,
+    every: f64,
+    seed: u64,
+) -> (Array2<f64>, Vec<(usize, bool)>) {
+    let mut state = seed;
+    let mut noise = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 20.0
+    };
+    let mut data = Array2::from_shape_fn((n_channels, n_times), |_| noise());
+    let second = sfreq as usize;
+    let (from, to) = (
+        (0.3 * sfreq).round() as usize,
+        (0.5 * sfreq).round() as usize,
+    );
+    let mut flashes = Vec::new();
+    let step = ((every * sfreq) as usize).max(1);
+    for (k, onset) in (second..n_times.saturating_sub(second))
+        .step_by(step)
+        .enumerate()
+    {
+        let target = k % 5 == 2;
+        if target {
+            for c in 0..n_channels {
+                for t in onset + from..onset + to {
+                    data[[c, t]] += 3.0;
+                }
+            }
+        }
+        flashes.push((onset, target));
+    }
+    (data, flashes)
+}
+
 /// Writes a recording as CSV: a `time` column (s, 6 decimals), `ch0..chN` (µV, 4 decimals) and a
 /// `stim` column of markers (0 = none).
 pub fn write_codes_csv(path: &Path, data: &Array2<f64>, markers: &[u32], sfreq: f64) {
