@@ -48,9 +48,8 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
     let dir = tmp("offline");
     let (a, b) = (dir.join("a"), dir.join("b"));
     let m = dir.join("m.json");
-    let (ok, _, err) = common::oddball(&["demo", "--out", a.to_str().unwrap()]);
-    assert!(ok, "{err}");
-    let (ok, out, err) = common::oddball(&[
+    common::oddball_ok(&["demo", "--out", a.to_str().unwrap()]);
+    let out = common::oddball_ok(&[
         "train",
         a.join("session.dat").to_str().unwrap(),
         "--pipeline",
@@ -58,7 +57,6 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
         "-o",
         m.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(
         out.contains("decision models from 5-fold cross-validated scores"),
         "{out}"
@@ -72,14 +70,13 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
     assert_eq!(model["live"]["preprocess"]["causal"], true);
     assert!(model["live"]["decision"].is_object());
 
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "demo",
         "--model",
         m.to_str().unwrap(),
         "--out",
         b.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(out.contains("no calibration"), "{out}");
     assert!(!out.contains("calibration: 10 decisions"), "{out}");
     let s = summary(&b);
@@ -92,14 +89,13 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
         "{right}/{n} right from the offline model: {out}"
     );
     // The model the session ran (its causal fit) re-decides the session's own recording.
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "evaluate",
         "--model",
         b.join("model.json").to_str().unwrap(),
         "--test",
         b.join("session.dat").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(
         out.contains(&format!(
             "{n} online decisions: {n} identical to the recorded ones"
@@ -108,7 +104,7 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
     );
 
     // task takes it too.
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "task",
         "track",
         "--targets",
@@ -118,7 +114,6 @@ fn a_model_trained_offline_decides_in_demo_task_and_online_without_calibration()
         "--out",
         dir.join("task").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(out.contains("no calibration"), "{out}");
 
     // A model saved before format 4 has no decision model: refused with what fixes it, before
@@ -172,41 +167,37 @@ fn a_live_recording_evaluates_trains_and_replays_to_the_same_decisions() {
         live.to_str().unwrap(),
     ];
     args.extend(common_args);
-    let (ok, recorded, err) = common::oddball(&args);
-    assert!(ok, "{err}");
+    let recorded = common::oddball_ok(&args);
     let recorded_decisions = decisions(&recorded);
     assert_eq!(recorded_decisions.len(), 3, "{recorded}");
     let xdf = live.join("session.xdf");
     let model = live.join("model.json");
 
     // The recording's flashes carry their flags: 8 calibration + 3 online trials of 5 rounds.
-    let (ok, out, err) = common::oddball(&["inspect", xdf.to_str().unwrap()]);
-    assert!(ok, "{err}");
+    let out = common::oddball_ok(&["inspect", xdf.to_str().unwrap()]);
     assert!(
         out.contains("targets    55 target, 165 non-target"),
         "{out}"
     );
     // It evaluates with its model: every online decision recomputed, the same.
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "evaluate",
         "--test",
         xdf.to_str().unwrap(),
         "--model",
         model.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(
         out.contains("3 online decisions: 3 identical to the recorded ones"),
         "{out}"
     );
     // It trains like any labelled file.
-    let (ok, _, err) = common::oddball(&[
+    common::oddball_ok(&[
         "train",
         xdf.to_str().unwrap(),
         "-o",
         dir.join("m.json").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
 
     // Replayed with its model, as fast as it goes: the calibration passed over, the same
     // decisions (choice, posterior, rounds, time), every flash on a flash of the file.
@@ -222,8 +213,7 @@ fn a_live_recording_evaluates_trains_and_replays_to_the_same_decisions() {
         again.to_str().unwrap(),
     ];
     args.extend(common_args);
-    let (ok, replayed, err) = common::oddball(&args);
-    assert!(ok, "{err}");
+    let replayed = common::oddball_ok(&args);
     assert!(
         replayed.contains("passing over the recording's calibration: 8 trials"),
         "{replayed}"
@@ -240,12 +230,11 @@ fn a_live_recording_evaluates_trains_and_replays_to_the_same_decisions() {
 fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
     let dir = tmp("channels");
     let a = dir.join("a");
-    let (ok, _, err) = common::oddball(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
-    assert!(ok, "{err}");
+    common::oddball_ok(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
     let session = a.join("session.dat");
     // A model of 4 of the 8 channels, in another order: the session epochs just those.
     let m4 = dir.join("m4.json");
-    let (ok, _, err) = common::oddball(&[
+    common::oddball_ok(&[
         "train",
         session.to_str().unwrap(),
         "--channels",
@@ -253,26 +242,23 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         "-o",
         m4.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     let b = dir.join("b");
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "demo",
         "--model",
         m4.to_str().unwrap(),
         "--out",
         b.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(out.contains("4 channels at 500 Hz"), "{out}");
     assert!(mostly_right(&b), "{out}");
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "evaluate",
         "--model",
         b.join("model.json").to_str().unwrap(),
         "--test",
         b.join("session.dat").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(all_identical(&out), "{out}");
 
     // A montage renames every channel: a model trained under those names needs them in the
@@ -281,7 +267,7 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
     let text: String = (1..=8).map(|i| format!("{i}\t0\t0.1\tA{i}..\n")).collect();
     std::fs::write(&loc, text).unwrap();
     let m8 = dir.join("m8.json");
-    let (ok, _, err) = common::oddball(&[
+    common::oddball_ok(&[
         "train",
         session.to_str().unwrap(),
         "--montage",
@@ -289,7 +275,6 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         "-o",
         m8.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     let c = dir.join("c");
     let (ok, _, err) = common::oddball(&[
         "demo",
@@ -303,7 +288,7 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         err.contains("no channel named [\"A1\"") && err.contains("--montage"),
         "{err}"
     );
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "demo",
         "--model",
         m8.to_str().unwrap(),
@@ -312,10 +297,8 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         "--out",
         c.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(mostly_right(&c), "{out}");
-    let (ok, out, err) = common::oddball(&["inspect", c.join("session.dat").to_str().unwrap()]);
-    assert!(ok, "{err}");
+    let out = common::oddball_ok(&["inspect", c.join("session.dat").to_str().unwrap()]);
     assert!(out.contains("channels   8: A1 A2 A3"), "{out}");
 }
 
@@ -323,11 +306,10 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
 fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
     let dir = tmp("rate");
     let a = dir.join("a");
-    let (ok, _, err) = common::oddball(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
-    assert!(ok, "{err}");
+    common::oddball_ok(&["demo", "--commands", "up", "--out", a.to_str().unwrap()]);
     // A model at 256 Hz from the 500 Hz session (resampled offline, polyphase).
     let m = dir.join("m256.json");
-    let (ok, _, err) = common::oddball(&[
+    common::oddball_ok(&[
         "train",
         a.join("session.dat").to_str().unwrap(),
         "--resample",
@@ -335,32 +317,28 @@ fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
         "-o",
         m.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     let b = dir.join("b");
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "demo",
         "--model",
         m.to_str().unwrap(),
         "--out",
         b.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(
         out.contains("resampling the EEG from 500 Hz to the model's 256 Hz as it streams"),
         "{out}"
     );
     assert!(mostly_right(&b), "{out}");
     // The session ran, and recorded, at the model's rate: its recording re-decides the same.
-    let (ok, out, err) = common::oddball(&["inspect", b.join("session.dat").to_str().unwrap()]);
-    assert!(ok, "{err}");
+    let out = common::oddball_ok(&["inspect", b.join("session.dat").to_str().unwrap()]);
     assert!(out.contains("sfreq      256 Hz"), "{out}");
-    let (ok, out, err) = common::oddball(&[
+    let out = common::oddball_ok(&[
         "evaluate",
         "--model",
         b.join("model.json").to_str().unwrap(),
         "--test",
         b.join("session.dat").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert!(all_identical(&out), "{out}");
 }

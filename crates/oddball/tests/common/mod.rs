@@ -25,6 +25,13 @@ pub fn oddball(args: &[&str]) -> (bool, String, String) {
 }
 
 /// A fresh temporary folder for one test, removed when dropped.
+/// Runs the binary, asserts it succeeded (showing its stderr) and returns its stdout.
+pub fn oddball_ok(args: &[&str]) -> String {
+    let (ok, out, err) = oddball(args);
+    assert!(ok, "oddball {}: {err}", args.join(" "));
+    out
+}
+
 pub fn tmp_dir(name: &str) -> oddball_testkit::TempDir {
     oddball_testkit::TempDir::new(name)
 }
