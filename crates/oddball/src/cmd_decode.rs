@@ -59,10 +59,11 @@ pub struct EvaluateArgs {
     /// final model; the labels only score the result.
     #[arg(long, requires = "test", conflicts_with_all = ["train", "model", "tune", "plot"])]
     pub unsupervised: bool,
-    /// With --unsupervised: where each refit's EM starts — `template`, every epoch's score by a
-    /// P300 template (a positive wave at 350 ms, sd 80 ms, seen through the band-pass), as a
-    /// session without calibration starts; or `random`, the last fit and 8 random starts, the
-    /// likeliest kept.
+    /// With --unsupervised: where each refit's EM starts (the likeliest result kept) —
+    /// `template`: every epoch's score by a P300 template (a positive wave at 350 ms, sd 80 ms,
+    /// seen through the band-pass), the last fit and, once there are as many epochs as features,
+    /// 8 random starts, as a session without calibration starts; `random`: the last fit and the
+    /// 8 random starts only.
     #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
     pub em_start: EmStart,
     /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
