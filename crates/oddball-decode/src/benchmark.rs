@@ -36,7 +36,9 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::dataset::{self, DatasetError, Labelling};
-use crate::evaluate::{self, EpochedRecording, EvaluateError, EvaluateParams, PipelineResult};
+use crate::evaluate::{
+    self, EpochedRecording, EvaluateError, EvaluateParams, PipelineResult, TrainingSet,
+};
 use crate::preprocess::Preprocess;
 use crate::preset::PRESETS;
 use crate::stats::{wilcoxon, Alternative};
@@ -459,15 +461,6 @@ fn run_unit(
         tune: false,
     };
     let session = u.session.as_ref().map(|(name, _)| name.clone());
-    let results = evaluate::evaluate(&eval, &train, &test, &mut |_| {}).map_err(|source| {
-        BenchmarkError::Evaluate {
-            dataset: m.name.clone(),
-            subject: subj.id.clone(),
-            protocol: u.protocol,
-            session: session.clone(),
-            source: Box::new(source),
-        }
-    })?;
     let scored = if test.is_empty() { &train } else { &test };
     let n_epochs: usize = scored.iter().map(|r| r.epochs.n_epochs()).sum();
     let n_targets: usize = scored
@@ -475,6 +468,21 @@ fn run_unit(
         .flat_map(|r| r.epochs.events())
         .filter(|e| e.target == Some(true))
         .count();
+    let failed = |source| BenchmarkError::Evaluate {
+        dataset: m.name.clone(),
+        subject: subj.id.clone(),
+        protocol: u.protocol,
+        session: session.clone(),
+        source: Box::new(source),
+    };
+    // Copies made for this unit (other subjects', a session's runs) are pooled as they are
+    // freed; runs borrowed from the loaded ones are pooled by copy, the loaded ones kept.
+    let set = match train {
+        Cow::Borrowed(runs) => TrainingSet::of(runs),
+        Cow::Owned(runs) => TrainingSet::pool(runs),
+    }
+    .map_err(&failed)?;
+    let results = evaluate::evaluate(&eval, &set, &test, &mut |_| {}).map_err(failed)?;
     Ok(results
         .iter()
         .map(|r| {

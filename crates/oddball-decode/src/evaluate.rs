@@ -167,20 +167,68 @@ pub fn character_groups(recs: &[EpochedRecording]) -> Option<Vec<usize>> {
         .then_some(groups)
 }
 
-/// Epochs of one or more recordings as one set, their labels and speller characters.
-type Pooled<'a> = (Cow<'a, Epochs>, Vec<bool>, Option<Vec<usize>>);
+/// Training recordings as one set: their epochs pooled, the labels and the speller characters
+/// (what [`evaluate`], [`train`] and [`train_with`] fit on, and their cross-validation splits).
+#[derive(Debug, Clone)]
+pub struct TrainingSet<'a> {
+    epochs: Cow<'a, Epochs>,
+    y: Vec<bool>,
+    groups: Option<Vec<usize>>,
+}
 
-/// The recordings' epochs as one set, their labels and speller characters: one recording's
-/// own epochs (no copy), several concatenated once.
-fn pooled(recs: &[EpochedRecording]) -> Result<Pooled<'_>> {
-    let epochs = match recs {
-        [one] => Cow::Borrowed(&one.epochs),
-        _ => Cow::Owned(Epochs::concatenate(
-            &recs.iter().map(|r| &r.epochs).collect::<Vec<_>>(),
-        )?),
-    };
-    let y = labels(&epochs)?;
-    Ok((epochs, y, character_groups(recs)))
+impl TrainingSet<'static> {
+    /// Moves the recordings' epochs into one set: one recording's are taken as they are, and
+    /// several are pooled with each freed as it is copied ([`Epochs::pool`]), so the set never
+    /// sits beside a second copy of its epochs.
+    pub fn pool(recs: Vec<EpochedRecording>) -> Result<Self> {
+        let groups = character_groups(&recs);
+        let mut parts: Vec<Epochs> = recs.into_iter().map(|r| r.epochs).collect();
+        let epochs = if parts.len() == 1 {
+            parts.pop().expect("one part")
+        } else {
+            Epochs::pool(parts)?
+        };
+        let y = labels(&epochs)?;
+        Ok(Self {
+            epochs: Cow::Owned(epochs),
+            y,
+            groups,
+        })
+    }
+}
+
+impl<'a> TrainingSet<'a> {
+    /// The recordings' epochs as one set, the recordings staying the caller's: one recording's
+    /// are borrowed, several are copied into one set.
+    pub fn of(recs: &'a [EpochedRecording]) -> Result<Self> {
+        let epochs = match recs {
+            [one] => Cow::Borrowed(&one.epochs),
+            _ => Cow::Owned(Epochs::concatenate(
+                &recs.iter().map(|r| &r.epochs).collect::<Vec<_>>(),
+            )?),
+        };
+        let y = labels(&epochs)?;
+        Ok(Self {
+            epochs,
+            y,
+            groups: character_groups(recs),
+        })
+    }
+
+    /// The pooled epochs, the recordings' in order.
+    pub fn epochs(&self) -> &Epochs {
+        &self.epochs
+    }
+
+    /// The target flag of every epoch.
+    pub fn labels(&self) -> &[bool] {
+        &self.y
+    }
+
+    /// The speller character of every epoch (see [`character_groups`]).
+    pub fn groups(&self) -> Option<&[usize]> {
+        self.groups.as_deref()
+    }
 }
 
 /// A fitted pipeline and how it was made.
@@ -213,12 +261,12 @@ pub const DECISION_FOLDS: usize = 5;
 /// [`DECISION_FOLDS`]), so its evidence is not over-confident.
 pub fn train(
     preset: &str,
-    recs: &[EpochedRecording],
+    set: &TrainingSet<'_>,
     tune_folds: Option<usize>,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
-    let (epochs, y, groups) = pooled(recs)?;
-    let folds = cv_folds(&y, groups.as_deref(), tune_folds.unwrap_or(DECISION_FOLDS))?;
+    let (epochs, y, groups) = (set.epochs(), set.labels(), set.groups());
+    let folds = cv_folds(y, groups, tune_folds.unwrap_or(DECISION_FOLDS))?;
     let (params, tuning) = match tune_folds {
         Some(k) => {
             let grid = preset_grid(preset, epochs.sfreq())?;
@@ -226,14 +274,9 @@ pub fn train(
                 fits: (grid.len() + 1) * folds.n_folds(),
                 cross_validation: None,
             });
-            let (params, report) = tune(
-                &grid,
-                epochs.data().view(),
-                &y,
-                groups.as_deref(),
-                k,
-                &mut || on(Progress::Fit),
-            )
+            let (params, report) = tune(&grid, epochs.data().view(), y, groups, k, &mut || {
+                on(Progress::Fit)
+            })
             .map_err(|source| EvaluateError::Tuning {
                 preset: preset.to_string(),
                 fold: None,
@@ -254,7 +297,7 @@ pub fn train(
             (PipelineParams::preset(preset, epochs.sfreq())?, None)
         }
     };
-    let mut trained = fit_with_decision(&params, &epochs, &y, groups.as_deref(), &folds, on)?;
+    let mut trained = fit_with_decision(&params, epochs, y, groups, &folds, on)?;
     trained.tuning = tuning;
     Ok(trained)
 }
@@ -264,17 +307,17 @@ pub fn train(
 /// tuning, e.g. for the same settings on differently pre-processed epochs.
 pub fn train_with(
     params: &PipelineParams,
-    recs: &[EpochedRecording],
+    set: &TrainingSet<'_>,
     k: usize,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
-    let (epochs, y, groups) = pooled(recs)?;
-    let folds = cv_folds(&y, groups.as_deref(), k)?;
+    let (epochs, y, groups) = (set.epochs(), set.labels(), set.groups());
+    let folds = cv_folds(y, groups, k)?;
     on(Progress::Plan {
         fits: folds.n_folds(),
         cross_validation: None,
     });
-    fit_with_decision(params, &epochs, &y, groups.as_deref(), &folds, on)
+    fit_with_decision(params, epochs, y, groups, &folds, on)
 }
 
 fn fit_with_decision(
@@ -341,11 +384,11 @@ pub fn out_of_fold_scores(
 /// cross-validation on `train` when `test` is empty.
 pub fn evaluate(
     params: &EvaluateParams,
-    train: &[EpochedRecording],
+    train: &TrainingSet<'_>,
     test: &[EpochedRecording],
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Vec<PipelineResult>> {
-    let (train_epochs, ytr, groups) = pooled(train)?;
+    let (train_epochs, ytr, groups) = (train.epochs(), train.labels(), train.groups());
     let grids = params
         .presets
         .iter()
@@ -358,20 +401,19 @@ pub fn evaluate(
         })
         .collect::<std::result::Result<Vec<usize>, _>>()?;
     let outer = if test.is_empty() {
-        Some(cv_folds(&ytr, groups.as_deref(), params.folds)?)
+        Some(cv_folds(ytr, groups, params.folds)?)
     } else {
         None
     };
     // Every fit the run will make.
     let fits_per_grid_point: usize = match &outer {
-        None if params.tune => cv_folds(&ytr, groups.as_deref(), params.folds)?.n_folds(),
+        None if params.tune => cv_folds(ytr, groups, params.folds)?.n_folds(),
         None => 0,
         Some(f) if params.tune => (0..f.n_folds())
             .map(|k| {
                 let (tr, _) = f.split(k);
                 let y: Vec<bool> = tr.iter().map(|&i| ytr[i]).collect();
-                let g: Option<Vec<usize>> =
-                    groups.as_ref().map(|g| tr.iter().map(|&i| g[i]).collect());
+                let g: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
                 cv_folds(&y, g.as_deref(), params.folds).map(|f| f.n_folds())
             })
             .sum::<std::result::Result<usize, _>>()?,
@@ -395,9 +437,9 @@ pub fn evaluate(
         let r = match &outer {
             Some(folds) => cross_validate(
                 name,
-                &train_epochs,
-                &ytr,
-                groups.as_deref(),
+                train_epochs,
+                ytr,
+                groups,
                 folds,
                 params.tune.then_some(params.folds),
                 &mut cache,
@@ -410,8 +452,8 @@ pub fn evaluate(
                         &grid,
                         &mut cache,
                         &all,
-                        &ytr,
-                        groups.as_deref(),
+                        ytr,
+                        groups,
                         params.folds,
                         &mut || on(Progress::Fit),
                     )
@@ -429,7 +471,7 @@ pub fn evaluate(
                 } else {
                     (PipelineParams::preset(name, train_epochs.sfreq())?, None)
                 };
-                let mut r = held_out(&p, &train_epochs, &ytr, groups.as_deref(), test)?;
+                let mut r = held_out(&p, train_epochs, ytr, groups, test)?;
                 on(Progress::Fit);
                 r.tuning = tuning;
                 r

@@ -21,7 +21,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use oddball_decode::dataset::{self, Labelling};
-use oddball_decode::evaluate::{self, EvaluateParams};
+use oddball_decode::evaluate::{self, EvaluateParams, TrainingSet};
 use oddball_decode::preprocess::Preprocess;
 use oddball_signal::{Event, Events, Raw};
 use oddball_testkit::TempDir;
@@ -100,42 +100,53 @@ struct Peaks {
     epochs: usize,
     read: usize,
     epoch: usize,
+    pool: usize,
     evaluate: usize,
     train: usize,
 }
 
-/// The peak bytes above what was live before, of each stage and of the whole path.
-fn run(path: &std::path::Path, n_ch: usize, n_times: usize) -> Peaks {
+/// The peak bytes above what was live before, of each stage and of the whole path, for the
+/// recordings at `paths` (each `n_times` samples of `n_ch` channels) as one training set.
+fn run(paths: &[std::path::PathBuf], n_ch: usize, n_times: usize) -> Peaks {
     let base = LIVE.load(Ordering::SeqCst);
     let since = |stage_base: usize| PEAK.swap(stage_base, Ordering::SeqCst) - base;
     PEAK.store(base, Ordering::SeqCst);
 
-    let rec = dataset::read_labelled(path, Labelling::default()).unwrap();
-    let read = since(LIVE.load(Ordering::SeqCst));
-    let rec = dataset::epoch(rec, &Preprocess::peer()).unwrap();
-    let epoch = since(LIVE.load(Ordering::SeqCst));
-    let epochs = rec.epochs.data().len() * 8;
-    let recs = vec![rec];
+    let (mut read, mut epoch, mut epochs) = (0, 0, 0);
+    let mut recs = Vec::new();
+    for path in paths {
+        // Reading is measured above what the earlier recordings' epochs hold.
+        let held = LIVE.load(Ordering::SeqCst) - base;
+        let rec = dataset::read_labelled(path, Labelling::default()).unwrap();
+        read = read.max(since(LIVE.load(Ordering::SeqCst)) - held);
+        let rec = dataset::epoch(rec, &Preprocess::peer()).unwrap();
+        epoch = epoch.max(since(LIVE.load(Ordering::SeqCst)));
+        epochs += rec.epochs.data().len() * 8;
+        recs.push(rec);
+    }
+    let set = TrainingSet::pool(recs).unwrap();
+    let pool = since(LIVE.load(Ordering::SeqCst));
     let params = EvaluateParams {
         presets: vec!["lda".into()],
         folds: 5,
         tune: false,
     };
-    let results = evaluate::evaluate(&params, &recs, &[], &mut |_| {}).unwrap();
+    let results = evaluate::evaluate(&params, &set, &[], &mut |_| {}).unwrap();
     let evaluate = since(LIVE.load(Ordering::SeqCst));
     assert!(
         results[0].auc > 0.7,
         "the bump is found: AUC {}",
         results[0].auc
     );
-    let trained = evaluate::train("lda", &recs, None, &mut |_| {}).unwrap();
+    let trained = evaluate::train("lda", &set, None, &mut |_| {}).unwrap();
     let train = since(LIVE.load(Ordering::SeqCst));
     assert!(trained.cv_auc > 0.7, "AUC {}", trained.cv_auc);
     Peaks {
-        data: n_ch * n_times * 8,
+        data: paths.len() * n_ch * n_times * 8,
         epochs,
         read,
         epoch,
+        pool,
         evaluate,
         train,
     }
@@ -144,24 +155,35 @@ fn run(path: &std::path::Path, n_ch: usize, n_times: usize) -> Peaks {
 #[test]
 fn peak_memory_is_linear_in_the_recording_and_its_epochs() {
     let dir = TempDir::new("memory");
-    // Overlapping windows (E ≈ 3.2 D), then windows 0.2 s apart (E = 0.8 D).
-    for (name, seconds, every) in [("dense.edf", 1200.0, 0.25), ("sparse.edf", 1200.0, 1.0)] {
-        let path = dir.path().join(name);
-        let (n_ch, n_times) = write_recording(&path, seconds, every);
-        let p = run(&path, n_ch, n_times);
+    // Overlapping windows (E ≈ 3.2 D), then windows 0.2 s apart (E = 0.8 D), then the
+    // overlapping ones as two recordings of half the length pooled into one training set.
+    for (name, n_files, seconds, every) in [
+        ("dense.edf", 1, 1200.0, 0.25),
+        ("sparse.edf", 1, 1200.0, 1.0),
+        ("half.edf", 2, 600.0, 0.25),
+    ] {
+        let mut paths = Vec::new();
+        let mut size = (0, 0);
+        for k in 0..n_files {
+            let path = dir.path().join(format!("{k}-{name}"));
+            size = write_recording(&path, seconds, every);
+            paths.push(path);
+        }
+        let p = run(&paths, size.0, size.1);
         let budget = p.data + p.epochs + p.data.max(p.epochs) / 2 + MARGIN;
         let peak = [p.read, p.epoch, p.evaluate, p.train]
             .into_iter()
             .max()
             .unwrap();
         eprintln!(
-            "{name}: data {:.1} MB, epochs {:.1} MB; peak read {:.1}, epoch {:.1}, evaluate \
-             {:.1}, train {:.1} MB; budget {:.1} MB; peak / data {:.2}, peak / max(data, \
-             epochs) {:.2}",
+            "{n_files} × {name}: data {:.1} MB, epochs {:.1} MB; peak read {:.1}, epoch {:.1}, \
+             pool {:.1}, evaluate {:.1}, train {:.1} MB; budget {:.1} MB; peak / data {:.2}, \
+             peak / max(data, epochs) {:.2}",
             p.data as f64 / MB,
             p.epochs as f64 / MB,
             p.read as f64 / MB,
             p.epoch as f64 / MB,
+            p.pool as f64 / MB,
             p.evaluate as f64 / MB,
             p.train as f64 / MB,
             budget as f64 / MB,
@@ -179,6 +201,15 @@ fn peak_memory_is_linear_in_the_recording_and_its_epochs() {
             peak as f64 / MB,
             budget as f64 / MB,
             p.data as f64 / MB,
+            p.epochs as f64 / MB
+        );
+        // Pooling several recordings copies each into the set and frees it: the counter sees
+        // the set's whole buffer beside the parts not yet copied (at most both, `2 E`),
+        // though only the pages written so far are resident.
+        assert!(
+            p.pool <= 2 * p.epochs + MARGIN,
+            "{name}: pooling peaks at {:.1} MB for {:.1} MB of epochs",
+            p.pool as f64 / MB,
             p.epochs as f64 / MB
         );
         // Reading holds the samples once, plus what the reader holds of the file.

@@ -467,19 +467,7 @@ impl Epochs {
     pub fn concatenate<E: std::borrow::Borrow<Epochs>>(parts: &[E]) -> Result<Epochs, SignalError> {
         let first = parts.first().ok_or(SignalError::NoEpochs)?.borrow();
         for p in parts[1..].iter().map(E::borrow) {
-            if p.ch_names != first.ch_names
-                || p.sfreq != first.sfreq
-                || p.tmin != first.tmin
-                || p.n_times() != first.n_times()
-            {
-                return Err(SignalError::LayoutMismatch {
-                    what: format!(
-                        "epochs of {} channels at {} Hz, tmin {} s, {} samples vs {} channels at {} Hz, tmin {} s, {} samples",
-                        first.n_channels(), first.sfreq, first.tmin, first.n_times(),
-                        p.n_channels(), p.sfreq, p.tmin, p.n_times()
-                    ),
-                });
-            }
+            first.check_same_layout(p)?;
         }
         let views: Vec<_> = parts.iter().map(|p| p.borrow().data.view()).collect();
         let data =
@@ -496,6 +484,54 @@ impl Epochs {
                 .flat_map(|p| p.borrow().events.iter().cloned())
                 .collect(),
         })
+    }
+
+    /// Epochs of the same layout as one set, moving the parts' samples in: each part is freed
+    /// as soon as it is copied, and the set's pages are written only as they are filled, so
+    /// the parts and the set together stay about one set's size in resident memory (where
+    /// [`Self::concatenate`] holds both).
+    pub fn pool(parts: Vec<Epochs>) -> Result<Epochs, SignalError> {
+        let first = parts.first().ok_or(SignalError::NoEpochs)?;
+        for p in &parts[1..] {
+            first.check_same_layout(p)?;
+        }
+        let (sfreq, tmin, ch_names) = (first.sfreq, first.tmin, first.ch_names.clone());
+        let (n_channels, n_times) = (first.n_channels(), first.n_times());
+        let n_epochs: usize = parts.iter().map(Epochs::n_epochs).sum();
+        let mut samples = Vec::with_capacity(n_epochs * n_channels * n_times);
+        let mut events = Vec::with_capacity(n_epochs);
+        for part in parts {
+            // Copied in epoch, channel, time order whatever the part's memory layout.
+            samples.extend(part.data.iter().copied());
+            events.extend(part.events);
+        }
+        let data = Array3::from_shape_vec((n_epochs, n_channels, n_times), samples)
+            .expect("the pooled samples fill the pooled shape");
+        Ok(Epochs {
+            data,
+            sfreq,
+            tmin,
+            ch_names,
+            events,
+        })
+    }
+
+    /// Errors unless `other` has the same channels, rate, `tmin` and window length.
+    fn check_same_layout(&self, other: &Epochs) -> Result<(), SignalError> {
+        if other.ch_names != self.ch_names
+            || other.sfreq != self.sfreq
+            || other.tmin != self.tmin
+            || other.n_times() != self.n_times()
+        {
+            return Err(SignalError::LayoutMismatch {
+                what: format!(
+                    "epochs of {} channels at {} Hz, tmin {} s, {} samples vs {} channels at {} Hz, tmin {} s, {} samples",
+                    self.n_channels(), self.sfreq, self.tmin, self.n_times(),
+                    other.n_channels(), other.sfreq, other.tmin, other.n_times()
+                ),
+            });
+        }
+        Ok(())
     }
 
     /// Splits into its parts: data, sfreq, tmin, channel names, events.

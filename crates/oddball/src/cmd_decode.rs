@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress};
+use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::tuning::TuningReport;
 
@@ -226,26 +226,26 @@ fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
 
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
-    let recs = load_epochs(&args.files, &pre, &args.events, &[])?;
+    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[])?)?;
     let mut report = Report::new(&args.pipeline);
     let trained = evaluate::train(
         &args.pipeline,
-        &recs,
+        &set,
         args.tune.then_some(args.folds),
         &mut |p| report.on(p),
     );
     report.finish();
     let trained = trained?;
-    let ch_names = recs[0].epochs.ch_names().to_vec();
+    let ch_names = set.epochs().ch_names().to_vec();
     // The zero-phase epochs go before the causal ones come (one set in memory at a time).
-    drop(recs);
+    drop(set);
     // What a session runs: the same settings on the causally band-passed epochs.
     let live_pre = pre.as_causal();
-    let live_recs = load_epochs(&args.files, &live_pre, &args.events, &[])?;
+    let live_set = TrainingSet::pool(load_epochs(&args.files, &live_pre, &args.events, &[])?)?;
     let mut report = Report::new(&args.pipeline);
     let live = evaluate::train_with(
         &trained.params,
-        &live_recs,
+        &live_set,
         if args.tune {
             args.folds
         } else {
@@ -255,7 +255,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     );
     report.finish();
     let live = live.context("fitting the live (causal) model")?;
-    drop(live_recs);
+    drop(live_set);
     let mut live_model = Model::new(live_pre, live.sfreq, ch_names.clone(), live.pipeline);
     live_model.decision = Some(live.decision);
     let mut model = Model::new(pre, trained.sfreq, ch_names, trained.pipeline);
@@ -334,6 +334,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         folds: args.folds,
         tune: args.tune,
     };
+    let train = TrainingSet::pool(train)?;
     let mut report = Report::new("evaluate");
     let results = evaluate::evaluate(&params, &train, &test, &mut |p| report.on(p));
     report.finish();
