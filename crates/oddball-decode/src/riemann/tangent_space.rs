@@ -276,7 +276,7 @@ impl TangentSpace {
 
     /// Tangent vectors of four exactly symmetric matrices into the four rows of `out`, their
     /// whitened matrices decomposed at once (`pool`: storage for them, reused).
-    fn vectorize4_into(
+    pub(crate) fn vectorize4_into(
         &self,
         inputs: &[DMatrix<f64>],
         pool: &mut [DMatrix<f64>; 4],
