@@ -4,7 +4,9 @@
 //! choice of hyper-parameters ([`crate::tuning`] sees the training epochs only).
 //!
 //! The input is [`EpochedRecording`]s (the epochs of one recording each, cut by
-//! `oddball_signal::preprocess`); [`evaluate`] runs a list of presets, [`train`] fits one.
+//! `oddball_signal::preprocess`): the training ones as one [`TrainingSet`] (pooled once, moved
+//! rather than copied), the test ones as they are; [`evaluate`] runs a list of presets,
+//! [`train`] fits one.
 //! Both report what they do through a [`Progress`] callback (fits made, tuning tables, each
 //! preset's [`PipelineResult`]) and print nothing.
 
