@@ -150,11 +150,19 @@ fn fit_stacker(
         .map(|f| {
             let (tr, te) = folds.split(f);
             let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
-            let etr = epochs.select(Axis(0), &tr);
+            // The fold's training epochs are copied for the fits and freed before its test
+            // epochs are (two folds run at once on two threads).
+            let models = {
+                let etr = epochs.select(Axis(0), &tr);
+                singles
+                    .iter()
+                    .map(|p| p.fit(etr.view(), &ytr))
+                    .collect::<Result<Vec<_>>>()?
+            };
             let ete = epochs.select(Axis(0), &te);
-            let scores = singles
+            let scores = models
                 .iter()
-                .map(|p| p.fit(etr.view(), &ytr)?.decision_function(ete.view()))
+                .map(|m| m.decision_function(ete.view()))
                 .collect::<Result<Vec<Array1<f64>>>>()?;
             Ok((te, scores))
         })
