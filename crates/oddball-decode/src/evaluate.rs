@@ -852,6 +852,45 @@ mod tests {
         assert!((s.seconds_per_character(2) - 1.7).abs() < 1e-12);
     }
 
+    /// A 2 × 2 speller recording of `chars` characters (8 flashes each), every flash epoched.
+    fn speller_recording(name: &str, chars: usize) -> EpochedRecording {
+        let mut speller = Speller::from_rows(&["AB", "CD"]).unwrap();
+        speller.flashes_per_character = Some(8);
+        let n = 8 * chars;
+        let events: Vec<Event> = (0..n)
+            .map(|i| Event::new(i * 10 + (i / 8) * 100, (i % 4) as u32 + 1).with_target(i % 4 == 0))
+            .collect();
+        let data = ndarray::Array3::from_shape_fn((n, 1, 4), |(e, _, t)| (e * 4 + t) as f64);
+        EpochedRecording {
+            name: name.into(),
+            epochs: Epochs::new(data, 100.0, 0.0, vec!["Cz".into()], events).unwrap(),
+            speller: Some(speller),
+            n_events: n,
+        }
+    }
+
+    #[test]
+    fn a_pooled_training_set_is_the_copied_one() {
+        let recs = vec![speller_recording("a", 2), speller_recording("b", 3)];
+        let copied = TrainingSet::of(&recs).unwrap();
+        let moved = TrainingSet::pool(recs.clone()).unwrap();
+        assert_eq!(moved.epochs(), copied.epochs());
+        assert_eq!(moved.labels(), copied.labels());
+        assert_eq!(moved.groups(), copied.groups());
+        // Characters are numbered across the recordings: 2 + 3.
+        let groups = moved.groups().unwrap();
+        assert_eq!(groups.len(), 40);
+        assert_eq!((groups[0], groups[16], groups[39]), (0, 2, 4));
+        // One recording is taken whole (moved), or borrowed.
+        let one = TrainingSet::pool(vec![recs[0].clone()]).unwrap();
+        assert_eq!(one.epochs(), &recs[0].epochs);
+        assert!(matches!(
+            TrainingSet::of(&recs[..1]).unwrap().epochs,
+            Cow::Borrowed(_)
+        ));
+        assert!(TrainingSet::pool(Vec::new()).is_err());
+    }
+
     #[test]
     fn unlabelled_epochs_and_dropped_speller_flashes_are_named() {
         assert_eq!(
