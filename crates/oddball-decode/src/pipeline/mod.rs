@@ -19,7 +19,7 @@ pub mod fusion;
 
 use std::sync::Arc;
 
-use ndarray::{Array1, ArrayView2, ArrayView3, Axis};
+use ndarray::{s, Array1, ArrayView2, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
 use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
@@ -480,9 +480,16 @@ impl PipelineParams {
                 });
             }
         }
-        let epochs = cache.epochs();
+        // A pipeline that reads every k-th sample only is fitted on copies of those samples.
+        let (epochs, params) = match self.decimated() {
+            Some((k, p)) => (
+                cache.epochs().slice_move(s![.., .., ..;k]),
+                std::borrow::Cow::Owned(p),
+            ),
+            None => (cache.epochs(), std::borrow::Cow::Borrowed(self)),
+        };
         let t0 = std::time::Instant::now();
-        let model = self.fit_grouped(epochs.select(Axis(0), train).view(), y_train, groups)?;
+        let model = params.fit_grouped(epochs.select(Axis(0), train).view(), y_train, groups)?;
         let fit_s = t0.elapsed().as_secs_f64();
         let t1 = std::time::Instant::now();
         let scores = model.decision_function(epochs.select(Axis(0), test).view())?;
@@ -491,6 +498,26 @@ impl PipelineParams {
             fit_s,
             score_s: t1.elapsed().as_secs_f64(),
         })
+    }
+}
+
+impl PipelineParams {
+    /// When the pipeline reads only every `k`-th sample of an epoch (a single pipeline, no
+    /// channel selection, an xDAWN front with step `k > 1`): `k` and the same settings reading
+    /// every sample. Fitted on epochs decimated by `k`, those give the scores this pipeline
+    /// gives on the full epochs, while a fold's copy holds a `k`-th of the samples.
+    fn decimated(&self) -> Option<(usize, PipelineParams)> {
+        if !self.fused.is_empty() || self.main.channel_selection.is_some() {
+            return None;
+        }
+        let mut p = self.clone();
+        let step = match &mut p.main.features {
+            FeatureParams::XdawnTangent(x) => &mut x.step,
+            FeatureParams::XdawnCovariances(x) => &mut x.step,
+            _ => return None,
+        };
+        let k = std::mem::replace(step, 1);
+        (k > 1).then_some((k, p))
     }
 }
 

@@ -322,3 +322,39 @@ fn wrong_version_and_layout_are_clear_errors() {
     ));
     assert!(PipelineParams::preset("nope", 64.0).is_err());
 }
+
+/// A single xDAWN pipeline reads every k-th sample only: cross-validation fits it on copies of
+/// those samples, and its scores are exactly those of the pipeline fitted on full copies.
+#[test]
+fn a_decimating_pipeline_scores_the_same_fitted_on_decimated_copies() {
+    let (x, y) = synthetic(120, 9);
+    let tr: Vec<usize> = (0..120).filter(|i| i % 4 != 1).collect();
+    let te: Vec<usize> = (0..120).filter(|i| i % 4 == 1).collect();
+    let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+    for name in ["riemann", "mdm"] {
+        let p = PipelineParams::preset(name, 256.0).unwrap();
+        let (k, _) = p
+            .decimated()
+            .expect("an xDAWN front reading every k-th sample");
+        assert_eq!(k, 4, "{name}");
+        let whole = p
+            .fit(x.select(Axis(0), &tr).view(), &ytr)
+            .unwrap()
+            .decision_function(x.select(Axis(0), &te).view())
+            .unwrap();
+        let mut cache = FrontCache::new(x.view());
+        let cached = p
+            .fit_score_cached(&mut cache, &tr, &ytr, None, &te)
+            .unwrap()
+            .scores;
+        assert_eq!(cached, whole, "{name}");
+    }
+    for name in ["lda", "lda+riemann", "stack", "paper"] {
+        let p = PipelineParams::preset(name, 256.0).unwrap();
+        assert!(p.decimated().is_none(), "{name} reads every sample");
+    }
+    assert!(PipelineParams::preset("riemann", 64.0)
+        .unwrap()
+        .decimated()
+        .is_none());
+}
