@@ -499,9 +499,7 @@ impl PipelineParams {
             score_s: t1.elapsed().as_secs_f64(),
         })
     }
-}
 
-impl PipelineParams {
     /// When the pipeline reads only every `k`-th sample of an epoch (a single pipeline, no
     /// channel selection, an xDAWN front with step `k > 1`): `k` and the same settings reading
     /// every sample. Fitted on epochs decimated by `k`, those give the scores this pipeline
