@@ -2,12 +2,13 @@
 //! each adding `w · (s − c) / σ` ([`FusionTerm`]) to the fused score.
 
 use ndarray::parallel::prelude::*;
-use ndarray::{Array1, Array2, ArrayView3, Axis};
+use ndarray::{s, Array1, Array2, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
 use super::{Pipeline, PipelineParams, Single, SingleParams};
 use crate::logistic::LogisticParams;
 use crate::scaler::StandardScalerParams;
+use crate::traits::FeatureData;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -145,24 +146,39 @@ fn fit_stacker(
     let folds = crate::tuning::cv_folds(y, groups, n_folds)?;
     let singles: Vec<&SingleParams> = params.singles().collect();
     let n = y.len();
+    let n_channels = epochs.dim().1;
+    // The features of a pipeline whose front learns nothing are computed once for every fold
+    // (the rows its fit on a fold's epochs would compute); a pipeline reading every k-th
+    // sample is fitted on copies of those samples. The scores are the same as fitting each
+    // on a full copy of the fold's epochs.
+    let stateless = singles
+        .iter()
+        .map(|p| p.stateless_features(epochs).transpose())
+        .collect::<Result<Vec<Option<FeatureData>>>>()?;
+    let decimated: Vec<Option<(usize, SingleParams)>> =
+        singles.iter().map(|p| p.decimated()).collect();
     let per_fold = (0..folds.n_folds())
         .into_par_iter()
         .map(|f| {
             let (tr, te) = folds.split(f);
             let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
-            // The fold's training epochs are copied for the fits and freed before its test
-            // epochs are (two folds run at once on two threads).
-            let models = {
-                let etr = epochs.select(Axis(0), &tr);
-                singles
-                    .iter()
-                    .map(|p| p.fit(etr.view(), &ytr))
-                    .collect::<Result<Vec<_>>>()?
-            };
-            let ete = epochs.select(Axis(0), &te);
-            let scores = models
+            let scores = singles
                 .iter()
-                .map(|m| m.decision_function(ete.view()))
+                .enumerate()
+                .map(|(k, p)| {
+                    if let Some(x) = &stateless[k] {
+                        let necked = p.neck_split(x.select(&tr), x.select(&te))?;
+                        return Ok(p.classifier_scores(&necked, &ytr, n_channels)?.0);
+                    }
+                    let (epochs, p) = match &decimated[k] {
+                        Some((step, q)) => (epochs.slice(s![.., .., ..;*step]), q),
+                        None => (epochs.view(), *p),
+                    };
+                    // The fold's training epochs are freed before its test epochs are copied
+                    // (two folds run at once on two threads).
+                    let model = p.fit(epochs.select(Axis(0), &tr).view(), &ytr)?;
+                    model.decision_function(epochs.select(Axis(0), &te).view())
+                })
                 .collect::<Result<Vec<Array1<f64>>>>()?;
             Ok((te, scores))
         })

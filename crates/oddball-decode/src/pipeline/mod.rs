@@ -296,6 +296,24 @@ impl SingleParams {
         })
     }
 
+    /// When it reads only every `k`-th sample of an epoch (no channel selection, an xDAWN front
+    /// with step `k > 1`): `k` and the same settings reading every sample. Fitted on epochs
+    /// decimated by `k`, those give the scores these give on the full epochs, while a copy of
+    /// a fold's epochs holds a `k`-th of the samples.
+    pub(crate) fn decimated(&self) -> Option<(usize, SingleParams)> {
+        if self.channel_selection.is_some() {
+            return None;
+        }
+        let mut p = self.clone();
+        let step = match &mut p.features {
+            FeatureParams::XdawnTangent(x) => &mut x.step,
+            FeatureParams::XdawnCovariances(x) => &mut x.step,
+            _ => return None,
+        };
+        let k = std::mem::replace(step, 1);
+        (k > 1).then_some((k, p))
+    }
+
     /// Features of `epochs` when the front learns nothing (no channel selection, a stateless
     /// feature map): the same rows whatever the training split. `None` otherwise.
     pub(crate) fn stateless_features(
@@ -500,22 +518,21 @@ impl PipelineParams {
         })
     }
 
-    /// When the pipeline reads only every `k`-th sample of an epoch (a single pipeline, no
-    /// channel selection, an xDAWN front with step `k > 1`): `k` and the same settings reading
-    /// every sample. Fitted on epochs decimated by `k`, those give the scores this pipeline
-    /// gives on the full epochs, while a fold's copy holds a `k`-th of the samples.
+    /// When the pipeline reads only every `k`-th sample of an epoch (a single pipeline reading
+    /// every `k`-th, see [`SingleParams::decimated`]): `k` and the same settings reading every
+    /// sample.
     fn decimated(&self) -> Option<(usize, PipelineParams)> {
-        if !self.fused.is_empty() || self.main.channel_selection.is_some() {
+        if !self.fused.is_empty() {
             return None;
         }
-        let mut p = self.clone();
-        let step = match &mut p.main.features {
-            FeatureParams::XdawnTangent(x) => &mut x.step,
-            FeatureParams::XdawnCovariances(x) => &mut x.step,
-            _ => return None,
-        };
-        let k = std::mem::replace(step, 1);
-        (k > 1).then_some((k, p))
+        let (k, main) = self.main.decimated()?;
+        Some((
+            k,
+            PipelineParams {
+                main,
+                ..self.clone()
+            },
+        ))
     }
 }
 

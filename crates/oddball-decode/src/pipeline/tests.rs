@@ -358,3 +358,48 @@ fn a_decimating_pipeline_scores_the_same_fitted_on_decimated_copies() {
         .decimated()
         .is_none());
 }
+
+/// The stack's inner folds take the amplitude features of its LDA once for all folds and fit
+/// its xDAWN members on every 4th sample: its learned combination is exactly the one from
+/// fitting each member on full copies of each fold's epochs.
+#[test]
+fn a_stack_learns_the_same_combination_without_full_copies_per_fold() {
+    let (x, y) = synthetic(160, 12);
+    let stack = PipelineParams::preset("stack", 256.0).unwrap();
+    let Fusion::Stacked { n_folds } = stack.fusion else {
+        panic!("stack is stacked");
+    };
+    let singles: Vec<&SingleParams> = stack.singles().collect();
+    assert!(singles[0].stateless_features(x.view()).is_some());
+    assert!(singles[1].decimated().is_some() && singles[2].decimated().is_some());
+    let folds = crate::tuning::cv_folds(&y, None, n_folds).unwrap();
+    let mut oof = Array2::<f64>::zeros((160, 3));
+    for f in 0..folds.n_folds() {
+        let (tr, te) = folds.split(f);
+        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+        for (k, p) in singles.iter().enumerate() {
+            let s = p
+                .fit(x.select(Axis(0), &tr).view(), &ytr)
+                .unwrap()
+                .decision_function(x.select(Axis(0), &te).view())
+                .unwrap();
+            for (&i, &v) in te.iter().zip(&s) {
+                oof[[i, k]] = v;
+            }
+        }
+    }
+    let scaler = StandardScalerParams::default().fit(oof.view()).unwrap();
+    let lr = LogisticParams::default()
+        .fit(scaler.transform(oof.view()).unwrap().view(), &y)
+        .unwrap();
+    let fused = stack.fit(x.view(), &y).unwrap();
+    let terms: Vec<FusionTerm> = std::iter::once(fused.term)
+        .chain(fused.fused().iter().map(|m| m.term))
+        .collect();
+    for (k, t) in terms.iter().enumerate() {
+        assert_eq!(t.center, scaler.mean[k], "member {k}");
+        assert_eq!(t.scale, scaler.scale[k], "member {k}");
+        assert_eq!(t.weight, lr.coef()[k], "member {k}");
+    }
+    assert_eq!(fused.fusion_intercept, lr.intercept());
+}
