@@ -122,6 +122,32 @@ fn a_score_fusion_adds_its_members_scores_in_units_of_their_training_spread() {
     }
 }
 
+/// Each pipeline's scores of every epoch, fitted on full copies of the other folds' epochs
+/// (the naive stacking input): `(n_epochs, n_pipelines)`.
+fn out_of_fold(
+    singles: &[&SingleParams],
+    x: &Array3<f64>,
+    y: &[bool],
+    folds: &crate::tuning::Folds,
+) -> Array2<f64> {
+    let mut oof = Array2::<f64>::zeros((y.len(), singles.len()));
+    for f in 0..folds.n_folds() {
+        let (tr, te) = folds.split(f);
+        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+        for (k, p) in singles.iter().enumerate() {
+            let s = p
+                .fit(x.select(Axis(0), &tr).view(), &ytr)
+                .unwrap()
+                .decision_function(x.select(Axis(0), &te).view())
+                .unwrap();
+            for (&i, &v) in te.iter().zip(&s) {
+                oof[[i, k]] = v;
+            }
+        }
+    }
+    oof
+}
+
 #[test]
 fn a_stacked_fusion_is_a_logistic_regression_on_out_of_fold_scores() {
     let (xtr, ytr) = synthetic(200, 6);
@@ -138,23 +164,11 @@ fn a_stacked_fusion_is_a_logistic_regression_on_out_of_fold_scores() {
     assert!(folds.grouped());
     let fold_of = folds.fold_of();
     assert!((0..200).all(|i| fold_of[i] == fold_of[25 * groups[i]]));
-    let mut oof = Array2::<f64>::zeros((200, 3));
-    for f in 0..folds.n_folds() {
-        let (tr, te) = folds.split(f);
-        let y: Vec<bool> = tr.iter().map(|&i| ytr[i]).collect();
-        for (k, name) in names.iter().enumerate() {
-            let m = PipelineParams::preset(name, 64.0)
-                .unwrap()
-                .fit(xtr.select(Axis(0), &tr).view(), &y)
-                .unwrap();
-            let s = m
-                .decision_function(xtr.select(Axis(0), &te).view())
-                .unwrap();
-            for (&i, &v) in te.iter().zip(&s) {
-                oof[[i, k]] = v;
-            }
-        }
-    }
+    let alone: Vec<SingleParams> = names
+        .iter()
+        .map(|name| PipelineParams::preset(name, 64.0).unwrap().main)
+        .collect();
+    let oof = out_of_fold(&alone.iter().collect::<Vec<_>>(), &xtr, &ytr, &folds);
     let scaler = StandardScalerParams::default().fit(oof.view()).unwrap();
     let lr = LogisticParams::default()
         .fit(scaler.transform(oof.view()).unwrap().view(), &ytr)
@@ -373,21 +387,7 @@ fn a_stack_learns_the_same_combination_without_full_copies_per_fold() {
     assert!(singles[0].stateless_features(x.view()).is_some());
     assert!(singles[1].decimated().is_some() && singles[2].decimated().is_some());
     let folds = crate::tuning::cv_folds(&y, None, n_folds).unwrap();
-    let mut oof = Array2::<f64>::zeros((160, 3));
-    for f in 0..folds.n_folds() {
-        let (tr, te) = folds.split(f);
-        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
-        for (k, p) in singles.iter().enumerate() {
-            let s = p
-                .fit(x.select(Axis(0), &tr).view(), &ytr)
-                .unwrap()
-                .decision_function(x.select(Axis(0), &te).view())
-                .unwrap();
-            for (&i, &v) in te.iter().zip(&s) {
-                oof[[i, k]] = v;
-            }
-        }
-    }
+    let oof = out_of_fold(&singles, &x, &y, &folds);
     let scaler = StandardScalerParams::default().fit(oof.view()).unwrap();
     let lr = LogisticParams::default()
         .fit(scaler.transform(oof.view()).unwrap().view(), &y)
