@@ -23,7 +23,8 @@ fn riemann(c: &mut Criterion) {
         .iter()
         .map(|e| e.target == Some(true))
         .collect();
-    let x = train.data().view();
+    let data = train.data();
+    let x = data.view();
     let xc_params = XdawnCovariancesParams::default();
     let xc = xc_params.fit(x, &y).unwrap();
     let covs = xc.transform(x).unwrap();

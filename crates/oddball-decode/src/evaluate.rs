@@ -22,7 +22,7 @@ use crate::decision::{DecisionModel, DecisionRule, ScoreModelParams};
 use crate::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash};
 use crate::pipeline::FrontCache;
 use crate::pipeline::{Pipeline, PipelineParams};
-use crate::tuning::{cv_folds, preset_grid, tune, tune_cached, Folds, TuningReport};
+use crate::tuning::{cv_folds, preset_grid, tune_cached, Folds, TuningReport};
 use crate::DecodeError;
 
 /// Why an evaluation could not run.
@@ -269,6 +269,9 @@ pub fn train(
 ) -> Result<Trained> {
     let (epochs, y, groups) = (set.epochs(), set.labels(), set.groups());
     let folds = cv_folds(y, groups, tune_folds.unwrap_or(DECISION_FOLDS))?;
+    // The features of a front that learns nothing, computed once for the search, the decision
+    // model's folds and the final fit.
+    let mut cache = FrontCache::new(epochs);
     let (params, tuning) = match tune_folds {
         Some(k) => {
             let grid = preset_grid(preset, epochs.sfreq())?;
@@ -276,7 +279,8 @@ pub fn train(
                 fits: (grid.len() + 1) * folds.n_folds(),
                 cross_validation: None,
             });
-            let (params, report) = tune(&grid, epochs.data().view(), y, groups, k, &mut || {
+            let all: Vec<usize> = (0..y.len()).collect();
+            let (params, report) = tune_cached(&grid, &mut cache, &all, y, groups, k, &mut || {
                 on(Progress::Fit)
             })
             .map_err(|source| EvaluateError::Tuning {
@@ -299,7 +303,7 @@ pub fn train(
             (PipelineParams::preset(preset, epochs.sfreq())?, None)
         }
     };
-    let mut trained = fit_with_decision(&params, epochs, y, groups, &folds, on)?;
+    let mut trained = fit_with_decision(&params, &mut cache, epochs, y, groups, &folds, on)?;
     trained.tuning = tuning;
     Ok(trained)
 }
@@ -319,25 +323,36 @@ pub fn train_with(
         fits: folds.n_folds(),
         cross_validation: None,
     });
-    fit_with_decision(params, epochs, y, groups, &folds, on)
+    fit_with_decision(
+        params,
+        &mut FrontCache::new(epochs),
+        epochs,
+        y,
+        groups,
+        &folds,
+        on,
+    )
 }
 
+/// The decision model on `folds`' out-of-fold scores and the final fit, both through `cache`
+/// (over `epochs`).
 fn fit_with_decision(
     params: &PipelineParams,
+    cache: &mut FrontCache<'_>,
     epochs: &Epochs,
     y: &[bool],
     groups: Option<&[usize]>,
     folds: &Folds,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
-    let oof = out_of_fold_scores(params, epochs, y, groups, folds, on)?;
+    let oof = out_of_fold_cached(params, cache, y, groups, folds, on)?;
     let cv_auc = roc_auc(&oof, y)?;
     let decision = DecisionModel {
         scores: ScoreModelParams::default().fit(&oof, y)?,
         rule: DecisionRule::Fixed { rounds: 5 },
     };
     let t0 = Instant::now();
-    let pipeline = params.fit_grouped(epochs.data().view(), y, groups)?;
+    let pipeline = params.fit_cached(cache, y, groups)?;
     let fit_s = t0.elapsed().as_secs_f64();
     Ok(Trained {
         pipeline,
@@ -363,16 +378,27 @@ pub fn out_of_fold_scores(
     folds: &Folds,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Vec<f64>> {
+    out_of_fold_cached(params, &mut FrontCache::new(data), y, groups, folds, on)
+}
+
+/// [`out_of_fold_scores`] of `cache`'s epochs: a front that learns nothing is computed once for
+/// every fold, and no fold copies the epochs of a cached front (other fronts are fitted on a
+/// copy of the fold's epochs).
+fn out_of_fold_cached(
+    params: &PipelineParams,
+    cache: &mut FrontCache<'_>,
+    y: &[bool],
+    groups: Option<&[usize]>,
+    folds: &Folds,
+    on: &mut dyn FnMut(Progress<'_>),
+) -> Result<Vec<f64>> {
     let mut oof = vec![0.0; y.len()];
-    // A front that learns nothing is computed once for every fold, and no fold copies the
-    // epochs of a cached front (other fronts are fitted on a copy of the fold's epochs).
-    let mut cache = FrontCache::new(data.data().view());
     for f in 0..folds.n_folds() {
         let (tr, te) = folds.split(f);
         let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
         let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
         let s = params
-            .fit_score_cached(&mut cache, &tr, &ytr, gtr.as_deref(), &te)?
+            .fit_score_cached(cache, &tr, &ytr, gtr.as_deref(), &te)?
             .scores;
         on(Progress::Fit);
         for (&i, &v) in te.iter().zip(s.iter()) {
@@ -432,7 +458,7 @@ pub fn evaluate(
     let mut results = Vec::new();
     // One home for the training epochs' features of fronts that learn nothing: every preset,
     // fold and grid point with such a front shares them.
-    let mut cache = FrontCache::new(train_epochs.data().view());
+    let mut cache = FrontCache::new(train_epochs);
     let all: Vec<usize> = (0..ytr.len()).collect();
     for name in &params.presets {
         on(Progress::Preset(name));
@@ -473,7 +499,7 @@ pub fn evaluate(
                 } else {
                     (PipelineParams::preset(name, train_epochs.sfreq())?, None)
                 };
-                let mut r = held_out(&p, train_epochs, ytr, groups, test)?;
+                let mut r = held_out(&p, &mut cache, ytr, groups, test)?;
                 on(Progress::Fit);
                 r.tuning = tuning;
                 r
@@ -485,16 +511,16 @@ pub fn evaluate(
     Ok(results)
 }
 
-/// Fits `params` on the training epochs and scores the test recordings.
+/// Fits `params` on the training epochs (`cache`'s) and scores the test recordings.
 pub fn held_out(
     params: &PipelineParams,
-    train: &Epochs,
+    cache: &mut FrontCache<'_>,
     ytr: &[bool],
     groups: Option<&[usize]>,
     test: &[EpochedRecording],
 ) -> Result<PipelineResult> {
     let t0 = Instant::now();
-    let model = params.fit_grouped(train.data().view(), ytr, groups)?;
+    let model = params.fit_cached(cache, ytr, groups)?;
     let fit_s = t0.elapsed().as_secs_f64();
     score_test(&model, fit_s, test)
 }
@@ -625,7 +651,7 @@ pub fn score_test(
     for rec in test {
         let ep = &rec.epochs;
         let t1 = Instant::now();
-        let scores: Array1<f64> = model.decision_function(ep.data().view())?;
+        let scores: Array1<f64> = model.decision_function_epochs(ep)?;
         score_s += t1.elapsed().as_secs_f64();
         let y = labels(ep)?;
         if let Some(speller) = &rec.speller {
@@ -712,11 +738,11 @@ pub fn cross_validate(
     cache: &mut FrontCache<'_>,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<PipelineResult> {
-    if cache.epochs().dim() != data.data().dim() {
+    if cache.epochs().dim() != data.dim() {
         return Err(EvaluateError::Decode(DecodeError::InvalidParameter {
             name: "cache",
             value: format!("{:?}", cache.epochs().dim()),
-            reason: format!("a cache over other epochs than {:?}", data.data().dim()),
+            reason: format!("a cache over other epochs than {:?}", data.dim()),
         }));
     }
     let mut aucs = Vec::new();

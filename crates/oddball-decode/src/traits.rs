@@ -82,6 +82,40 @@ impl FeatureData {
         }
     }
 
+    /// The epochs of `parts` in order, one after another (parts of the same kind and width:
+    /// the features of consecutive chunks of epochs by one map).
+    pub fn concatenate(parts: Vec<FeatureData>) -> Result<Self> {
+        let mismatch = |e: ndarray::ShapeError| DecodeError::ShapeMismatch {
+            what: "feature parts".into(),
+            expected: "parts of one map".into(),
+            got: e.to_string(),
+        };
+        if parts.iter().all(|p| matches!(p, FeatureData::Rows(_))) {
+            let views: Vec<_> = parts
+                .iter()
+                .map(|p| match p {
+                    FeatureData::Rows(x) => x.view(),
+                    FeatureData::Spd(_) => unreachable!("all rows"),
+                })
+                .collect();
+            return Ok(FeatureData::Rows(
+                ndarray::concatenate(Axis(0), &views).map_err(mismatch)?,
+            ));
+        }
+        let mut views = Vec::with_capacity(parts.len());
+        for p in &parts {
+            match p {
+                FeatureData::Spd(x) => views.push(x.view()),
+                FeatureData::Rows(x) => {
+                    return Err(wrong_kind("concatenate", "SPD matrices", x.ndim()))
+                }
+            }
+        }
+        Ok(FeatureData::Spd(
+            ndarray::concatenate(Axis(0), &views).map_err(mismatch)?,
+        ))
+    }
+
     /// The rows, for a step that takes rows (`what` names it in the error otherwise).
     pub fn into_rows(self, what: &str) -> Result<Array2<f64>> {
         match self {

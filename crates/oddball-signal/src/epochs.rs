@@ -219,6 +219,51 @@ impl EpochsParams {
         events: &[Event],
         non_finite: Option<&NonFinite>,
     ) -> Result<(Epochs, DropLog), SignalError> {
+        let (cut, log) = self.scan(raw, events, non_finite, true)?;
+        let Cut {
+            kept,
+            samples,
+            n_times,
+            tmin,
+            ..
+        } = cut;
+        let data = Array3::from_shape_vec((kept.len(), raw.n_channels(), n_times), samples)
+            .expect("buffer holds exactly the kept epochs");
+        Ok((
+            Epochs::new(data, raw.sfreq(), tmin, raw.ch_names().to_vec(), kept)?,
+            log,
+        ))
+    }
+
+    /// [`Self::cut_marked`] as windows into `raw`, which the epochs keep (no samples copied):
+    /// the same epochs, dropped by the same rule, with the same samples.
+    pub(crate) fn cut_windows(
+        &self,
+        raw: Raw,
+        events: &[Event],
+        non_finite: Option<&NonFinite>,
+    ) -> Result<(Epochs, DropLog), SignalError> {
+        let (cut, log) = self.scan(&raw, events, non_finite, false)?;
+        let baseline = self.baseline.map(|_| {
+            Array2::from_shape_vec((cut.kept.len(), raw.n_channels()), cut.means)
+                .expect("one baseline mean per kept epoch and channel")
+        });
+        Ok((
+            Epochs::windows(raw, cut.starts, cut.n_times, baseline, cut.tmin, cut.kept)?,
+            log,
+        ))
+    }
+
+    /// The one pass over `events` both cuts make: which epochs are kept (and why the others
+    /// are not), with the kept samples (`copy`) or each kept epoch's first sample and
+    /// baseline means.
+    fn scan(
+        &self,
+        raw: &Raw,
+        events: &[Event],
+        non_finite: Option<&NonFinite>,
+        copy: bool,
+    ) -> Result<(Cut, DropLog), SignalError> {
         let sfreq = raw.sfreq();
         let (first, last) = self.validate(sfreq)?;
         let n_times = (last - first + 1) as usize;
@@ -264,7 +309,14 @@ impl EpochsParams {
             });
         }
         let mut kept = Vec::with_capacity(n_fit);
-        let mut out: Vec<f64> = Vec::with_capacity(n_fit * n_channels * n_times);
+        let mut out: Vec<f64> = Vec::with_capacity(if copy {
+            n_fit * n_channels * n_times
+        } else {
+            0
+        });
+        let mut starts = Vec::with_capacity(if copy { 0 } else { n_fit });
+        let mut means: Vec<f64> = Vec::new();
+        let mut epoch_means = vec![0.0; n_channels];
         let mut log = DropLog::default();
         let mut epoch = Array2::<f64>::zeros(if fits { (n_channels, n_times) } else { (0, 0) });
         for (index, ev) in events.iter().enumerate() {
@@ -284,9 +336,10 @@ impl EpochsParams {
             }
             epoch.assign(&data.slice(s![.., start as usize..=end as usize]));
             if let Some((lo, hi)) = baseline {
-                for mut row in epoch.rows_mut() {
+                for (mut row, em) in epoch.rows_mut().into_iter().zip(&mut epoch_means) {
                     let m = row.slice(s![lo..=hi]).mean().unwrap_or(0.0);
                     row.mapv_inplace(|v| v - m);
+                    *em = m;
                 }
             }
             let reason = self.drop_reason(epoch.view(), raw.ch_names(), |c| {
@@ -300,17 +353,42 @@ impl EpochsParams {
                 });
                 continue;
             }
-            out.extend(epoch.iter().copied());
+            if copy {
+                out.extend(epoch.iter().copied());
+            } else {
+                starts.push(start as usize);
+                if baseline.is_some() {
+                    means.extend_from_slice(&epoch_means);
+                }
+            }
             kept.push(ev.clone());
         }
-        let data = Array3::from_shape_vec((kept.len(), n_channels, n_times), out)
-            .expect("buffer holds exactly the kept epochs");
-        let tmin = first as f64 / sfreq;
         Ok((
-            Epochs::new(data, sfreq, tmin, raw.ch_names().to_vec(), kept)?,
+            Cut {
+                kept,
+                samples: out,
+                starts,
+                means,
+                n_times,
+                tmin: first as f64 / sfreq,
+            },
             log,
         ))
     }
+}
+
+/// What [`EpochsParams::scan`] found: the kept epochs' events, and their samples or windows.
+struct Cut {
+    kept: Vec<Event>,
+    /// The kept epochs' samples, `(n_kept, n_channels, n_times)` in order (when copied).
+    samples: Vec<f64>,
+    /// Each kept epoch's first sample (when not copied).
+    starts: Vec<usize>,
+    /// Each kept epoch's baseline mean per channel, `(n_kept, n_channels)` in order (when not
+    /// copied and baseline-corrected).
+    means: Vec<f64>,
+    n_times: usize,
+    tmin: f64,
 }
 
 /// Why one channel drops an epoch (see [`EpochsParams::channel_fault`]); values in µV.
@@ -526,8 +604,7 @@ pub fn average_by_code(epochs: &Epochs) -> Vec<Evoked> {
                 target: common_target(&evs),
                 nave: idx.len(),
                 data: epochs
-                    .data()
-                    .select(Axis(0), &idx)
+                    .gather(&idx, 1)
                     .mean_axis(Axis(0))
                     .expect("at least one epoch per code"),
             }
@@ -553,13 +630,12 @@ pub fn average_repetitions(epochs: &Epochs, n_reps: usize) -> Result<Epochs, Sig
         })
         .collect();
     groups.sort_by_key(|g| g[0]);
-    let (_, n_channels, n_times) = epochs.data().dim();
+    let (_, n_channels, n_times) = epochs.dim();
     let mut data = Array3::zeros((groups.len(), n_channels, n_times));
     let mut events = Vec::with_capacity(groups.len());
     for (g, idx) in groups.iter().enumerate() {
         let mean = epochs
-            .data()
-            .select(Axis(0), idx)
+            .gather(idx, 1)
             .mean_axis(Axis(0))
             .expect("non-empty group");
         data.index_axis_mut(Axis(0), g).assign(&mean);

@@ -47,6 +47,6 @@ mod types;
 
 pub use error::SignalError;
 pub use types::{
-    check_sfreq, check_unique_names, Epochs, Event, Events, Raw, MAX_EPOCH_OVERLAP, MAX_WINDOW_S,
-    SFREQ_MAX, SFREQ_MIN,
+    check_sfreq, check_unique_names, Epochs, Event, Events, Raw, EPOCH_CHUNK, MAX_EPOCH_OVERLAP,
+    MAX_WINDOW_S, SFREQ_MAX, SFREQ_MIN,
 };

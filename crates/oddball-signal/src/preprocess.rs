@@ -85,12 +85,13 @@ impl PreprocessParams {
         self.epochs_at(raw, raw.events().as_slice())
     }
 
-    /// [`Self::epochs`] of a recording no longer needed: filtered in place, so the peak memory
-    /// is the recording once plus its epochs.
+    /// [`Self::epochs`] of a recording no longer needed: filtered in place and kept, the epochs
+    /// windows into it ([`Epochs`]' windows: the same samples, never copied), so the memory is
+    /// the recording once, however much the epochs overlap.
     pub fn epochs_owned(&self, raw: Raw) -> Result<(Epochs, DropLog), SignalError> {
         self.epochs.validate(raw.sfreq())?;
         let events = raw.events().as_slice().to_vec();
-        self.filter_owned(raw)?.cut(&self.epochs, &events)
+        self.filter_owned(raw)?.into_windows(&self.epochs, &events)
     }
 
     /// The epochs of `events` (onsets on `raw`'s sample clock; they may reach past its end),
@@ -110,6 +111,15 @@ impl Filtered {
         events: &[Event],
     ) -> Result<(Epochs, DropLog), SignalError> {
         params.cut_marked(&self.raw, events, Some(&self.non_finite))
+    }
+
+    /// [`Self::cut`] as windows into the filtered recording, which the epochs keep.
+    pub fn into_windows(
+        self,
+        params: &EpochsParams,
+        events: &[Event],
+    ) -> Result<(Epochs, DropLog), SignalError> {
+        params.cut_windows(self.raw, events, Some(&self.non_finite))
     }
 }
 

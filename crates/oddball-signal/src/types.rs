@@ -6,7 +6,9 @@
 
 use std::collections::BTreeMap;
 
-use ndarray::{s, Array1, Array2, Array3, ArrayView2, Axis};
+use std::sync::Arc;
+
+use ndarray::{s, Array1, Array2, Array3, Axis, CowArray, Ix2, Ix3};
 use serde::{Deserialize, Serialize};
 
 use crate::SignalError;
@@ -309,8 +311,73 @@ impl Raw {
 }
 
 /// Epochs cut around events: `(n_epochs, n_channels, n_times)` µV, with the event of each epoch.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+///
+/// Held one of two ways, as MNE's `Epochs` with `preload=True` or `False`:
+/// - **preloaded**: the samples of every epoch in one array ([`Epochs::new`]);
+/// - **windows** into the band-passed recording it was cut from
+///   ([`crate::preprocess::PreprocessParams::epochs_owned`]): the recording once, each epoch's
+///   first sample and its baseline means. Overlapping epochs (a flash every 250 ms with 0.8 s
+///   windows overlaps 3.2 times) then cost the recording, not 3.2 × it. Their samples are made
+///   on demand: [`Epochs::data`] for all of them, [`Epochs::gather`] for some (what cross-
+///   validation and chunked feature maps read), each value `x[c, start + t] − baseline[c]`
+///   exactly as the preloaded cut computes it, so both ways give the same numbers to the bit.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(try_from = "EpochsRepr", into = "EpochsRepr")]
 pub struct Epochs {
+    store: Store,
+    sfreq: f64,
+    tmin: f64,
+    ch_names: Vec<String>,
+    events: Vec<Event>,
+}
+
+/// How an [`Epochs`] holds its samples.
+#[derive(Debug, Clone)]
+enum Store {
+    Preloaded(Array3<f64>),
+    Windows(Windows),
+}
+
+/// Epochs as windows into continuous recordings.
+#[derive(Debug, Clone)]
+struct Windows {
+    /// Band-passed recordings `(n_channels, n_samples)`, shared by the epochs cut from them
+    /// (several after [`Epochs::pool`]).
+    sources: Vec<Arc<Array2<f64>>>,
+    /// Each epoch's recording (index into `sources`) and first sample.
+    at: Vec<(usize, usize)>,
+    n_channels: usize,
+    n_times: usize,
+    /// The baseline mean subtracted from each epoch's channels `(n_epochs, n_channels)`;
+    /// `None` without baseline correction.
+    baseline: Option<Array2<f64>>,
+}
+
+impl Windows {
+    /// Writes epoch `e`'s samples at every `step`-th time into `out` `(n_channels, n_out)`.
+    fn fill(&self, e: usize, step: usize, mut out: ndarray::ArrayViewMut2<'_, f64>) {
+        let (src, start) = self.at[e];
+        let src = &self.sources[src];
+        let window = src.slice(s![.., start..start + self.n_times; step]);
+        match &self.baseline {
+            None => out.assign(&window),
+            Some(b) => {
+                for ((mut o, w), &m) in out
+                    .rows_mut()
+                    .into_iter()
+                    .zip(window.rows())
+                    .zip(b.row(e).iter())
+                {
+                    o.zip_mut_with(&w, |o, &v| *o = v - m);
+                }
+            }
+        }
+    }
+}
+
+/// The serialised form of [`Epochs`]: always the samples themselves.
+#[derive(Serialize, Deserialize)]
+struct EpochsRepr {
     data: Array3<f64>,
     sfreq: f64,
     tmin: f64,
@@ -318,10 +385,96 @@ pub struct Epochs {
     events: Vec<Event>,
 }
 
+impl From<Epochs> for EpochsRepr {
+    fn from(e: Epochs) -> Self {
+        let (data, sfreq, tmin, ch_names, events) = e.into_parts();
+        Self {
+            data,
+            sfreq,
+            tmin,
+            ch_names,
+            events,
+        }
+    }
+}
+
+impl TryFrom<EpochsRepr> for Epochs {
+    type Error = SignalError;
+    fn try_from(r: EpochsRepr) -> Result<Self, SignalError> {
+        Epochs::new(r.data, r.sfreq, r.tmin, r.ch_names, r.events)
+    }
+}
+
+impl PartialEq for Epochs {
+    /// The same samples, rate, `tmin`, channels and events, however each is held.
+    fn eq(&self, other: &Self) -> bool {
+        self.sfreq == other.sfreq
+            && self.tmin == other.tmin
+            && self.ch_names == other.ch_names
+            && self.events == other.events
+            && self.dim() == other.dim()
+            && self.data() == other.data()
+    }
+}
+
+/// Epochs [`Epochs::chunks`] yields at a time by default: small enough that a chunk's samples
+/// (64 channels × 205 samples × 8 bytes × 256 = 27 MB) stay a fixed margin, large enough for
+/// the batched feature maps.
+pub const EPOCH_CHUNK: usize = 256;
+
 impl Epochs {
     /// Checks one event per epoch, one name per channel and a valid `sfreq`.
     pub fn new(
         data: Array3<f64>,
+        sfreq: f64,
+        tmin: f64,
+        ch_names: Vec<String>,
+        events: Vec<Event>,
+    ) -> Result<Self, SignalError> {
+        Self::checked(Store::Preloaded(data), sfreq, tmin, ch_names, events)
+    }
+
+    /// Epochs as windows into `raw`'s samples `(n_channels, n_samples)` (its events are not
+    /// kept): epoch `i` is `data[:, starts[i] .. starts[i] + n_times]` minus `baseline[i, c]`
+    /// on channel `c`, with the event `events[i]`.
+    pub(crate) fn windows(
+        raw: Raw,
+        starts: Vec<usize>,
+        n_times: usize,
+        baseline: Option<Array2<f64>>,
+        tmin: f64,
+        events: Vec<Event>,
+    ) -> Result<Self, SignalError> {
+        let (source, sfreq, ch_names, _) = raw.into_parts();
+        let n_channels = source.nrows();
+        let fits = starts.iter().all(|&s| {
+            s.checked_add(n_times)
+                .is_some_and(|end| end <= source.ncols())
+        });
+        let baseline_fits = baseline
+            .as_ref()
+            .is_none_or(|b| b.dim() == (starts.len(), n_channels));
+        if !(fits && baseline_fits) {
+            return Err(SignalError::LayoutMismatch {
+                what: format!(
+                    "{} windows of {n_times} samples into a recording of {} samples",
+                    starts.len(),
+                    source.ncols()
+                ),
+            });
+        }
+        let store = Store::Windows(Windows {
+            sources: vec![Arc::new(source)],
+            at: starts.into_iter().map(|s| (0, s)).collect(),
+            n_channels,
+            n_times,
+            baseline,
+        });
+        Self::checked(store, sfreq, tmin, ch_names, events)
+    }
+
+    fn checked(
+        store: Store,
         sfreq: f64,
         tmin: f64,
         ch_names: Vec<String>,
@@ -334,31 +487,107 @@ impl Epochs {
                 tmax: f64::NAN,
             });
         }
-        let (n_epochs, n_channels, _) = data.dim();
-        if ch_names.len() != n_channels {
-            return Err(SignalError::ChannelCountMismatch {
-                names: ch_names.len(),
-                n_channels,
-            });
-        }
-        if events.len() != n_epochs {
-            return Err(SignalError::EventCountMismatch {
-                events: events.len(),
-                n_epochs,
-            });
-        }
-        Ok(Self {
-            data,
+        let epochs = Self {
+            store,
             sfreq,
             tmin,
             ch_names,
             events,
-        })
+        };
+        let (n_epochs, n_channels, _) = epochs.dim();
+        if epochs.ch_names.len() != n_channels {
+            return Err(SignalError::ChannelCountMismatch {
+                names: epochs.ch_names.len(),
+                n_channels,
+            });
+        }
+        if epochs.events.len() != n_epochs {
+            return Err(SignalError::EventCountMismatch {
+                events: epochs.events.len(),
+                n_epochs,
+            });
+        }
+        Ok(epochs)
     }
 
-    /// Samples in µV, `(n_epochs, n_channels, n_times)`.
-    pub fn data(&self) -> &Array3<f64> {
-        &self.data
+    /// `(n_epochs, n_channels, n_times)`.
+    pub fn dim(&self) -> (usize, usize, usize) {
+        match &self.store {
+            Store::Preloaded(d) => d.dim(),
+            Store::Windows(w) => (w.at.len(), w.n_channels, w.n_times),
+        }
+    }
+
+    /// Whether the samples are held as one array (otherwise as windows into the recording,
+    /// made on demand).
+    pub fn is_preloaded(&self) -> bool {
+        matches!(self.store, Store::Preloaded(_))
+    }
+
+    /// The samples when they are held as one array (preloaded); `None` for windows.
+    pub fn preloaded(&self) -> Option<ndarray::ArrayView3<'_, f64>> {
+        match &self.store {
+            Store::Preloaded(d) => Some(d.view()),
+            Store::Windows(_) => None,
+        }
+    }
+
+    /// Samples in µV, `(n_epochs, n_channels, n_times)`: borrowed when preloaded, otherwise
+    /// made (all of them: to read a few, [`Self::gather`]; to read all a part at a time,
+    /// [`Self::chunks`]).
+    pub fn data(&self) -> CowArray<'_, f64, Ix3> {
+        match &self.store {
+            Store::Preloaded(d) => CowArray::from(d.view()),
+            Store::Windows(_) => {
+                let all: Vec<usize> = (0..self.n_epochs()).collect();
+                CowArray::from(self.gather(&all, 1))
+            }
+        }
+    }
+
+    /// A copy of the epochs at `indices`, in that order, keeping every `step`-th sample
+    /// (`(indices.len(), n_channels, ⌈n_times / step⌉)`; `step` 1 keeps all).
+    ///
+    /// # Panics
+    /// When an index is out of range or `step` is 0.
+    pub fn gather(&self, indices: &[usize], step: usize) -> Array3<f64> {
+        assert!(step > 0, "a step of 0 samples");
+        match &self.store {
+            Store::Preloaded(d) => d.slice(s![.., .., ..;step]).select(Axis(0), indices),
+            Store::Windows(w) => {
+                let n_out = w.n_times.div_ceil(step);
+                let mut out = Array3::zeros((indices.len(), w.n_channels, n_out));
+                for (mut o, &e) in out.outer_iter_mut().zip(indices) {
+                    w.fill(e, step, o.view_mut());
+                }
+                out
+            }
+        }
+    }
+
+    /// The epochs `range` as an array: a view when preloaded, otherwise a copy.
+    pub fn slab(&self, range: std::ops::Range<usize>) -> CowArray<'_, f64, Ix3> {
+        match &self.store {
+            Store::Preloaded(d) => CowArray::from(d.slice(s![range, .., ..])),
+            Store::Windows(_) => {
+                let idx: Vec<usize> = range.collect();
+                CowArray::from(self.gather(&idx, 1))
+            }
+        }
+    }
+
+    /// The epochs in consecutive parts of at most `size` (at least 1) epochs, each with its
+    /// range: views when preloaded, otherwise copies of one part at a time.
+    pub fn chunks(
+        &self,
+        size: usize,
+    ) -> impl Iterator<Item = (std::ops::Range<usize>, CowArray<'_, f64, Ix3>)> + '_ {
+        let size = size.max(1);
+        let n = self.n_epochs();
+        (0..n.div_ceil(size)).map(move |k| {
+            let r = k * size..((k + 1) * size).min(n);
+            (r.clone(), self.slab(r))
+        })
     }
 
     pub fn sfreq(&self) -> f64 {
@@ -385,15 +614,15 @@ impl Epochs {
     }
 
     pub fn n_epochs(&self) -> usize {
-        self.data.dim().0
+        self.dim().0
     }
 
     pub fn n_channels(&self) -> usize {
-        self.data.dim().1
+        self.dim().1
     }
 
     pub fn n_times(&self) -> usize {
-        self.data.dim().2
+        self.dim().2
     }
 
     pub fn is_empty(&self) -> bool {
@@ -405,9 +634,16 @@ impl Epochs {
         Array1::from_shape_fn(self.n_times(), |i| self.tmin + i as f64 / self.sfreq)
     }
 
-    /// One epoch, `(n_channels, n_times)`.
-    pub fn epoch(&self, i: usize) -> ArrayView2<'_, f64> {
-        self.data.index_axis(Axis(0), i)
+    /// One epoch, `(n_channels, n_times)`: borrowed when preloaded, otherwise made.
+    pub fn epoch(&self, i: usize) -> CowArray<'_, f64, Ix2> {
+        match &self.store {
+            Store::Preloaded(d) => CowArray::from(d.index_axis(Axis(0), i)),
+            Store::Windows(w) => {
+                let mut out = Array2::zeros((w.n_channels, w.n_times));
+                w.fill(i, 1, out.view_mut());
+                CowArray::from(out)
+            }
+        }
     }
 
     /// The target flag of each epoch.
@@ -415,10 +651,21 @@ impl Epochs {
         self.events.iter().map(|e| e.target).collect()
     }
 
-    /// A copy holding the epochs at `indices`, in that order.
+    /// The epochs at `indices`, in that order: a copy of their samples when preloaded, other
+    /// windows into the same recording otherwise (no samples copied).
     pub fn select(&self, indices: &[usize]) -> Epochs {
+        let store = match &self.store {
+            Store::Preloaded(d) => Store::Preloaded(d.select(Axis(0), indices)),
+            Store::Windows(w) => Store::Windows(Windows {
+                sources: w.sources.clone(),
+                at: indices.iter().map(|&i| w.at[i]).collect(),
+                n_channels: w.n_channels,
+                n_times: w.n_times,
+                baseline: w.baseline.as_ref().map(|b| b.select(Axis(0), indices)),
+            }),
+        };
         Epochs {
-            data: self.data.select(Axis(0), indices),
+            store,
             sfreq: self.sfreq,
             tmin: self.tmin,
             ch_names: self.ch_names.clone(),
@@ -426,10 +673,10 @@ impl Epochs {
         }
     }
 
-    /// A copy holding only the channels at `indices`, in that order.
+    /// A copy holding only the channels at `indices`, in that order (preloaded).
     pub fn select_channels(&self, indices: &[usize]) -> Epochs {
         Epochs {
-            data: self.data.select(Axis(1), indices),
+            store: Store::Preloaded(self.data().select(Axis(1), indices)),
             sfreq: self.sfreq,
             tmin: self.tmin,
             ch_names: indices.iter().map(|&i| self.ch_names[i].clone()).collect(),
@@ -437,7 +684,8 @@ impl Epochs {
         }
     }
 
-    /// A copy keeping the samples whose time lies in `[tmin, tmax]` (seconds).
+    /// The samples whose time lies in `[tmin, tmax]` (seconds): a copy when preloaded,
+    /// shorter windows otherwise.
     pub fn crop(&self, tmin: f64, tmax: f64) -> Result<Epochs, SignalError> {
         if !(tmin.is_finite() && tmax.is_finite() && tmin <= tmax) {
             return Err(SignalError::InvalidWindow { tmin, tmax });
@@ -448,8 +696,16 @@ impl Epochs {
             return Err(SignalError::InvalidWindow { tmin, tmax });
         }
         let last = (last as usize).min(self.n_times() - 1);
+        let store = match &self.store {
+            Store::Preloaded(d) => Store::Preloaded(d.slice(s![.., .., first..=last]).to_owned()),
+            Store::Windows(w) => Store::Windows(Windows {
+                at: w.at.iter().map(|&(src, s)| (src, s + first)).collect(),
+                n_times: last - first + 1,
+                ..w.clone()
+            }),
+        };
         Ok(Epochs {
-            data: self.data.slice(s![.., .., first..=last]).to_owned(),
+            store,
             sfreq: self.sfreq,
             tmin: self.tmin + first as f64 / self.sfreq,
             ch_names: self.ch_names.clone(),
@@ -459,23 +715,38 @@ impl Epochs {
 
     /// The mean over all epochs, `(n_channels, n_times)`; `None` when there are no epochs.
     pub fn average(&self) -> Option<Array2<f64>> {
-        self.data.mean_axis(Axis(0))
+        match &self.store {
+            Store::Preloaded(d) => d.mean_axis(Axis(0)),
+            Store::Windows(w) => {
+                if w.at.is_empty() {
+                    return None;
+                }
+                let mut sum = Array2::zeros((w.n_channels, w.n_times));
+                let mut one = Array2::zeros((w.n_channels, w.n_times));
+                for e in 0..w.at.len() {
+                    w.fill(e, 1, one.view_mut());
+                    sum += &one;
+                }
+                Some(sum / w.at.len() as f64)
+            }
+        }
     }
 
     /// Concatenates epochs of the same layout (channels, sfreq, tmin, n_times): owned epochs
-    /// or references (`&[&Epochs]`, no copy of the parts first).
+    /// or references (`&[&Epochs]`, no copy of the parts first). Preloaded.
     pub fn concatenate<E: std::borrow::Borrow<Epochs>>(parts: &[E]) -> Result<Epochs, SignalError> {
         let first = parts.first().ok_or(SignalError::NoEpochs)?.borrow();
         for p in parts[1..].iter().map(E::borrow) {
             first.check_same_layout(p)?;
         }
-        let views: Vec<_> = parts.iter().map(|p| p.borrow().data.view()).collect();
+        let datas: Vec<_> = parts.iter().map(|p| p.borrow().data()).collect();
+        let views: Vec<_> = datas.iter().map(|d| d.view()).collect();
         let data =
             ndarray::concatenate(Axis(0), &views).map_err(|e| SignalError::LayoutMismatch {
                 what: e.to_string(),
             })?;
         Ok(Epochs {
-            data,
+            store: Store::Preloaded(data),
             sfreq: first.sfreq,
             tmin: first.tmin,
             ch_names: first.ch_names.clone(),
@@ -486,10 +757,11 @@ impl Epochs {
         })
     }
 
-    /// Epochs of the same layout as one set, moving the parts' samples in: each part is freed
-    /// as soon as it is copied, and the set's pages are written only as they are filled, so
-    /// the parts and the set together stay about one set's size in resident memory (where
-    /// [`Self::concatenate`] holds both).
+    /// Epochs of the same layout as one set, moving the parts' samples in. Windows into
+    /// recordings stay windows (the recordings are moved, not copied). Preloaded parts are
+    /// copied into one array, each part freed as soon as it is copied and the set's pages
+    /// written only as they are filled, so the parts and the set together stay about one
+    /// set's size in resident memory (where [`Self::concatenate`] holds both).
     pub fn pool(parts: Vec<Epochs>) -> Result<Epochs, SignalError> {
         let first = parts.first().ok_or(SignalError::NoEpochs)?;
         for p in &parts[1..] {
@@ -498,17 +770,61 @@ impl Epochs {
         let (sfreq, tmin, ch_names) = (first.sfreq, first.tmin, first.ch_names.clone());
         let (n_channels, n_times) = (first.n_channels(), first.n_times());
         let n_epochs: usize = parts.iter().map(Epochs::n_epochs).sum();
-        let mut samples = Vec::with_capacity(n_epochs * n_channels * n_times);
         let mut events = Vec::with_capacity(n_epochs);
-        for part in parts {
-            // Copied in epoch, channel, time order whatever the part's memory layout.
-            samples.extend(part.data.iter().copied());
-            events.extend(part.events);
-        }
-        let data = Array3::from_shape_vec((n_epochs, n_channels, n_times), samples)
-            .expect("the pooled samples fill the pooled shape");
+        let store = if parts.iter().all(|p| !p.is_preloaded()) {
+            let with_baseline = parts.iter().any(|p| match &p.store {
+                Store::Windows(w) => w.baseline.is_some(),
+                Store::Preloaded(_) => false,
+            });
+            let mut sources = Vec::new();
+            let mut at = Vec::with_capacity(n_epochs);
+            let mut baseline = Vec::new();
+            for part in parts {
+                let Store::Windows(w) = part.store else {
+                    unreachable!("every part is windows")
+                };
+                let offset = sources.len();
+                at.extend(w.at.iter().map(|&(s, t)| (s + offset, t)));
+                sources.extend(w.sources);
+                if with_baseline {
+                    match w.baseline {
+                        Some(b) => baseline.extend(b.iter().copied()),
+                        None => baseline.extend(std::iter::repeat_n(0.0, w.at.len() * n_channels)),
+                    }
+                }
+                events.extend(part.events);
+            }
+            Store::Windows(Windows {
+                sources,
+                at,
+                n_channels,
+                n_times,
+                baseline: with_baseline.then(|| {
+                    Array2::from_shape_vec((n_epochs, n_channels), baseline)
+                        .expect("one baseline mean per epoch and channel")
+                }),
+            })
+        } else {
+            let mut samples = Vec::with_capacity(n_epochs * n_channels * n_times);
+            for part in parts {
+                // Copied in epoch, channel, time order whatever the part's memory layout.
+                match &part.store {
+                    Store::Preloaded(d) => samples.extend(d.iter().copied()),
+                    Store::Windows(_) => {
+                        for (_, chunk) in part.chunks(EPOCH_CHUNK) {
+                            samples.extend(chunk.iter().copied());
+                        }
+                    }
+                }
+                events.extend(part.events);
+            }
+            Store::Preloaded(
+                Array3::from_shape_vec((n_epochs, n_channels, n_times), samples)
+                    .expect("the pooled samples fill the pooled shape"),
+            )
+        };
         Ok(Epochs {
-            data,
+            store,
             sfreq,
             tmin,
             ch_names,
@@ -536,6 +852,10 @@ impl Epochs {
 
     /// Splits into its parts: data, sfreq, tmin, channel names, events.
     pub fn into_parts(self) -> (Array3<f64>, f64, f64, Vec<String>, Vec<Event>) {
-        (self.data, self.sfreq, self.tmin, self.ch_names, self.events)
+        let data = match self.store {
+            Store::Preloaded(d) => d,
+            Store::Windows(_) => self.data().into_owned(),
+        };
+        (data, self.sfreq, self.tmin, self.ch_names, self.events)
     }
 }

@@ -27,7 +27,7 @@
 //! The functions only ever see the data they are given: the caller passes the training epochs,
 //! and held-out test data can't influence the choice.
 
-use ndarray::{ArrayView3, Axis};
+use ndarray::ArrayView3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -257,12 +257,11 @@ pub fn grid_search_cached(
                 .par_iter()
                 .map(|p| {
                     let m = candidates[i].fit_grouped(
-                        epochs.select(Axis(0), &full(&p.tr)).view(),
+                        epochs.gather(&full(&p.tr), 1).view(),
                         &p.ytr,
                         p.gtr.as_deref(),
                     )?;
-                    let scores =
-                        m.decision_function(epochs.select(Axis(0), &full(&p.te)).view())?;
+                    let scores = m.decision_function(epochs.gather(&full(&p.te), 1).view())?;
                     roc_auc(&scores.to_vec(), &p.yte)
                 })
                 .collect::<Result<Vec<f64>>>()?;
@@ -318,9 +317,9 @@ pub fn grid_search_cached(
                 let (xtr, xte, n_front) = match &shared {
                     Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
                     None => {
-                        let etr = epochs.select(Axis(0), &full(&p.tr));
+                        let etr = epochs.gather(&full(&p.tr), 1);
                         let (front, xtr) = candidates[i].main.fit_front(etr.view(), &p.ytr)?;
-                        let xte = front.transform(epochs.select(Axis(0), &full(&p.te)).view())?;
+                        let xte = front.transform(epochs.gather(&full(&p.te), 1).view())?;
                         (xtr, xte, front.n_channels(n_in))
                     }
                 };
@@ -467,7 +466,7 @@ pub fn tune_cached(
 mod tests {
     use super::*;
     use crate::pipeline::PRESETS;
-    use ndarray::Array3;
+    use ndarray::{Array3, Axis};
 
     /// Synthetic epochs at 64 Hz: targets (every 6th) carry a bump at 300 ms; groups of 24.
     fn synthetic(n_epochs: usize, seed: u64) -> (Array3<f64>, Vec<bool>, Vec<usize>) {

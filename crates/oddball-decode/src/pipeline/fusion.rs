@@ -2,10 +2,10 @@
 //! each adding `w · (s − c) / σ` ([`FusionTerm`]) to the fused score.
 
 use ndarray::parallel::prelude::*;
-use ndarray::{s, Array1, Array2, ArrayView3, Axis};
+use ndarray::{Array1, Array2};
 use serde::{Deserialize, Serialize};
 
-use super::{Pipeline, PipelineParams, Single, SingleParams};
+use super::{EpochSource, Pipeline, PipelineParams, Single, SingleParams};
 use crate::logistic::LogisticParams;
 use crate::scaler::StandardScalerParams;
 use crate::traits::FeatureData;
@@ -81,7 +81,7 @@ impl FusedMember {
 pub(super) fn fit_terms(
     params: &PipelineParams,
     pipeline: &mut Pipeline,
-    epochs: ArrayView3<f64>,
+    epochs: EpochSource<'_>,
     y: &[bool],
     groups: Option<&[usize]>,
 ) -> Result<()> {
@@ -111,8 +111,8 @@ pub(super) fn fit_terms(
 
 /// Standard deviation of `single`'s decision values on its training `epochs` (its unit in a
 /// score fusion).
-fn training_score_sd(single: &Single, epochs: ArrayView3<f64>) -> Result<f64> {
-    let scores = single.decision_function(epochs)?;
+fn training_score_sd(single: &Single, epochs: EpochSource<'_>) -> Result<f64> {
+    let scores = single.decision_function_source(epochs)?;
     let sd = scores.std(0.0);
     if sd.is_finite() && sd > 0.0 {
         Ok(sd)
@@ -138,7 +138,7 @@ struct Stacker {
 /// Stacking weights from out-of-fold scores (see [`Fusion::Stacked`]).
 fn fit_stacker(
     params: &PipelineParams,
-    epochs: ArrayView3<f64>,
+    epochs: EpochSource<'_>,
     y: &[bool],
     groups: Option<&[usize]>,
     n_folds: usize,
@@ -153,7 +153,15 @@ fn fit_stacker(
     // on a full copy of the fold's epochs.
     let stateless = singles
         .iter()
-        .map(|p| p.stateless_features(epochs).transpose())
+        .map(|p| {
+            p.has_stateless_front()
+                .then(|| {
+                    epochs.map_chunks(&mut |chunk| {
+                        p.stateless_features(chunk).expect("a stateless front")
+                    })
+                })
+                .transpose()
+        })
         .collect::<Result<Vec<Option<FeatureData>>>>()?;
     let decimated: Vec<Option<(usize, SingleParams)>> =
         singles.iter().map(|p| p.decimated()).collect();
@@ -170,14 +178,14 @@ fn fit_stacker(
                         let necked = p.neck_split(x.select(&tr), x.select(&te))?;
                         return Ok(p.classifier_scores(&necked, &ytr, n_channels)?.0);
                     }
-                    let (epochs, p) = match &decimated[k] {
-                        Some((step, q)) => (epochs.slice(s![.., .., ..;*step]), q),
-                        None => (epochs.view(), *p),
+                    let (step, p) = match &decimated[k] {
+                        Some((step, q)) => (*step, q),
+                        None => (1, *p),
                     };
                     // The fold's training epochs are freed before its test epochs are copied
                     // (two folds run at once on two threads).
-                    let model = p.fit(epochs.select(Axis(0), &tr).view(), &ytr)?;
-                    model.decision_function(epochs.select(Axis(0), &te).view())
+                    let model = p.fit(epochs.gather(&tr, step).view(), &ytr)?;
+                    model.decision_function(epochs.gather(&te, step).view())
                 })
                 .collect::<Result<Vec<Array1<f64>>>>()?;
             Ok((te, scores))

@@ -19,7 +19,8 @@ pub mod fusion;
 
 use std::sync::Arc;
 
-use ndarray::{s, Array1, ArrayView2, ArrayView3, Axis};
+use ndarray::{s, Array1, Array3, ArrayView2, ArrayView3, Axis};
+use oddball_signal::{Epochs, EPOCH_CHUNK};
 use serde::{Deserialize, Serialize};
 
 use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
@@ -113,7 +114,19 @@ impl PipelineParams {
         y: &[bool],
         groups: Option<&[usize]>,
     ) -> Result<Pipeline> {
-        let main = self.main.fit(epochs, y)?;
+        self.fit_source(EpochSource::Array(epochs), y, groups)
+    }
+
+    /// [`Self::fit_grouped`] on an [`EpochSource`]: on windows, each single pipeline reads
+    /// them as [`SingleParams::fit_source`] does, the stack's inner folds as they read a
+    /// fold's epochs; the result is the same.
+    pub fn fit_source(
+        &self,
+        epochs: EpochSource<'_>,
+        y: &[bool],
+        groups: Option<&[usize]>,
+    ) -> Result<Pipeline> {
+        let main = self.main.fit_source(epochs, y)?;
         let mut pipeline = Pipeline {
             main,
             params: Some(self.clone()),
@@ -127,7 +140,7 @@ impl PipelineParams {
         let mut members = Vec::with_capacity(self.fused.len());
         for p in &self.fused {
             members.push(FusedMember {
-                single: p.fit(epochs, y)?,
+                single: p.fit_source(epochs, y)?,
                 params: Some(p.clone()),
                 term: FusionTerm::UNIT,
             });
@@ -150,6 +163,62 @@ impl SingleParams {
         check_labels(n_epochs, y)?;
         let (front, x) = self.fit_front(epochs, y)?;
         let n_front = front.n_channels(n_channels);
+        let Front { channels, features } = front;
+        let Head {
+            scaler,
+            pca,
+            classifier,
+        } = self.fit_head(x, y, n_front)?;
+        Ok(Single {
+            name: self.name.clone(),
+            n_channels,
+            n_times,
+            channels,
+            features,
+            scaler,
+            pca,
+            classifier,
+        })
+    }
+
+    /// [`Self::fit`] on an [`EpochSource`], with the same result. An array is read as it is.
+    /// Windows are read without a copy of all of them where the pipeline allows: a front
+    /// that learns nothing computes its features a part at a time; an xDAWN front reading
+    /// every `k`-th sample is fitted on a copy of those samples; the channel selection on a
+    /// copy of the target epochs (all it reads), the features after it a part at a time. Any
+    /// other reads a copy of all the epochs.
+    pub fn fit_source(&self, epochs: EpochSource<'_>, y: &[bool]) -> Result<Single> {
+        if let Some(all) = epochs.as_view() {
+            return self.fit(all, y);
+        }
+        let (n_epochs, n_channels, n_times) = epochs.dim();
+        check_labels(n_epochs, y)?;
+        if let Some((k, p)) = self.decimated() {
+            let all: Vec<usize> = (0..n_epochs).collect();
+            let mut single = p.fit(epochs.gather(&all, k).view(), y)?;
+            single.undecimate(k, n_times)?;
+            return Ok(single);
+        }
+        if !self.features.is_stateless() {
+            let all: Vec<usize> = (0..n_epochs).collect();
+            return self.fit(epochs.gather(&all, 1).view(), y);
+        }
+        let channels = match &self.channel_selection {
+            None => None,
+            Some(c) => {
+                let targets: Vec<usize> = (0..n_epochs).filter(|&i| y[i]).collect();
+                Some(c.fit(
+                    epochs.gather(&targets, 1).view(),
+                    &vec![true; targets.len()],
+                )?)
+            }
+        };
+        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
+        let features = self
+            .features
+            .fit(epochs.gather(&[], 1).slice(s![.., ..n_front, ..]), &[])?;
+        let front = Front { channels, features };
+        let x = epochs.map_chunks(&mut |chunk| front.transform(chunk))?;
         let Front { channels, features } = front;
         let Head {
             scaler,
@@ -202,7 +271,7 @@ impl SingleParams {
     /// with `n_channels` channels (after channel selection).
     pub(crate) fn fit_head(&self, x: FeatureData, y: &[bool], n_channels: usize) -> Result<Head> {
         let (neck, x) = self.fit_neck(x)?;
-        self.fit_classifier(neck, x, y, n_channels)
+        self.fit_classifier(neck, x.view(), y, n_channels)
     }
 
     /// Whether `other` has the same front, scaler and PCA (so one fitted neck serves both:
@@ -280,15 +349,12 @@ impl SingleParams {
     pub(crate) fn fit_classifier(
         &self,
         neck: Neck,
-        x: FeatureData,
+        x: FeatureView<'_>,
         y: &[bool],
         n_channels: usize,
     ) -> Result<Head> {
-        let classifier = with_gamma_factor(&self.classifier, x.view(), self.svm_gamma_scale)?.fit(
-            x.view(),
-            y,
-            n_channels,
-        )?;
+        let classifier =
+            with_gamma_factor(&self.classifier, x, self.svm_gamma_scale)?.fit(x, y, n_channels)?;
         Ok(Head {
             scaler: neck.scaler,
             pca: neck.pca,
@@ -314,13 +380,18 @@ impl SingleParams {
         (k > 1).then_some((k, p))
     }
 
+    /// Whether the front learns nothing (no channel selection, a stateless feature map).
+    pub(crate) fn has_stateless_front(&self) -> bool {
+        self.channel_selection.is_none() && self.features.is_stateless()
+    }
+
     /// Features of `epochs` when the front learns nothing (no channel selection, a stateless
     /// feature map): the same rows whatever the training split. `None` otherwise.
     pub(crate) fn stateless_features(
         &self,
         epochs: ArrayView3<f64>,
     ) -> Option<Result<FeatureData>> {
-        if self.channel_selection.is_some() || !self.features.is_stateless() {
+        if !self.has_stateless_front() {
             return None;
         }
         Some(
@@ -339,7 +410,7 @@ impl SingleParams {
 /// selection, xDAWN) are never cached: they must be fitted inside each training split.
 #[derive(Debug)]
 pub struct FrontCache<'a> {
-    epochs: ArrayView3<'a, f64>,
+    epochs: EpochSource<'a>,
     /// Each front's features of all epochs and the seconds per epoch they took.
     entries: Vec<(SingleParams, FeatureData, f64)>,
     /// Features of a cached front through a scaler and PCA fitted on one split's training
@@ -373,11 +444,81 @@ pub struct CachedScores {
     pub score_s: f64,
 }
 
+/// The epochs a [`FrontCache`] serves: an array `(n_epochs, n_channels, n_times)`, or
+/// [`Epochs`] (perhaps windows into their recording, whose samples are made a part at a time
+/// and never all at once where a pipeline allows).
+#[derive(Debug, Clone, Copy)]
+pub enum EpochSource<'a> {
+    Array(ArrayView3<'a, f64>),
+    Epochs(&'a Epochs),
+}
+
+impl<'a> From<ArrayView3<'a, f64>> for EpochSource<'a> {
+    fn from(v: ArrayView3<'a, f64>) -> Self {
+        EpochSource::Array(v)
+    }
+}
+
+impl<'a> From<&'a Epochs> for EpochSource<'a> {
+    fn from(e: &'a Epochs) -> Self {
+        EpochSource::Epochs(e)
+    }
+}
+
+impl<'a> EpochSource<'a> {
+    /// `(n_epochs, n_channels, n_times)`.
+    pub fn dim(&self) -> (usize, usize, usize) {
+        match self {
+            EpochSource::Array(v) => v.dim(),
+            EpochSource::Epochs(e) => e.dim(),
+        }
+    }
+
+    /// A copy of the epochs at `indices`, every `step`-th sample (see [`Epochs::gather`]).
+    pub fn gather(&self, indices: &[usize], step: usize) -> Array3<f64> {
+        match self {
+            EpochSource::Array(v) => v.slice(s![.., .., ..;step]).select(Axis(0), indices),
+            EpochSource::Epochs(e) => e.gather(indices, step),
+        }
+    }
+
+    /// Every epoch as one view when the samples are held as an array (nothing to copy).
+    fn as_view(&self) -> Option<ArrayView3<'a, f64>> {
+        match self {
+            EpochSource::Array(v) => Some(*v),
+            EpochSource::Epochs(e) => e.preloaded(),
+        }
+    }
+
+    /// `f` of every epoch: of all at once when they are held as an array, otherwise of
+    /// [`EPOCH_CHUNK`] at a time (copies made one at a time), the rows concatenated. Only for
+    /// maps of each epoch alone, which give the same rows either way.
+    pub(crate) fn map_chunks(
+        &self,
+        f: &mut dyn FnMut(ArrayView3<f64>) -> Result<FeatureData>,
+    ) -> Result<FeatureData> {
+        if let Some(v) = self.as_view() {
+            return f(v);
+        }
+        let EpochSource::Epochs(e) = self else {
+            unreachable!("an array is a view")
+        };
+        let mut parts = Vec::new();
+        for (_, chunk) in e.chunks(EPOCH_CHUNK) {
+            parts.push(f(chunk.view())?);
+        }
+        if parts.is_empty() {
+            return f(e.gather(&[], 1).view());
+        }
+        FeatureData::concatenate(parts)
+    }
+}
+
 impl<'a> FrontCache<'a> {
-    /// An empty cache over `epochs` `(n_epochs, n_channels, n_times)`.
-    pub fn new(epochs: ArrayView3<'a, f64>) -> Self {
+    /// An empty cache over `epochs` `(n_epochs, n_channels, n_times)`: an array or [`Epochs`].
+    pub fn new(epochs: impl Into<EpochSource<'a>>) -> Self {
         Self {
-            epochs,
+            epochs: epochs.into(),
             entries: Vec::new(),
             necks: Vec::new(),
         }
@@ -410,7 +551,7 @@ impl<'a> FrontCache<'a> {
     }
 
     /// The epochs the cache serves.
-    pub fn epochs(&self) -> ArrayView3<'a, f64> {
+    pub fn epochs(&self) -> EpochSource<'a> {
         self.epochs
     }
 
@@ -434,8 +575,14 @@ impl<'a> FrontCache<'a> {
         if let Some(i) = self.entries.iter().position(|(q, _, _)| q.same_front(p)) {
             return Some(Ok(i));
         }
+        if !p.has_stateless_front() {
+            return None;
+        }
         let t0 = std::time::Instant::now();
-        Some(p.stateless_features(self.epochs)?.map(|x| {
+        let x = self
+            .epochs
+            .map_chunks(&mut |chunk| p.stateless_features(chunk).expect("a stateless front"));
+        Some(x.map(|x| {
             let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
             self.entries.push((p.clone(), x, per_epoch));
             self.entries.len() - 1
@@ -498,24 +645,97 @@ impl PipelineParams {
                 });
             }
         }
+        let decimated = self.decimated();
+        // Windows are fitted on the training part's windows, read as `fit_source` reads them.
+        if let (EpochSource::Epochs(e), None) = (cache.epochs(), &decimated) {
+            if !e.is_preloaded() {
+                let t0 = std::time::Instant::now();
+                let model =
+                    self.fit_source(EpochSource::Epochs(&e.select(train)), y_train, groups)?;
+                let fit_s = t0.elapsed().as_secs_f64();
+                let t1 = std::time::Instant::now();
+                let scores = model.decision_function_epochs(&e.select(test))?;
+                return Ok(CachedScores {
+                    scores,
+                    fit_s,
+                    score_s: t1.elapsed().as_secs_f64(),
+                });
+            }
+        }
         // A pipeline that reads every k-th sample only is fitted on copies of those samples.
-        let (epochs, params) = match self.decimated() {
-            Some((k, p)) => (
-                cache.epochs().slice_move(s![.., .., ..;k]),
-                std::borrow::Cow::Owned(p),
-            ),
-            None => (cache.epochs(), std::borrow::Cow::Borrowed(self)),
+        let (k, params) = match decimated {
+            Some((k, p)) => (k, std::borrow::Cow::Owned(p)),
+            None => (1, std::borrow::Cow::Borrowed(self)),
         };
+        let epochs = cache.epochs();
         let t0 = std::time::Instant::now();
-        let model = params.fit_grouped(epochs.select(Axis(0), train).view(), y_train, groups)?;
+        let model = params.fit_grouped(epochs.gather(train, k).view(), y_train, groups)?;
         let fit_s = t0.elapsed().as_secs_f64();
         let t1 = std::time::Instant::now();
-        let scores = model.decision_function(epochs.select(Axis(0), test).view())?;
+        let scores = model.decision_function(epochs.gather(test, k).view())?;
         Ok(CachedScores {
             scores,
             fit_s,
             score_s: t1.elapsed().as_secs_f64(),
         })
+    }
+
+    /// [`Self::fit_grouped`] on all of `cache`'s epochs (labels `y`, `groups` for a stack's inner
+    /// folds), with the same result. A single pipeline whose front learns nothing takes its
+    /// features from `cache` (computed a part at a time from windows, shared with the
+    /// cross-validation); one reading every `k`-th sample is fitted on a copy of those samples;
+    /// any other, when the epochs are windows, on a copy of all of them.
+    pub fn fit_cached(
+        &self,
+        cache: &mut FrontCache<'_>,
+        y: &[bool],
+        groups: Option<&[usize]>,
+    ) -> Result<Pipeline> {
+        let source = cache.epochs();
+        let (n_epochs, n_channels, n_times) = source.dim();
+        if self.fused.is_empty() {
+            if let Some(i) = cache.entry(&self.main) {
+                let i = i?;
+                check_labels(n_epochs, y)?;
+                let features = self.main.features.fit(source.gather(&[], 1).view(), &[])?;
+                let x = &cache.entries[i].1;
+                // Without a scaler or PCA the classifier reads the cached rows as they are.
+                let Head {
+                    scaler,
+                    pca,
+                    classifier,
+                } = if self.main.has_neck() {
+                    self.main.fit_head(x.clone(), y, n_channels)?
+                } else {
+                    self.main.fit_classifier(
+                        Neck {
+                            scaler: None,
+                            pca: None,
+                        },
+                        x.view(),
+                        y,
+                        n_channels,
+                    )?
+                };
+                return Ok(Pipeline {
+                    main: Single {
+                        name: self.main.name.clone(),
+                        n_channels,
+                        n_times,
+                        channels: None,
+                        features,
+                        scaler,
+                        pca,
+                        classifier,
+                    },
+                    params: Some(self.clone()),
+                    term: FusionTerm::UNIT,
+                    fused: Vec::new(),
+                    fusion_intercept: 0.0,
+                });
+            }
+        }
+        self.fit_source(source, y, groups)
     }
 
     /// When the pipeline reads only every `k`-th sample of an epoch (a single pipeline reading
@@ -707,6 +927,43 @@ impl Single {
         let x = self.features(epochs)?;
         self.classifier.scorer().decision_function(x.view())
     }
+
+    /// [`Self::decision_function`] of an [`EpochSource`], a part at a time when it is not an
+    /// array.
+    pub(crate) fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
+        let x = epochs.map_chunks(&mut |chunk| {
+            Ok(FeatureData::Rows(
+                self.decision_function(chunk)?.insert_axis(Axis(1)),
+            ))
+        })?;
+        Ok(x.into_rows("scores")?.column(0).to_owned())
+    }
+
+    /// Fitted on epochs decimated by `k` (by the settings [`SingleParams::decimated`] gives):
+    /// the same pipeline reading every `k`-th sample of full epochs of `n_times` samples.
+    fn undecimate(&mut self, k: usize, n_times: usize) -> Result<()> {
+        let step = match &mut self.features {
+            Features::XdawnTangent(x) => &mut x.step,
+            Features::XdawnCovariances(x) => &mut x.step,
+            _ => {
+                return Err(DecodeError::InvalidParameter {
+                    name: "step",
+                    value: k.to_string(),
+                    reason: "only an xDAWN front reads every k-th sample".into(),
+                })
+            }
+        };
+        if *step != 1 || n_times.div_ceil(k) != self.n_times {
+            return Err(DecodeError::ShapeMismatch {
+                what: "decimated fit".into(),
+                expected: format!("step 1 on {} samples", n_times.div_ceil(k)),
+                got: format!("step {} on {} samples", *step, self.n_times),
+            });
+        }
+        *step = k;
+        self.n_times = n_times;
+        Ok(())
+    }
 }
 
 /// A fitted pipeline: a single pipeline and, in a score fusion, the single pipelines fused with
@@ -784,6 +1041,23 @@ impl Pipeline {
             total += &m.term.apply(m.single.decision_function(epochs)?);
         }
         Ok(total + self.fusion_intercept)
+    }
+
+    /// [`Self::decision_function`] of [`Epochs`]: of their array when preloaded, otherwise of
+    /// [`EPOCH_CHUNK`] epochs at a time (each epoch's score depends on that epoch alone, so
+    /// the scores are the same).
+    pub fn decision_function_epochs(&self, epochs: &Epochs) -> Result<Array1<f64>> {
+        if let Some(all) = epochs.preloaded() {
+            return self.decision_function(all);
+        }
+        let mut scores = Vec::with_capacity(epochs.n_epochs());
+        for (_, chunk) in epochs.chunks(EPOCH_CHUNK) {
+            scores.extend(self.decision_function(chunk.view())?);
+        }
+        if epochs.is_empty() {
+            return self.decision_function(epochs.gather(&[], 1).view());
+        }
+        Ok(Array1::from(scores))
     }
 
     /// P(target) per epoch. A score fusion has no calibrated probability: the logistic of its
