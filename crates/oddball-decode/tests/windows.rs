@@ -92,3 +92,35 @@ fn windows_score_and_train_as_preloaded_epochs() {
         assert!(a.0 == b.0, "the saved models differ");
     }
 }
+
+/// The hyper-parameter search reads windows as the fits do (an xDAWN front on every 4th
+/// sample, the channel selection on the targets): the same choices and scores.
+#[test]
+fn windows_tune_as_preloaded_epochs() {
+    let train = [recording(60.0, 6)];
+    let test = [recording(40.0, 7)];
+    let params = EvaluateParams {
+        presets: vec!["riemann".into(), "paper-svm".into()],
+        folds: 2,
+        tune: true,
+    };
+    let mut outcomes = Vec::new();
+    for windows in [false, true] {
+        let set = TrainingSet::pool(recs(&train, windows)).unwrap();
+        let held = evaluate::evaluate(&params, &set, &recs(&test, windows), &mut |_| {}).unwrap();
+        let t = evaluate::train("riemann", &set, Some(2), &mut |_| {}).unwrap();
+        let chosen = serde_json::to_string(&t.tuning).unwrap();
+        let model = Model::new(Preprocess::peer(), t.sfreq, vec![], t.pipeline).to_json();
+        outcomes.push((held, chosen, model));
+    }
+    let (dense, win) = (&outcomes[0], &outcomes[1]);
+    for (a, b) in dense.0.iter().zip(&win.0) {
+        assert_eq!(bits(&a.auc_folds), bits(&b.auc_folds), "{}", a.pipeline);
+        assert_eq!(
+            serde_json::to_string(&a.tuning).unwrap(),
+            serde_json::to_string(&b.tuning).unwrap()
+        );
+    }
+    assert_eq!(dense.1, win.1, "the search's report");
+    assert!(dense.2 == win.2, "the tuned models differ");
+}

@@ -256,12 +256,13 @@ pub fn grid_search_cached(
             let aucs = parts
                 .par_iter()
                 .map(|p| {
-                    let m = candidates[i].fit_grouped(
-                        epochs.gather(&full(&p.tr), 1).view(),
+                    let m = candidates[i].fit_source(
+                        epochs.subset(&full(&p.tr)).source(),
                         &p.ytr,
                         p.gtr.as_deref(),
                     )?;
-                    let scores = m.decision_function(epochs.gather(&full(&p.te), 1).view())?;
+                    let scores =
+                        m.decision_function_source(epochs.subset(&full(&p.te)).source())?;
                     roc_auc(&scores.to_vec(), &p.yte)
                 })
                 .collect::<Result<Vec<f64>>>()?;
@@ -317,9 +318,13 @@ pub fn grid_search_cached(
                 let (xtr, xte, n_front) = match &shared {
                     Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
                     None => {
-                        let etr = epochs.gather(&full(&p.tr), 1);
-                        let (front, xtr) = candidates[i].main.fit_front(etr.view(), &p.ytr)?;
-                        let xte = front.transform(epochs.gather(&full(&p.te), 1).view())?;
+                        let (front, xtr) = candidates[i]
+                            .main
+                            .fit_front_source(epochs.subset(&full(&p.tr)).source(), &p.ytr)?;
+                        let xte = epochs
+                            .subset(&full(&p.te))
+                            .source()
+                            .map_chunks(&mut |chunk| front.transform(chunk))?;
                         (xtr, xte, front.n_channels(n_in))
                     }
                 };

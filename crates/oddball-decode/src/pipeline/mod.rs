@@ -181,44 +181,16 @@ impl SingleParams {
         })
     }
 
-    /// [`Self::fit`] on an [`EpochSource`], with the same result. An array is read as it is.
-    /// Windows are read without a copy of all of them where the pipeline allows: a front
-    /// that learns nothing computes its features a part at a time; an xDAWN front reading
-    /// every `k`-th sample is fitted on a copy of those samples; the channel selection on a
-    /// copy of the target epochs (all it reads), the features after it a part at a time. Any
-    /// other reads a copy of all the epochs.
+    /// [`Self::fit`] on an [`EpochSource`], with the same result: the front as
+    /// [`Self::fit_front_source`] fits it, then the steps after it.
     pub fn fit_source(&self, epochs: EpochSource<'_>, y: &[bool]) -> Result<Single> {
         if let Some(all) = epochs.as_view() {
             return self.fit(all, y);
         }
         let (n_epochs, n_channels, n_times) = epochs.dim();
         check_labels(n_epochs, y)?;
-        if let Some((k, p)) = self.decimated() {
-            let all: Vec<usize> = (0..n_epochs).collect();
-            let mut single = p.fit(epochs.gather(&all, k).view(), y)?;
-            single.undecimate(k, n_times)?;
-            return Ok(single);
-        }
-        if !self.features.is_stateless() {
-            let all: Vec<usize> = (0..n_epochs).collect();
-            return self.fit(epochs.gather(&all, 1).view(), y);
-        }
-        let channels = match &self.channel_selection {
-            None => None,
-            Some(c) => {
-                let targets: Vec<usize> = (0..n_epochs).filter(|&i| y[i]).collect();
-                Some(c.fit(
-                    epochs.gather(&targets, 1).view(),
-                    &vec![true; targets.len()],
-                )?)
-            }
-        };
-        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
-        let features = self
-            .features
-            .fit(epochs.gather(&[], 1).slice(s![.., ..n_front, ..]), &[])?;
-        let front = Front { channels, features };
-        let x = epochs.map_chunks(&mut |chunk| front.transform(chunk))?;
+        let (front, x) = self.fit_front_source(epochs, y)?;
+        let n_front = front.n_channels(n_channels);
         let Front { channels, features } = front;
         let Head {
             scaler,
@@ -235,6 +207,53 @@ impl SingleParams {
             pca,
             classifier,
         })
+    }
+
+    /// [`Self::fit_front`] on an [`EpochSource`], with the same result. An array is read as it
+    /// is. Windows are read without a copy of all of them where the front allows: one that
+    /// learns nothing computes its features a part at a time; an xDAWN front reading every
+    /// `k`-th sample is fitted on a copy of those samples; the channel selection on a copy of
+    /// the target epochs (all it reads), a feature map after it that learns nothing a part at
+    /// a time. Any other front reads a copy of all the epochs.
+    pub(crate) fn fit_front_source(
+        &self,
+        epochs: EpochSource<'_>,
+        y: &[bool],
+    ) -> Result<(Front, FeatureData)> {
+        if let Some(all) = epochs.as_view() {
+            return self.fit_front(all, y);
+        }
+        let (n_epochs, n_channels, _) = epochs.dim();
+        if y.len() != n_epochs {
+            return Err(DecodeError::LabelCount {
+                n_samples: n_epochs,
+                n_labels: y.len(),
+            });
+        }
+        let all: Vec<usize> = (0..n_epochs).collect();
+        if let Some((k, p)) = self.decimated() {
+            let (mut front, x) = p.fit_front(epochs.gather(&all, k).view(), y)?;
+            set_step(&mut front.features, k)?;
+            return Ok((front, x));
+        }
+        let targets: Vec<usize> = (0..n_epochs).filter(|&i| y[i]).collect();
+        if !self.features.is_stateless() || targets.is_empty() {
+            return self.fit_front(epochs.gather(&all, 1).view(), y);
+        }
+        let channels = match &self.channel_selection {
+            None => None,
+            Some(c) => Some(c.fit(
+                epochs.gather(&targets, 1).view(),
+                &vec![true; targets.len()],
+            )?),
+        };
+        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
+        let features = self
+            .features
+            .fit(epochs.gather(&[], 1).slice(s![.., ..n_front, ..]), &[])?;
+        let front = Front { channels, features };
+        let x = epochs.map_chunks(&mut |chunk| front.transform(chunk))?;
+        Ok((front, x))
     }
 
     /// Fits the channel selection and the features on `epochs`; returns them with the features
@@ -514,6 +533,42 @@ impl<'a> EpochSource<'a> {
     }
 }
 
+impl EpochSource<'_> {
+    /// [`Self::map_chunks`] of a score per epoch.
+    pub(crate) fn map_scores(
+        &self,
+        f: &mut dyn FnMut(ArrayView3<f64>) -> Result<Array1<f64>>,
+    ) -> Result<Array1<f64>> {
+        let x =
+            self.map_chunks(&mut |chunk| Ok(FeatureData::Rows(f(chunk)?.insert_axis(Axis(1)))))?;
+        Ok(x.into_rows("scores")?.column(0).to_owned())
+    }
+
+    /// The epochs at `indices` as a source of their own: windows stay windows (no samples
+    /// copied), an array's epochs are copied.
+    pub(crate) fn subset(&self, indices: &[usize]) -> Subset {
+        match self {
+            EpochSource::Epochs(e) if !e.is_preloaded() => Subset::Epochs(e.select(indices)),
+            _ => Subset::Array(self.gather(indices, 1)),
+        }
+    }
+}
+
+/// Some epochs of an [`EpochSource`], held as a source ([`EpochSource::subset`]).
+pub(crate) enum Subset {
+    Array(Array3<f64>),
+    Epochs(Epochs),
+}
+
+impl Subset {
+    pub(crate) fn source(&self) -> EpochSource<'_> {
+        match self {
+            Subset::Array(a) => EpochSource::Array(a.view()),
+            Subset::Epochs(e) => EpochSource::Epochs(e),
+        }
+    }
+}
+
 impl<'a> FrontCache<'a> {
     /// An empty cache over `epochs` `(n_epochs, n_channels, n_times)`: an array or [`Epochs`].
     pub fn new(epochs: impl Into<EpochSource<'a>>) -> Self {
@@ -645,34 +700,28 @@ impl PipelineParams {
                 });
             }
         }
-        let decimated = self.decimated();
-        // Windows are fitted on the training part's windows, read as `fit_source` reads them.
-        if let (EpochSource::Epochs(e), None) = (cache.epochs(), &decimated) {
-            if !e.is_preloaded() {
-                let t0 = std::time::Instant::now();
-                let model =
-                    self.fit_source(EpochSource::Epochs(&e.select(train)), y_train, groups)?;
+        let epochs = cache.epochs();
+        let t0 = std::time::Instant::now();
+        // A pipeline that reads every k-th sample only is fitted on copies of those samples.
+        let model = match self.decimated() {
+            Some((k, p)) => {
+                let model = p.fit_grouped(epochs.gather(train, k).view(), y_train, groups)?;
                 let fit_s = t0.elapsed().as_secs_f64();
                 let t1 = std::time::Instant::now();
-                let scores = model.decision_function_epochs(&e.select(test))?;
+                let scores = model.decision_function(epochs.gather(test, k).view())?;
                 return Ok(CachedScores {
                     scores,
                     fit_s,
                     score_s: t1.elapsed().as_secs_f64(),
                 });
             }
-        }
-        // A pipeline that reads every k-th sample only is fitted on copies of those samples.
-        let (k, params) = match decimated {
-            Some((k, p)) => (k, std::borrow::Cow::Owned(p)),
-            None => (1, std::borrow::Cow::Borrowed(self)),
+            // Any other on the training part: windows stay windows, read as `fit_source`
+            // reads them; an array's epochs are copied.
+            None => self.fit_source(epochs.subset(train).source(), y_train, groups)?,
         };
-        let epochs = cache.epochs();
-        let t0 = std::time::Instant::now();
-        let model = params.fit_grouped(epochs.gather(train, k).view(), y_train, groups)?;
         let fit_s = t0.elapsed().as_secs_f64();
         let t1 = std::time::Instant::now();
-        let scores = model.decision_function(epochs.gather(test, k).view())?;
+        let scores = model.decision_function_source(epochs.subset(test).source())?;
         Ok(CachedScores {
             scores,
             fit_s,
@@ -931,39 +980,33 @@ impl Single {
     /// [`Self::decision_function`] of an [`EpochSource`], a part at a time when it is not an
     /// array.
     pub(crate) fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
-        let x = epochs.map_chunks(&mut |chunk| {
-            Ok(FeatureData::Rows(
-                self.decision_function(chunk)?.insert_axis(Axis(1)),
-            ))
-        })?;
-        Ok(x.into_rows("scores")?.column(0).to_owned())
+        epochs.map_scores(&mut |chunk| self.decision_function(chunk))
     }
+}
 
-    /// Fitted on epochs decimated by `k` (by the settings [`SingleParams::decimated`] gives):
-    /// the same pipeline reading every `k`-th sample of full epochs of `n_times` samples.
-    fn undecimate(&mut self, k: usize, n_times: usize) -> Result<()> {
-        let step = match &mut self.features {
-            Features::XdawnTangent(x) => &mut x.step,
-            Features::XdawnCovariances(x) => &mut x.step,
-            _ => {
-                return Err(DecodeError::InvalidParameter {
-                    name: "step",
-                    value: k.to_string(),
-                    reason: "only an xDAWN front reads every k-th sample".into(),
-                })
-            }
-        };
-        if *step != 1 || n_times.div_ceil(k) != self.n_times {
-            return Err(DecodeError::ShapeMismatch {
-                what: "decimated fit".into(),
-                expected: format!("step 1 on {} samples", n_times.div_ceil(k)),
-                got: format!("step {} on {} samples", *step, self.n_times),
-            });
+/// An xDAWN front fitted reading every sample of epochs decimated by `k` (by the settings
+/// [`SingleParams::decimated`] gives), made the same front reading every `k`-th sample.
+fn set_step(features: &mut Features, k: usize) -> Result<()> {
+    let step = match features {
+        Features::XdawnTangent(x) => &mut x.step,
+        Features::XdawnCovariances(x) => &mut x.step,
+        _ => {
+            return Err(DecodeError::InvalidParameter {
+                name: "step",
+                value: k.to_string(),
+                reason: "only an xDAWN front reads every k-th sample".into(),
+            })
         }
-        *step = k;
-        self.n_times = n_times;
-        Ok(())
+    };
+    if *step != 1 {
+        return Err(DecodeError::InvalidParameter {
+            name: "step",
+            value: step.to_string(),
+            reason: "a decimated fit reads every sample of its decimated epochs".into(),
+        });
     }
+    *step = k;
+    Ok(())
 }
 
 /// A fitted pipeline: a single pipeline and, in a score fusion, the single pipelines fused with
@@ -1047,17 +1090,13 @@ impl Pipeline {
     /// [`EPOCH_CHUNK`] epochs at a time (each epoch's score depends on that epoch alone, so
     /// the scores are the same).
     pub fn decision_function_epochs(&self, epochs: &Epochs) -> Result<Array1<f64>> {
-        if let Some(all) = epochs.preloaded() {
-            return self.decision_function(all);
-        }
-        let mut scores = Vec::with_capacity(epochs.n_epochs());
-        for (_, chunk) in epochs.chunks(EPOCH_CHUNK) {
-            scores.extend(self.decision_function(chunk.view())?);
-        }
-        if epochs.is_empty() {
-            return self.decision_function(epochs.gather(&[], 1).view());
-        }
-        Ok(Array1::from(scores))
+        self.decision_function_source(EpochSource::Epochs(epochs))
+    }
+
+    /// [`Self::decision_function`] of an [`EpochSource`], a part at a time when it is not an
+    /// array.
+    pub fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
+        epochs.map_scores(&mut |chunk| self.decision_function(chunk))
     }
 
     /// P(target) per epoch. A score fusion has no calibrated probability: the logistic of its
