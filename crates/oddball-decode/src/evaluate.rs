@@ -201,7 +201,8 @@ impl TrainingSet<'static> {
 
 impl<'a> TrainingSet<'a> {
     /// The recordings' epochs as one set, the recordings staying the caller's: one recording's
-    /// are borrowed, several are copied into one set.
+    /// are borrowed; several held as windows share their recordings (nothing is copied);
+    /// other epochs are copied into one set.
     pub fn of(recs: &'a [EpochedRecording]) -> Result<Self> {
         let epochs = match recs {
             [one] => Cow::Borrowed(&one.epochs),

@@ -79,6 +79,12 @@ fn windows_score_and_train_as_preloaded_epochs() {
         }
         outcomes.push((folds, held, models));
     }
+    // Windows of several recordings borrowed as one set share the recordings.
+    let held = recs(&train, true);
+    let of = TrainingSet::of(&held).unwrap();
+    assert!(!of.epochs().is_preloaded());
+    assert!(of.epochs() == TrainingSet::pool(recs(&train, false)).unwrap().epochs());
+
     let (dense, win) = (&outcomes[0], &outcomes[1]);
     for (a, b) in dense.0.iter().zip(&win.0).chain(dense.1.iter().zip(&win.1)) {
         assert_eq!(a.pipeline, b.pipeline);

@@ -733,11 +733,16 @@ impl Epochs {
     }
 
     /// Concatenates epochs of the same layout (channels, sfreq, tmin, n_times): owned epochs
-    /// or references (`&[&Epochs]`, no copy of the parts first). Preloaded.
+    /// or references (`&[&Epochs]`, no copy of the parts first). Windows stay windows into
+    /// the parts' recordings (shared, not copied); otherwise the samples are copied into one
+    /// array.
     pub fn concatenate<E: std::borrow::Borrow<Epochs>>(parts: &[E]) -> Result<Epochs, SignalError> {
         let first = parts.first().ok_or(SignalError::NoEpochs)?.borrow();
         for p in parts[1..].iter().map(E::borrow) {
             first.check_same_layout(p)?;
+        }
+        if parts.iter().all(|p| !p.borrow().is_preloaded()) {
+            return Self::pool(parts.iter().map(|p| p.borrow().clone()).collect());
         }
         let datas: Vec<_> = parts.iter().map(|p| p.borrow().data()).collect();
         let views: Vec<_> = datas.iter().map(|d| d.view()).collect();

@@ -157,9 +157,14 @@ fn pooled_windows_are_the_concatenation() {
             .into_iter()
             .map(|r| p.epochs_owned(r).unwrap().0)
             .collect();
+        let joined = Epochs::concatenate(&win).unwrap();
+        assert!(!joined.is_preloaded());
         let pooled = Epochs::pool(win).unwrap();
         assert!(!pooled.is_preloaded());
-        same_bits(&pooled, &Epochs::concatenate(&dense).unwrap());
+        let want = Epochs::concatenate(&dense).unwrap();
+        assert!(want.is_preloaded());
+        same_bits(&pooled, &want);
+        same_bits(&joined, &want);
     }
     // Windows without baseline and with it, in one set.
     let a = params(-0.1, false, None)

@@ -3,7 +3,7 @@
 
 use ndarray::Array1;
 use oddball_io::Speller;
-use oddball_signal::{Epochs, Events, SignalError};
+use oddball_signal::{Epochs, Events, SignalError, EPOCH_CHUNK};
 use serde::Serialize;
 
 use super::{replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams};
@@ -110,17 +110,21 @@ pub fn evaluate_unsupervised(
     let parts: Vec<&Epochs> = recs.iter().map(|r| &r.epochs).collect();
     let all = Epochs::concatenate(&parts)?;
     // The decoder sees epochs, codes and characters only.
+    // Epochs held as windows are read a part at a time.
     let start = template
         .map(|t| {
-            all.data()
-                .outer_iter()
-                .map(|e| t.score(e))
-                .collect::<std::result::Result<Vec<f64>, _>>()
+            let mut s = Vec::with_capacity(all.n_epochs());
+            for (_, chunk) in all.chunks(EPOCH_CHUNK) {
+                for e in chunk.outer_iter() {
+                    s.push(t.score(e)?);
+                }
+            }
+            Ok::<_, UnsupervisedError>(s)
         })
         .transpose()?;
     let r = replay_from(
         params,
-        all.data().view(),
+        &all,
         &codes,
         &trials,
         &constraint,
@@ -151,7 +155,11 @@ pub fn evaluate_unsupervised(
             online_text.push_str(&symbol(speller, online));
             k += 1;
         }
-        let scores: Array1<f64> = r.model.decision_function(rec.epochs.data().view())?;
+        let mut scores = Vec::with_capacity(rec.epochs.n_epochs());
+        for (_, chunk) in rec.epochs.chunks(EPOCH_CHUNK) {
+            scores.extend(r.model.decision_function(chunk.view())?);
+        }
+        let scores = Array1::from(scores);
         let s = score_speller(rec, speller, &scores)?;
         posthoc_text.push_str(&s.text);
         auc_by_recording.push(RecordingAuc {

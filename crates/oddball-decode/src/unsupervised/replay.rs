@@ -4,6 +4,8 @@
 //! plus the random initialisations — and the trial is decided with it ("online"); the final
 //! model re-decides every trial ("post hoc").
 
+use crate::pipeline::EpochSource;
+use crate::traits::FeatureData;
 use ndarray::{s, ArrayView3};
 
 use super::{argmax, Constraint, Result, Unsupervised, UnsupervisedError, UnsupervisedParams};
@@ -43,15 +45,16 @@ pub fn replay(
 
 /// [`replay`] with `start`, a score per epoch, as one more initialisation of every refit
 /// ([`UnsupervisedParams::fit_features_from`]).
-pub fn replay_from(
+pub fn replay_from<'a>(
     params: &UnsupervisedParams,
-    epochs: ArrayView3<f64>,
+    epochs: impl Into<EpochSource<'a>>,
     codes: &[u32],
     trials: &[usize],
     constraint: &Constraint,
     start: Option<&[f64]>,
     on_trial: &mut dyn FnMut(usize, usize),
 ) -> Result<Replay> {
+    let epochs: EpochSource<'_> = epochs.into();
     let n = epochs.dim().0;
     if let Some(s) = start {
         if s.len() != n {
@@ -85,7 +88,10 @@ pub fn replay_from(
     if n > 0 {
         ends.push(n);
     }
-    let x = params.features.transform(epochs)?;
+    // Features of a part of the epochs at a time when they are windows.
+    let x = epochs
+        .map_chunks(&mut |chunk| Ok(FeatureData::Rows(params.features.transform(chunk)?)))?
+        .into_rows("unsupervised features")?;
     let mut model: Option<Unsupervised> = None;
     let mut online = Vec::with_capacity(ends.len());
     for (k, &end) in ends.iter().enumerate() {
