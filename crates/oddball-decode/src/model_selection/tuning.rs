@@ -280,7 +280,12 @@ pub fn grid_search_cached(
                     && candidates[i].main.same_front(&candidates[j].main)
             })
             .collect();
-        let shared = cache.rows(&candidates[i].main, subset).transpose()?;
+        // A cached front's features, read by the folds at their indices into the cache's
+        // epochs (no copy of the subset's rows first).
+        let shared = cache
+            .entry(&candidates[i].main)
+            .transpose()?
+            .map(|k| cache.features(k));
         let n_in = epochs.dim().1;
         // Members with the same scaler and PCA share one neck per fold; with a cached front
         // it comes from (and goes to) the cache, shared with other searches and presets.
@@ -316,7 +321,7 @@ pub fn grid_search_cached(
             .zip(known.par_iter())
             .map(|(p, known)| -> Result<FoldOut> {
                 let (xtr, xte, n_front) = match &shared {
-                    Some(x) => (x.select(&p.tr), x.select(&p.te), n_in),
+                    Some(x) => (x.select(&full(&p.tr)), x.select(&full(&p.te)), n_in),
                     None => {
                         let (front, xtr) = candidates[i]
                             .main
@@ -330,12 +335,23 @@ pub fn grid_search_cached(
                 };
                 let mut aucs = Vec::new();
                 let mut fitted = Vec::new();
+                // The last group to fit a neck takes the fold's features, the others copies.
+                let last_fit = (0..groups_of_neck.len())
+                    .rev()
+                    .find(|&gi| known[gi].is_none());
+                let mut features = Some((xtr, xte));
                 for (gi, g) in groups_of_neck.iter().enumerate() {
                     let q = &candidates[g[0]].main;
                     let necked = match &known[gi] {
                         Some(k) => k.clone(),
                         None => {
-                            let k = Arc::new(q.neck_split(xtr.clone(), xte.clone())?);
+                            let (xtr, xte) = if Some(gi) == last_fit {
+                                features.take().expect("taken by the last group only")
+                            } else {
+                                let (xtr, xte) = features.as_ref().expect("not taken yet");
+                                (xtr.clone(), xte.clone())
+                            };
+                            let k = Arc::new(q.neck_split(xtr, xte)?);
                             if shared.is_some() && q.has_neck() {
                                 fitted.push((gi, k.clone()));
                             }

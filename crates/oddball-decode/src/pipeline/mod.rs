@@ -610,23 +610,14 @@ impl<'a> FrontCache<'a> {
         self.epochs
     }
 
-    /// The features `p`'s front gives the epochs at `subset` (computed for all epochs on first
-    /// use); `None` when the front learns from its training data.
-    pub(crate) fn rows(
-        &mut self,
-        p: &SingleParams,
-        subset: &[usize],
-    ) -> Option<Result<FeatureData>> {
-        let i = match self.entry(p)? {
-            Ok(i) => i,
-            Err(e) => return Some(Err(e)),
-        };
-        Some(Ok(self.entries[i].1.select(subset)))
+    /// The features of every epoch of the cached front at `index` (from [`Self::entry`]).
+    pub(crate) fn features(&self, index: usize) -> &FeatureData {
+        &self.entries[index].1
     }
 
     /// The index of `p`'s front among the cached ones, computing its features of all epochs
     /// (timed) on first use; `None` when the front learns from its training data.
-    fn entry(&mut self, p: &SingleParams) -> Option<Result<usize>> {
+    pub(crate) fn entry(&mut self, p: &SingleParams) -> Option<Result<usize>> {
         if let Some(i) = self.entries.iter().position(|(q, _, _)| q.same_front(p)) {
             return Some(Ok(i));
         }
