@@ -159,34 +159,12 @@ impl PipelineParams {
 impl SingleParams {
     /// Fits every step on `epochs` labelled `y`.
     pub fn fit(&self, epochs: ArrayView3<f64>, y: &[bool]) -> Result<Single> {
-        let (n_epochs, n_channels, n_times) = epochs.dim();
-        check_labels(n_epochs, y)?;
-        let (front, x) = self.fit_front(epochs, y)?;
-        let n_front = front.n_channels(n_channels);
-        let Front { channels, features } = front;
-        let Head {
-            scaler,
-            pca,
-            classifier,
-        } = self.fit_head(x, y, n_front)?;
-        Ok(Single {
-            name: self.name.clone(),
-            n_channels,
-            n_times,
-            channels,
-            features,
-            scaler,
-            pca,
-            classifier,
-        })
+        self.fit_source(EpochSource::Array(epochs), y)
     }
 
     /// [`Self::fit`] on an [`EpochSource`], with the same result: the front as
     /// [`Self::fit_front_source`] fits it, then the steps after it.
     pub fn fit_source(&self, epochs: EpochSource<'_>, y: &[bool]) -> Result<Single> {
-        if let Some(all) = epochs.as_view() {
-            return self.fit(all, y);
-        }
         let (n_epochs, n_channels, n_times) = epochs.dim();
         check_labels(n_epochs, y)?;
         let (front, x) = self.fit_front_source(epochs, y)?;
