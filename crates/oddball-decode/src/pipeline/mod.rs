@@ -162,8 +162,12 @@ impl SingleParams {
         self.fit_source(EpochSource::Array(epochs), y)
     }
 
-    /// [`Self::fit`] on an [`EpochSource`], with the same result: the front as
-    /// [`Self::fit_front_source`] fits it, then the steps after it.
+    /// [`Self::fit`] on an [`EpochSource`], with the same result. An array is read as it is.
+    /// Windows are read without a copy of all of them where the front allows: one that learns
+    /// nothing computes its features a part at a time; an xDAWN front reading every `k`-th
+    /// sample is fitted on a copy of those samples; the channel selection on a copy of the
+    /// target epochs (all it reads), a feature map after it that learns nothing a part at a
+    /// time. Any other front reads a copy of all the epochs.
     pub fn fit_source(&self, epochs: EpochSource<'_>, y: &[bool]) -> Result<Single> {
         let (n_epochs, n_channels, n_times) = epochs.dim();
         check_labels(n_epochs, y)?;
@@ -187,12 +191,8 @@ impl SingleParams {
         })
     }
 
-    /// [`Self::fit_front`] on an [`EpochSource`], with the same result. An array is read as it
-    /// is. Windows are read without a copy of all of them where the front allows: one that
-    /// learns nothing computes its features a part at a time; an xDAWN front reading every
-    /// `k`-th sample is fitted on a copy of those samples; the channel selection on a copy of
-    /// the target epochs (all it reads), a feature map after it that learns nothing a part at
-    /// a time. Any other front reads a copy of all the epochs.
+    /// [`Self::fit_front`] on an [`EpochSource`], with the same result, reading it as
+    /// [`Self::fit_source`] says.
     pub(crate) fn fit_front_source(
         &self,
         epochs: EpochSource<'_>,
