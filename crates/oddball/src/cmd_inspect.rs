@@ -45,7 +45,7 @@ pub fn run(args: &InspectArgs) -> Result<()> {
         recordings.push(rec);
     }
     if let Some(plot) = &args.plot {
-        let (target, nontarget) = erp_epochs(&recordings, args)?;
+        let (target, nontarget) = erp_epochs(recordings, args)?;
         let band = format!("{}–{} Hz", args.l_freq, args.h_freq);
         oddball_plot::erp::draw_erp(plot, &target, &nontarget, &band)?;
         println!("wrote {}", plot.display());
@@ -135,9 +135,14 @@ pub fn summary(rec: &Recording) -> String {
     s
 }
 
-/// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets.
-fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, Epochs)> {
-    let first = &recordings[0].raw;
+/// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets:
+/// windows into the recordings, each filtered in its own memory (no copy of the samples).
+fn erp_epochs(recordings: Vec<Recording>, args: &InspectArgs) -> Result<(Epochs, Epochs)> {
+    let (first_path, first_names, first_sfreq) = (
+        recordings[0].path.clone(),
+        recordings[0].raw.ch_names().to_vec(),
+        recordings[0].raw.sfreq(),
+    );
     let params = PreprocessParams {
         band: ButterworthParams {
             order: 4,
@@ -154,15 +159,15 @@ fn erp_epochs(recordings: &[Recording], args: &InspectArgs) -> Result<(Epochs, E
     let mut target = Vec::new();
     let mut nontarget = Vec::new();
     for rec in recordings {
-        let raw = &rec.raw;
-        if raw.ch_names() != first.ch_names() || raw.sfreq() != first.sfreq() {
+        let raw = rec.raw;
+        if raw.ch_names() != first_names || raw.sfreq() != first_sfreq {
             bail!(
                 "{} has other channels or another sampling rate than {}: plot them one at a time",
                 rec.path.display(),
-                recordings[0].path.display()
+                first_path.display()
             );
         }
-        let (epochs, _) = params.epochs(raw)?;
+        let (epochs, _) = params.epochs_owned(raw)?;
         let idx = |want: bool| -> Vec<usize> {
             (0..epochs.n_epochs())
                 .filter(|&i| epochs.events()[i].target == Some(want))
