@@ -32,7 +32,7 @@ use oddball_decode::adaptive::{AdaptiveLda, Update};
 use oddball_decode::classifiers::Classifier;
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams, Verdict};
 use oddball_decode::metrics::roc_auc;
-use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::pipeline::{EpochSource, FrontCache, Model, PipelineParams, Preprocess};
 use oddball_decode::stopping::{Expected, StoppingSearch};
 use oddball_decode::unsupervised::{
     Constraint, MatchedTemplate, P300Template, Unsupervised, UnsupervisedParams,
@@ -835,7 +835,7 @@ impl<S: Subject> Session<S> {
             self.params.cv_folds,
             sfreq,
             &self.ch_names,
-            &x,
+            x.view().into(),
             y,
             &groups,
         )?;
@@ -1243,13 +1243,16 @@ pub(crate) fn fit_session_model_oof(
     folds: usize,
     sfreq: f64,
     ch_names: &[String],
-    x: &Array3<f64>,
+    x: EpochSource<'_>,
     y: &[bool],
     groups: &[usize],
 ) -> Result<(Model, f64, f64, Vec<f64>), SessionError> {
     let params = PipelineParams::preset(pipeline, sfreq)?;
     let k = folds.max(2);
     let mut oof = vec![0.0; y.len()];
+    // A front that learns nothing is computed once for every fold and the final fit; epochs
+    // held as windows are read a part at a time (the scores are those of fitting on copies).
+    let mut cache = FrontCache::new(x);
     for fold in 0..k {
         let (test, train): (Vec<usize>, Vec<usize>) =
             (0..y.len()).partition(|&i| groups[i] % k == fold);
@@ -1258,8 +1261,9 @@ pub(crate) fn fit_session_model_oof(
         }
         let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
         let gtr: Vec<usize> = train.iter().map(|&i| groups[i]).collect();
-        let m = params.fit_grouped(x.select(Axis(0), &train).view(), &ytr, Some(&gtr))?;
-        let s = m.decision_function(x.select(Axis(0), &test).view())?;
+        let s = params
+            .fit_score_cached(&mut cache, &train, &ytr, Some(&gtr), &test)?
+            .scores;
         for (&i, &v) in test.iter().zip(s.iter()) {
             oof[i] = v;
         }
@@ -1270,7 +1274,7 @@ pub(crate) fn fit_session_model_oof(
         preprocess,
         sfreq,
         ch_names.to_vec(),
-        params.fit_grouped(x.view(), y, Some(groups))?,
+        params.fit_cached(&mut cache, y, Some(groups))?,
     );
     model.decision = Some(DecisionModel { scores, rule });
     Ok((model, cv_auc, scores.d_prime(), oof))

@@ -340,6 +340,18 @@ fn causal(pre: &Preprocess, sfreq: f64) -> Result<(PreprocessParams, i64, usize)
     Ok((params, first, n_times))
 }
 
+/// The epochs of `events` cut from a whole recording the way [`OnlineEpocher`] cuts them from
+/// the stream (as [`offline_epochs`]), held as windows into the recording's band-passed copy
+/// (no epoch copied), with those dropped and why.
+pub fn offline_windows(
+    pre: &Preprocess,
+    raw: &Raw,
+    events: &[Event],
+) -> Result<(oddball_signal::Epochs, oddball_signal::epochs::DropLog), SessionError> {
+    let (params, _, _) = causal(pre, raw.sfreq())?;
+    Ok(params.filter(raw)?.into_windows(&params.epochs, events)?)
+}
+
 /// The epochs of `onsets` cut from a whole recording the way [`OnlineEpocher`] cuts them from
 /// the stream: the one offline path ([`PreprocessParams::filter`] then
 /// [`oddball_signal::preprocess::Filtered::cut`]) with `pre`'s causal band-pass. Epochs that do

@@ -24,7 +24,6 @@
 //! sequence every 2.1 s), so its targets came further apart than on a fast four-bulb panel and
 //! their P300s were not shrunk by a short target-to-target interval as the panel's would be.
 
-use ndarray::{Array3, Axis};
 use oddball_arm::Command;
 use oddball_decode::decision::{DecisionModel, DecisionRule, Verdict};
 use oddball_decode::pipeline::{Model, Preprocess};
@@ -93,6 +92,23 @@ pub fn stream_epochs(
     pre: &Preprocess,
     chunk: usize,
 ) -> Result<Vec<Option<ReadyEpoch>>, SessionError> {
+    let mut out: Vec<Option<ReadyEpoch>> = vec![None; rec.raw.events().len()];
+    stream_epochs_with(rec, pre, chunk, &mut |e| {
+        let tag = e.marker.tag;
+        out[tag] = Some(e);
+        Ok(())
+    })?;
+    Ok(out)
+}
+
+/// [`stream_epochs`] handing each epoch to `on_epoch` as it completes (its marker's tag is the
+/// event's index) instead of keeping them all.
+pub fn stream_epochs_with(
+    rec: &Recording,
+    pre: &Preprocess,
+    chunk: usize,
+    on_epoch: &mut dyn FnMut(ReadyEpoch) -> Result<(), SessionError>,
+) -> Result<(), SessionError> {
     let raw = &rec.raw;
     let mut ep = OnlineEpocher::new(pre, raw.sfreq(), raw.n_channels())?;
     for (tag, e) in raw.events().iter().enumerate() {
@@ -102,54 +118,78 @@ pub fn stream_epochs(
             tag,
         })?;
     }
-    let mut out: Vec<Option<ReadyEpoch>> = vec![None; raw.events().len()];
     let data = raw.data();
     let n = data.ncols();
     let mut at = 0;
     while at < n {
         let end = (at + chunk.max(1)).min(n);
         for e in ep.push_samples(data.slice(ndarray::s![.., at..end]))? {
-            let tag = e.marker.tag;
-            out[tag] = Some(e);
+            on_epoch(e)?;
         }
         at = end;
     }
-    Ok(out)
+    Ok(())
 }
 
-/// The accepted epochs of recordings' events, each streamed causally as [`stream_epochs`] cuts
-/// them, as one [`oddball_signal::Epochs`] (targets flagged; `tmin` 0; the first recording's
-/// rate and channels): what a report's ERP plot shows of a replayed subject's calibration.
+/// Every recording's accepted epochs, as the online epocher streams them, held as windows
+/// into each recording's band-passed copy ([`crate::online::offline_windows`], the offline
+/// twin of the stream: the same epochs kept and dropped, the same samples to the bit): the
+/// pooled epochs, each one's (recording, event index), and how many were rejected (not
+/// counting those the recording ends before).
+struct Accepted {
+    epochs: oddball_signal::Epochs,
+    at: Vec<(usize, usize)>,
+    rejected: usize,
+}
+
+fn accepted_windows(recs: &[Recording], pre: &Preprocess) -> Result<Accepted, SessionError> {
+    let mut parts = Vec::with_capacity(recs.len());
+    let mut at = Vec::new();
+    let mut rejected = 0;
+    for (r, rec) in recs.iter().enumerate() {
+        let events = rec.raw.events().as_slice();
+        let (epochs, log) = crate::online::offline_windows(pre, &rec.raw, events)?;
+        let mut dropped = log.dropped.iter().map(|d| d.index).peekable();
+        rejected += log
+            .dropped
+            .iter()
+            .filter(|d| {
+                !matches!(
+                    d.reason,
+                    oddball_signal::epochs::DropReason::OutOfBounds { .. }
+                )
+            })
+            .count();
+        for i in 0..events.len() {
+            if dropped.next_if_eq(&i).is_none() {
+                at.push((r, i));
+            }
+        }
+        parts.push(epochs);
+    }
+    Ok(Accepted {
+        epochs: oddball_signal::Epochs::pool(parts)?,
+        at,
+        rejected,
+    })
+}
+
+/// The accepted epochs of recordings' events, as [`stream_epochs`] cuts them, as one
+/// [`oddball_signal::Epochs`] (windows into each recording's band-passed copy, targets
+/// flagged, the first recording's rate and channels): what a report's ERP plot shows of a
+/// replayed subject's calibration.
 pub fn accepted_epochs(
     recs: &[Recording],
     pre: &Preprocess,
     chunk: usize,
 ) -> Result<oddball_signal::Epochs, SessionError> {
+    // The stream's chunking does not change its epochs (`tests/epochs_agree.rs`).
+    let _ = chunk;
     let first = first_of(recs)?;
-    let mut kept: Vec<(ReadyEpoch, oddball_signal::Event)> = Vec::new();
-    for rec in recs {
-        let events = rec.raw.events().as_slice();
-        for (i, e) in stream_epochs(rec, pre, chunk)?.into_iter().enumerate() {
-            if let Some(e) = e.filter(|e| e.accepted) {
-                kept.push((e, events[i].clone()));
-            }
-        }
+    for other in &recs[1..] {
+        check_same_layout(first, other)?;
     }
-    let (n_ch, n_t) = kept
-        .first()
-        .map_or((first.raw.n_channels(), 0), |(e, _)| e.data.dim());
-    let mut x = Array3::zeros((kept.len(), n_ch, n_t));
-    for (j, (e, _)) in kept.iter().enumerate() {
-        x.index_axis_mut(Axis(0), j).assign(&e.data);
-    }
-    let events = kept.into_iter().map(|(_, ev)| ev).collect();
-    Ok(oddball_signal::Epochs::new(
-        x,
-        first.raw.sfreq(),
-        0.0,
-        first.raw.ch_names().to_vec(),
-        events,
-    )?)
+    Ok(accepted_windows(recs, pre)?.epochs)
 }
 
 /// The first of `recs`, or the error saying there is none.
@@ -191,30 +231,6 @@ pub fn calibrate(
     Ok((model, report))
 }
 
-/// Every recording's streamed epochs with each event's character, numbered across the
-/// recordings in order, and the event itself.
-type Streamed<'a> = Vec<(Option<ReadyEpoch>, usize, &'a oddball_signal::Event)>;
-
-/// Streams every recording of `recs` on its own; characters numbered across them.
-fn stream_all<'a>(
-    recs: &'a [Recording],
-    pre: &Preprocess,
-    chunk: usize,
-) -> Result<(Streamed<'a>, usize), SessionError> {
-    let mut out = Vec::new();
-    let mut n_chars = 0;
-    for rec in recs {
-        let chars = character_of_events(rec)?;
-        let epochs = stream_epochs(rec, pre, chunk)?;
-        let n = chars.last().map_or(0, |c| c + 1);
-        for ((e, c), ev) in epochs.into_iter().zip(chars).zip(rec.raw.events().iter()) {
-            out.push((e, n_chars + c, ev));
-        }
-        n_chars += n;
-    }
-    Ok((out, n_chars))
-}
-
 /// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
 /// cross-validated calibration scores (set in the model's decision model) with what it expects.
 pub fn calibrate_for_bit_rate(
@@ -226,33 +242,33 @@ pub fn calibrate_for_bit_rate(
     for other in &recs[1..] {
         check_same_layout(rec, other)?;
     }
-    let (epochs, n_chars) = stream_all(recs, &params.preprocess, params.chunk)?;
-    let mut kept = Vec::new();
-    let mut rejected = 0;
-    for (e, ch, ev) in &epochs {
-        match e {
-            Some(e) if e.accepted => {
-                let target = ev.target.ok_or_else(|| SessionError::InvalidParameter {
-                    name: "calibration recording",
-                    value: recs[0].path.display().to_string(),
-                    reason: format!(
-                        "the event at sample {} (code {}) has no target flag",
-                        ev.onset, ev.code
-                    ),
-                })?;
-                kept.push((e, target, *ch));
-            }
-            Some(_) => rejected += 1,
-            None => {}
-        }
+    let accepted = accepted_windows(recs, &params.preprocess)?;
+    let mut y = Vec::with_capacity(accepted.at.len());
+    let mut groups = Vec::with_capacity(accepted.at.len());
+    // Characters are numbered across the recordings, in order.
+    let mut char_base = Vec::with_capacity(recs.len());
+    let mut n_chars = 0;
+    let mut chars_of = Vec::with_capacity(recs.len());
+    for rec in recs {
+        let chars = character_of_events(rec)?;
+        char_base.push(n_chars);
+        n_chars += chars.last().map_or(0, |c| c + 1);
+        chars_of.push(chars);
     }
-    let (n_ch, n_t) = kept.first().map_or((0, 0), |(e, _, _)| e.data.dim());
-    let mut x = Array3::zeros((kept.len(), n_ch, n_t));
-    for (j, (e, _, _)) in kept.iter().enumerate() {
-        x.index_axis_mut(Axis(0), j).assign(&e.data);
+    for &(r, i) in &accepted.at {
+        let ev = &recs[r].raw.events().as_slice()[i];
+        let target = ev.target.ok_or_else(|| SessionError::InvalidParameter {
+            name: "calibration recording",
+            value: recs[0].path.display().to_string(),
+            reason: format!(
+                "the event at sample {} (code {}) has no target flag",
+                ev.onset, ev.code
+            ),
+        })?;
+        y.push(target);
+        groups.push(char_base[r] + chars_of[r][i]);
     }
-    let y: Vec<bool> = kept.iter().map(|&(_, t, _)| t).collect();
-    let groups: Vec<usize> = kept.iter().map(|&(_, _, c)| c).collect();
+    let rejected = accepted.rejected;
     let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
         &params.pipeline,
         params.preprocess,
@@ -260,7 +276,7 @@ pub fn calibrate_for_bit_rate(
         params.cv_folds,
         rec.raw.sfreq(),
         rec.raw.ch_names(),
-        &x,
+        (&accepted.epochs).into(),
         &y,
         &groups,
     )?;
@@ -281,7 +297,7 @@ pub fn calibrate_for_bit_rate(
         model,
         CalibrationReport {
             n_trials: n_chars,
-            n_epochs: kept.len(),
+            n_epochs: y.len(),
             n_targets: y.iter().filter(|&&t| t).count(),
             n_rejected: rejected,
             cv_auc,
@@ -395,18 +411,16 @@ fn slots_of(
         });
     }
     let chars = character_of_events(rec)?;
-    let epochs = stream_epochs(rec, &model.preprocess, params.chunk)?;
-    let scores: Vec<Option<Option<f64>>> = epochs
-        .iter()
-        .map(|e| match e {
-            Some(e) if e.accepted => model
-                .pipeline
-                .score_epoch(e.data.view())
-                .map(|s| Some(Some(s))),
-            Some(_) => Ok(Some(None)),
-            None => Ok(None),
-        })
-        .collect::<Result<_, _>>()?;
+    // Each epoch scored as it is streamed (none kept).
+    let mut scores: Vec<Option<Option<f64>>> = vec![None; events.len()];
+    stream_epochs_with(rec, &model.preprocess, params.chunk, &mut |e| {
+        scores[e.marker.tag] = Some(if e.accepted {
+            Some(model.pipeline.score_epoch(e.data.view())?)
+        } else {
+            None
+        });
+        Ok(())
+    })?;
     let per_seq = speller.n_rows() + speller.n_cols();
     let n_chars = chars.last().map_or(0, |c| c + 1);
     let r = params.rounds_per_decision.max(params.rule.max_rounds());

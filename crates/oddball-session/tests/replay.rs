@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use oddball_arm::Command;
 use oddball_decode::decision::DecisionRule;
 use oddball_session::engine::TrialOutcome;
-use oddball_session::replay::{calibrate, replay, ReplayParams};
+use oddball_session::replay::{accepted_epochs, calibrate, replay, stream_epochs, ReplayParams};
 
 fn data_file(name: &str) -> Option<PathBuf> {
     oddball_testkit::data_file(
@@ -139,4 +139,37 @@ fn several_speller_runs_calibrate_together_and_an_unlabelled_run_is_refused() {
     let both = replay(&[a, b], &model, &Command::LETTER_G, &params).unwrap();
     assert_eq!(both.len(), 36);
     assert_eq!(both.last().unwrap().character, 5);
+}
+
+/// A calibration's epochs are held as windows into each run's causally band-passed copy, not
+/// kept as the stream hands them over: they are the epochs the online epocher streams, bit for
+/// bit and in order (two runs, streamed in chunks of 7 samples).
+#[test]
+fn calibration_windows_are_the_streamed_epochs() {
+    let (Some(a), Some(b)) = (iib("AAS010R01"), iib("AAS010R02")) else {
+        return;
+    };
+    let recs = [a, b];
+    let pre = ReplayParams::paper("lda").preprocess;
+    let windows = accepted_epochs(&recs, &pre, 20).unwrap();
+    assert!(!windows.is_preloaded());
+    let mut streamed = Vec::new();
+    for rec in &recs {
+        let events = rec.raw.events().as_slice();
+        for e in stream_epochs(rec, &pre, 7).unwrap().into_iter().flatten() {
+            if e.accepted {
+                streamed.push((events[e.marker.tag].clone(), e.data));
+            }
+        }
+    }
+    assert_eq!(windows.n_epochs(), streamed.len());
+    assert!(streamed.len() > 1000, "{} epochs", streamed.len());
+    for (k, (event, data)) in streamed.iter().enumerate() {
+        assert_eq!(&windows.events()[k], event);
+        let w = windows.epoch(k);
+        assert!(
+            w.iter().zip(data).all(|(x, y)| x.to_bits() == y.to_bits()),
+            "epoch {k} differs"
+        );
+    }
 }
