@@ -346,7 +346,7 @@ fn fit_with_decision(
     folds: &Folds,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
-    let oof = out_of_fold_cached(params, cache, y, groups, folds, on)?;
+    let oof = out_of_fold_scores(params, cache, y, groups, folds, on)?;
     let cv_auc = roc_auc(&oof, y)?;
     let decision = DecisionModel {
         scores: ScoreModelParams::default().fit(&oof, y)?,
@@ -369,23 +369,11 @@ fn fit_with_decision(
     })
 }
 
-/// Every epoch's score by `params` fitted on the other folds (`groups` kept together in the
-/// fits, as in the final fit).
-pub fn out_of_fold_scores(
-    params: &PipelineParams,
-    data: &Epochs,
-    y: &[bool],
-    groups: Option<&[usize]>,
-    folds: &Folds,
-    on: &mut dyn FnMut(Progress<'_>),
-) -> Result<Vec<f64>> {
-    out_of_fold_cached(params, &mut FrontCache::new(data), y, groups, folds, on)
-}
-
-/// [`out_of_fold_scores`] of `cache`'s epochs: a front that learns nothing is computed once for
-/// every fold, and no fold copies the epochs of a cached front (other fronts are fitted on a
-/// copy of the fold's epochs).
-fn out_of_fold_cached(
+/// Every epoch of `cache`'s score by `params` fitted on the other folds (`groups` kept together
+/// in the fits, as in the final fit): a front that learns nothing is computed once for every
+/// fold, and no fold copies the epochs of a cached front (other fronts are fitted on a copy of
+/// the fold's epochs).
+fn out_of_fold_scores(
     params: &PipelineParams,
     cache: &mut FrontCache<'_>,
     y: &[bool],
@@ -652,7 +640,7 @@ pub fn score_test(
     for rec in test {
         let ep = &rec.epochs;
         let t1 = Instant::now();
-        let scores: Array1<f64> = model.decision_function_epochs(ep)?;
+        let scores: Array1<f64> = model.decision_function_source(ep.into())?;
         score_s += t1.elapsed().as_secs_f64();
         let y = labels(ep)?;
         if let Some(speller) = &rec.speller {

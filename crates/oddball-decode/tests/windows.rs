@@ -2,12 +2,14 @@
 //! `dataset::epoch` cuts, read a part at a time) gives what the preloaded epochs give, to the
 //! bit: every fold's AUC, every held-out score, the saved model and its decision model — for a
 //! front that learns nothing (`lda`: cached features, read in chunks), an xDAWN front reading
-//! every 4th sample (`riemann`: fitted on a decimated copy), a learned channel selection
-//! (`paper-svm`) and a stack (`stack`: fitted on a copy of the epochs).
+//! every 4th sample (`riemann`: fitted on a decimated copy), the paper's map with a scaler and
+//! PCA (`paper-svm`), a stack (`stack`: its members and inner folds on the folds' windows), and
+//! a learned channel selection (fitted on the target epochs' windows) in front of either kind of
+//! feature map.
 
 use oddball_decode::evaluate::{self, EpochedRecording, EvaluateParams, TrainingSet};
 use oddball_decode::model::Model;
-use oddball_decode::pipeline::Preprocess;
+use oddball_decode::pipeline::{FrontCache, PipelineParams, Preprocess};
 use oddball_signal::{Epochs, Event, Events, Raw};
 
 /// `seconds` of 8-channel EEG at 256 Hz with a flash every 0.25 s (epochs overlapping 3.2
@@ -129,4 +131,51 @@ fn windows_tune_as_preloaded_epochs() {
     }
     assert_eq!(dense.1, win.1, "the search's report");
     assert!(dense.2 == win.2, "the tuned models differ");
+}
+
+/// A channel selection fitted on windows reads only the target epochs (the paper's map behind
+/// it a part at a time; an xDAWN map behind it a copy of all the epochs): the same channels
+/// and scores as on preloaded epochs, fitted whole and cross-validated through a cache.
+#[test]
+fn a_channel_selection_fits_on_windows_as_on_preloaded_epochs() {
+    let raws = [recording(60.0, 8)];
+    let (dense, win) = (recs(&raws, false), recs(&raws, true));
+    let (dense, win) = (&dense[0].epochs, &win[0].epochs);
+    let y: Vec<bool> = dense
+        .events()
+        .iter()
+        .map(|e| e.target == Some(true))
+        .collect();
+    let n = y.len();
+    let train: Vec<usize> = (0..n).filter(|i| i % 3 != 0).collect();
+    let test: Vec<usize> = (0..n).filter(|i| i % 3 == 0).collect();
+    let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
+    for preset in ["paper-svm", "riemann"] {
+        let p = PipelineParams::preset(preset, dense.sfreq())
+            .unwrap()
+            .with_channel_drop(3);
+        let a = p.fit(dense.data().view(), &y).unwrap();
+        let b = p.fit_source(win.into(), &y, None).unwrap();
+        assert_eq!(a.selected_channels().len(), 5, "{preset}");
+        assert_eq!(a.selected_channels(), b.selected_channels(), "{preset}");
+        // Every fitted number, the channels' correlation scores among them.
+        assert!(
+            serde_json::to_string(&a).unwrap() == serde_json::to_string(&b).unwrap(),
+            "{preset}: the fitted pipelines differ"
+        );
+        let sa = a.decision_function(dense.data().view()).unwrap();
+        let sb = b.decision_function_source(win.into()).unwrap();
+        assert_eq!(bits(&sa.to_vec()), bits(&sb.to_vec()), "{preset}");
+        let ca = p
+            .fit_score_cached(&mut FrontCache::new(dense), &train, &ytr, None, &test)
+            .unwrap();
+        let cb = p
+            .fit_score_cached(&mut FrontCache::new(win), &train, &ytr, None, &test)
+            .unwrap();
+        assert_eq!(
+            bits(&ca.scores.to_vec()),
+            bits(&cb.scores.to_vec()),
+            "{preset}"
+        );
+    }
 }

@@ -143,6 +143,10 @@ struct Accepted {
 }
 
 fn accepted_windows(recs: &[Recording], pre: &Preprocess) -> Result<Accepted, SessionError> {
+    let first = first_of(recs)?;
+    for other in &recs[1..] {
+        check_same_layout(first, other)?;
+    }
     let mut parts = Vec::with_capacity(recs.len());
     let mut at = Vec::new();
     let mut rejected = 0;
@@ -172,24 +176,6 @@ fn accepted_windows(recs: &[Recording], pre: &Preprocess) -> Result<Accepted, Se
         at,
         rejected,
     })
-}
-
-/// The accepted epochs of recordings' events, as [`stream_epochs`] cuts them, as one
-/// [`oddball_signal::Epochs`] (windows into each recording's band-passed copy, targets
-/// flagged, the first recording's rate and channels): what a report's ERP plot shows of a
-/// replayed subject's calibration.
-pub fn accepted_epochs(
-    recs: &[Recording],
-    pre: &Preprocess,
-    chunk: usize,
-) -> Result<oddball_signal::Epochs, SessionError> {
-    // The stream's chunking does not change its epochs (`tests/epochs_agree.rs`).
-    let _ = chunk;
-    let first = first_of(recs)?;
-    for other in &recs[1..] {
-        check_same_layout(first, other)?;
-    }
-    Ok(accepted_windows(recs, pre)?.epochs)
 }
 
 /// The first of `recs`, or the error saying there is none.
@@ -227,8 +213,20 @@ pub fn calibrate(
     recs: &[Recording],
     params: &ReplayParams,
 ) -> Result<(Model, CalibrationReport), SessionError> {
-    let (model, report, _) = calibrate_for_bit_rate(recs, params)?;
-    Ok((model, report))
+    let c = calibrate_for_bit_rate(recs, params)?;
+    Ok((c.model, c.report))
+}
+
+/// A replayed subject's calibration ([`calibrate_for_bit_rate`]).
+#[derive(Debug)]
+pub struct Calibrated {
+    pub model: Model,
+    pub report: CalibrationReport,
+    /// With [`ReplayParams::stopping`]: the stopping rule chosen and what it expects.
+    pub expected: Option<Expected>,
+    /// The accepted epochs it was fitted on, as the online epocher streams them (windows into
+    /// each recording's band-passed copy, targets flagged): what a report's ERP plot shows.
+    pub epochs: oddball_signal::Epochs,
 }
 
 /// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
@@ -236,13 +234,10 @@ pub fn calibrate(
 pub fn calibrate_for_bit_rate(
     recs: &[Recording],
     params: &ReplayParams,
-) -> Result<(Model, CalibrationReport, Option<Expected>), SessionError> {
+) -> Result<Calibrated, SessionError> {
     let t0 = std::time::Instant::now();
-    let rec = first_of(recs)?;
-    for other in &recs[1..] {
-        check_same_layout(rec, other)?;
-    }
     let accepted = accepted_windows(recs, &params.preprocess)?;
+    let rec = &recs[0];
     let mut y = Vec::with_capacity(accepted.at.len());
     let mut groups = Vec::with_capacity(accepted.at.len());
     // Characters are numbered across the recordings, in order.
@@ -293,9 +288,9 @@ pub fn calibrate_for_bit_rate(
         decision.rule = e.rule;
         chosen = Some(e);
     }
-    Ok((
+    Ok(Calibrated {
         model,
-        CalibrationReport {
+        report: CalibrationReport {
             n_trials: n_chars,
             n_epochs: y.len(),
             n_targets: y.iter().filter(|&&t| t).count(),
@@ -304,8 +299,9 @@ pub fn calibrate_for_bit_rate(
             d_prime,
             fit_seconds: t0.elapsed().as_secs_f64(),
         },
-        chosen,
-    ))
+        expected: chosen,
+        epochs: accepted.epochs,
+    })
 }
 
 /// A second calibration or test recording must have the first's channels (same order) and rate.

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use oddball_arm::Command;
 use oddball_decode::decision::DecisionRule;
 use oddball_session::engine::TrialOutcome;
-use oddball_session::replay::{accepted_epochs, calibrate, replay, stream_epochs, ReplayParams};
+use oddball_session::replay::{
+    calibrate, calibrate_for_bit_rate, replay, stream_epochs, ReplayParams,
+};
 
 fn data_file(name: &str) -> Option<PathBuf> {
     oddball_testkit::data_file(
@@ -141,17 +143,19 @@ fn several_speller_runs_calibrate_together_and_an_unlabelled_run_is_refused() {
     assert_eq!(both.last().unwrap().character, 5);
 }
 
-/// A calibration's epochs are held as windows into each run's causally band-passed copy, not
-/// kept as the stream hands them over: they are the epochs the online epocher streams, bit for
-/// bit and in order (two runs, streamed in chunks of 7 samples).
+/// A calibration's epochs (what it is fitted on, and what the report's ERP shows) are held as
+/// windows into each run's causally band-passed copy, not kept as the stream hands them over:
+/// they are the epochs the online epocher streams, bit for bit and in order (two runs, streamed
+/// in chunks of 7 samples).
 #[test]
 fn calibration_windows_are_the_streamed_epochs() {
     let (Some(a), Some(b)) = (iib("AAS010R01"), iib("AAS010R02")) else {
         return;
     };
     let recs = [a, b];
-    let pre = ReplayParams::paper("lda").preprocess;
-    let windows = accepted_epochs(&recs, &pre, 20).unwrap();
+    let params = ReplayParams::paper("lda");
+    let pre = params.preprocess;
+    let windows = calibrate_for_bit_rate(&recs, &params).unwrap().epochs;
     assert!(!windows.is_preloaded());
     let mut streamed = Vec::new();
     for rec in &recs {

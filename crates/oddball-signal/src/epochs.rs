@@ -220,17 +220,17 @@ impl EpochsParams {
         non_finite: Option<&NonFinite>,
     ) -> Result<(Epochs, DropLog), SignalError> {
         let (cut, log) = self.scan(raw, events, non_finite, true)?;
-        let Cut {
-            kept,
-            samples,
-            n_times,
-            tmin,
-            ..
-        } = cut;
-        let data = Array3::from_shape_vec((kept.len(), raw.n_channels(), n_times), samples)
+        let samples = cut.samples.expect("scanned with a copy");
+        let data = Array3::from_shape_vec((cut.kept.len(), raw.n_channels(), cut.n_times), samples)
             .expect("buffer holds exactly the kept epochs");
         Ok((
-            Epochs::new(data, raw.sfreq(), tmin, raw.ch_names().to_vec(), kept)?,
+            Epochs::new(
+                data,
+                raw.sfreq(),
+                cut.tmin,
+                raw.ch_names().to_vec(),
+                cut.kept,
+            )?,
             log,
         ))
     }
@@ -255,8 +255,8 @@ impl EpochsParams {
     }
 
     /// The one pass over `events` both cuts make: which epochs are kept (and why the others
-    /// are not), with the kept samples (`copy`) or each kept epoch's first sample and
-    /// baseline means.
+    /// are not), each kept epoch's first sample and baseline means, and with `copy` their
+    /// samples.
     fn scan(
         &self,
         raw: &Raw,
@@ -309,12 +309,9 @@ impl EpochsParams {
             });
         }
         let mut kept = Vec::with_capacity(n_fit);
-        let mut out: Vec<f64> = Vec::with_capacity(if copy {
-            n_fit * n_channels * n_times
-        } else {
-            0
-        });
-        let mut starts = Vec::with_capacity(if copy { 0 } else { n_fit });
+        let mut samples: Option<Vec<f64>> =
+            copy.then(|| Vec::with_capacity(n_fit * n_channels * n_times));
+        let mut starts = Vec::with_capacity(n_fit);
         let mut means: Vec<f64> = Vec::new();
         let mut epoch_means = vec![0.0; n_channels];
         let mut log = DropLog::default();
@@ -353,20 +350,19 @@ impl EpochsParams {
                 });
                 continue;
             }
-            if copy {
+            if let Some(out) = &mut samples {
                 out.extend(epoch.iter().copied());
-            } else {
-                starts.push(start as usize);
-                if baseline.is_some() {
-                    means.extend_from_slice(&epoch_means);
-                }
+            }
+            starts.push(start as usize);
+            if baseline.is_some() {
+                means.extend_from_slice(&epoch_means);
             }
             kept.push(ev.clone());
         }
         Ok((
             Cut {
                 kept,
-                samples: out,
+                samples,
                 starts,
                 means,
                 n_times,
@@ -377,15 +373,16 @@ impl EpochsParams {
     }
 }
 
-/// What [`EpochsParams::scan`] found: the kept epochs' events, and their samples or windows.
+/// What [`EpochsParams::scan`] found: the kept epochs' events and windows, and their samples
+/// when copied.
 struct Cut {
     kept: Vec<Event>,
     /// The kept epochs' samples, `(n_kept, n_channels, n_times)` in order (when copied).
-    samples: Vec<f64>,
-    /// Each kept epoch's first sample (when not copied).
+    samples: Option<Vec<f64>>,
+    /// Each kept epoch's first sample.
     starts: Vec<usize>,
-    /// Each kept epoch's baseline mean per channel, `(n_kept, n_channels)` in order (when not
-    /// copied and baseline-corrected).
+    /// Each kept epoch's baseline mean per channel, `(n_kept, n_channels)` in order (empty
+    /// without baseline correction).
     means: Vec<f64>,
     n_times: usize,
     tmin: f64,

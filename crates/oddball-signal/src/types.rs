@@ -566,7 +566,7 @@ impl Epochs {
     }
 
     /// The epochs `range` as an array: a view when preloaded, otherwise a copy.
-    pub fn slab(&self, range: std::ops::Range<usize>) -> CowArray<'_, f64, Ix3> {
+    fn slab(&self, range: std::ops::Range<usize>) -> CowArray<'_, f64, Ix3> {
         match &self.store {
             Store::Preloaded(d) => CowArray::from(d.slice(s![range, .., ..])),
             Store::Windows(_) => {

@@ -642,7 +642,12 @@ impl SessionOptions {
         params.rule = rule;
         params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
         params.stopping = self.optimise_stopping.then(|| self.stopping_search());
-        let (model, calibration, chosen) = replay::calibrate_for_bit_rate(&cal, &params)
+        let replay::Calibrated {
+            model,
+            report: calibration,
+            expected: chosen,
+            epochs: calibration_epochs,
+        } = replay::calibrate_for_bit_rate(&cal, &params)
             .with_context(|| format!("calibrating on {cal_names}"))?;
         println!(
             "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
@@ -659,7 +664,7 @@ impl SessionOptions {
             println!("{}", oddball_session::timing::stopping_text(e));
         }
         Ok(Replayed {
-            calibration_recordings: cal,
+            calibration_epochs,
             test,
             model,
             calibration,
@@ -778,10 +783,11 @@ fn join_paths(p: &[PathBuf]) -> String {
         .join(",")
 }
 
-/// A replayed subject: the calibration recordings read and trained on, the test recordings read.
+/// A replayed subject: the calibration's accepted epochs (what it was trained on), the test
+/// recordings read.
 #[derive(Debug)]
 pub struct Replayed {
-    pub calibration_recordings: Vec<oddball_io::Recording>,
+    pub calibration_epochs: oddball_signal::Epochs,
     pub test: Vec<oddball_io::Recording>,
     pub model: oddball_decode::pipeline::Model,
     pub calibration: CalibrationReport,

@@ -10,7 +10,7 @@ use oddball_live::live::{EegSource, LiveSubject};
 use oddball_live::pilot::decisions_csv;
 pub use oddball_live::pilot::{AnyPilot, Prepared};
 use oddball_live::source::{AnySource, SourceSpec};
-use oddball_session::replay::{accepted_epochs, ReplaySource};
+use oddball_session::replay::ReplaySource;
 use oddball_session::task::{ReplayPilot, Step};
 
 use crate::args::{Replayed, SessionOptions, SourceArgs};
@@ -76,15 +76,10 @@ pub fn prepare(
         on_replay(&r, &replay)?;
         let arm = opts.arm()?;
         let pen_start = arm.pen();
-        let erp = accepted_epochs(
-            &r.calibration_recordings,
-            &r.params.preprocess,
-            r.params.chunk,
-        )?;
         return Ok(Prepared {
             pilot: AnyPilot::Replay(ReplayPilot::new(replay, arm, r.params.paradigm)),
             calibration: r.calibration,
-            erp,
+            erp: r.calibration_epochs,
             model_json: r.model.to_json(),
             subject: format!("replay:{}", files.test_names()),
             pen_start,

@@ -257,12 +257,12 @@ pub fn grid_search_cached(
                 .par_iter()
                 .map(|p| {
                     let m = candidates[i].fit_source(
-                        epochs.subset(&full(&p.tr)).source(),
+                        epochs.subset(&full(&p.tr), 1).source(),
                         &p.ytr,
                         p.gtr.as_deref(),
                     )?;
                     let scores =
-                        m.decision_function_source(epochs.subset(&full(&p.te)).source())?;
+                        m.decision_function_source(epochs.subset(&full(&p.te), 1).source())?;
                     roc_auc(&scores.to_vec(), &p.yte)
                 })
                 .collect::<Result<Vec<f64>>>()?;
@@ -325,9 +325,9 @@ pub fn grid_search_cached(
                     None => {
                         let (front, xtr) = candidates[i]
                             .main
-                            .fit_front_source(epochs.subset(&full(&p.tr)).source(), &p.ytr)?;
+                            .fit_front_source(epochs.subset(&full(&p.tr), 1).source(), &p.ytr)?;
                         let xte = epochs
-                            .subset(&full(&p.te))
+                            .subset(&full(&p.te), 1)
                             .source()
                             .map_chunks(&mut |chunk| front.transform(chunk))?;
                         (xtr, xte, front.n_channels(n_in))

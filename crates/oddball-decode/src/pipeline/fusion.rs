@@ -154,12 +154,8 @@ fn fit_stacker(
     let stateless = singles
         .iter()
         .map(|p| {
-            p.has_stateless_front()
-                .then(|| {
-                    epochs.map_chunks(&mut |chunk| {
-                        p.stateless_features(chunk).expect("a stateless front")
-                    })
-                })
+            p.stateless_features(epochs)
+                .map(|r| r.map(|(_, x)| x))
                 .transpose()
         })
         .collect::<Result<Vec<Option<FeatureData>>>>()?;

@@ -126,14 +126,7 @@ impl PipelineParams {
         y: &[bool],
         groups: Option<&[usize]>,
     ) -> Result<Pipeline> {
-        let main = self.main.fit_source(epochs, y)?;
-        let mut pipeline = Pipeline {
-            main,
-            params: Some(self.clone()),
-            term: FusionTerm::UNIT,
-            fused: Vec::new(),
-            fusion_intercept: 0.0,
-        };
+        let mut pipeline = self.unfused(self.main.fit_source(epochs, y)?);
         if self.fused.is_empty() {
             return Ok(pipeline);
         }
@@ -148,6 +141,17 @@ impl PipelineParams {
         pipeline.fused = members;
         fusion::fit_terms(self, &mut pipeline, epochs, y, groups)?;
         Ok(pipeline)
+    }
+
+    /// The fitted pipeline of `main` (fitted with these settings) before any fusion.
+    fn unfused(&self, main: Single) -> Pipeline {
+        Pipeline {
+            main,
+            params: Some(self.clone()),
+            term: FusionTerm::UNIT,
+            fused: Vec::new(),
+            fusion_intercept: 0.0,
+        }
     }
 
     /// This pipeline and its fused ones, each alone.
@@ -172,14 +176,19 @@ impl SingleParams {
         let (n_epochs, n_channels, n_times) = epochs.dim();
         check_labels(n_epochs, y)?;
         let (front, x) = self.fit_front_source(epochs, y)?;
-        let n_front = front.n_channels(n_channels);
+        let head = self.fit_head(x, y, front.n_channels(n_channels))?;
+        Ok(self.assemble(front, head, n_channels, n_times))
+    }
+
+    /// The fitted pipeline of a fitted front and head, for epochs `(n_channels, n_times)`.
+    fn assemble(&self, front: Front, head: Head, n_channels: usize, n_times: usize) -> Single {
         let Front { channels, features } = front;
         let Head {
             scaler,
             pca,
             classifier,
-        } = self.fit_head(x, y, n_front)?;
-        Ok(Single {
+        } = head;
+        Single {
             name: self.name.clone(),
             n_channels,
             n_times,
@@ -188,7 +197,7 @@ impl SingleParams {
             scaler,
             pca,
             classifier,
-        })
+        }
     }
 
     /// [`Self::fit_front`] on an [`EpochSource`], with the same result, reading it as
@@ -201,7 +210,7 @@ impl SingleParams {
         if let Some(all) = epochs.as_view() {
             return self.fit_front(all, y);
         }
-        let (n_epochs, n_channels, _) = epochs.dim();
+        let n_epochs = epochs.dim().0;
         if y.len() != n_epochs {
             return Err(DecodeError::LabelCount {
                 n_samples: n_epochs,
@@ -225,7 +234,20 @@ impl SingleParams {
                 &vec![true; targets.len()],
             )?),
         };
-        let n_front = channels.as_ref().map_or(n_channels, |c| c.selected.len());
+        self.stateless_front(channels, epochs)
+    }
+
+    /// The front of a feature map that learns nothing behind `channels` (fitted, or none), with
+    /// the features of every epoch of `epochs`, computed a part at a time when they are windows.
+    fn stateless_front(
+        &self,
+        channels: Option<ChannelSelection>,
+        epochs: EpochSource<'_>,
+    ) -> Result<(Front, FeatureData)> {
+        let n_front = channels
+            .as_ref()
+            .map_or(epochs.dim().1, |c| c.selected.len());
+        // Nothing to learn: fitted on no epochs, the map is its settings.
         let features = self
             .features
             .fit(epochs.gather(&[], 1).slice(s![.., ..n_front, ..]), &[])?;
@@ -382,20 +404,17 @@ impl SingleParams {
         self.channel_selection.is_none() && self.features.is_stateless()
     }
 
-    /// Features of `epochs` when the front learns nothing (no channel selection, a stateless
-    /// feature map): the same rows whatever the training split. `None` otherwise.
+    /// When the front learns nothing (no channel selection, a stateless feature map): the
+    /// fitted map and the features of every epoch of `epochs`, the same rows whatever the
+    /// training split. `None` otherwise.
     pub(crate) fn stateless_features(
         &self,
-        epochs: ArrayView3<f64>,
-    ) -> Option<Result<FeatureData>> {
-        if !self.has_stateless_front() {
-            return None;
-        }
-        Some(
-            self.features
-                .fit(epochs, &[])
-                .and_then(|f| f.transform(epochs)),
-        )
+        epochs: EpochSource<'_>,
+    ) -> Option<Result<(Features, FeatureData)>> {
+        self.has_stateless_front().then(|| {
+            self.stateless_front(None, epochs)
+                .map(|(front, x)| (front.features, x))
+        })
     }
 }
 
@@ -408,8 +427,9 @@ impl SingleParams {
 #[derive(Debug)]
 pub struct FrontCache<'a> {
     epochs: EpochSource<'a>,
-    /// Each front's features of all epochs and the seconds per epoch they took.
-    entries: Vec<(SingleParams, FeatureData, f64)>,
+    /// Each front's settings, its fitted map, its features of all epochs and the seconds per
+    /// epoch they took.
+    entries: Vec<(SingleParams, Features, FeatureData, f64)>,
     /// Features of a cached front through a scaler and PCA fitted on one split's training
     /// part: (settings, training indices, test indices, result).
     necks: Vec<NeckEntry>,
@@ -509,25 +529,35 @@ impl<'a> EpochSource<'a> {
         }
         FeatureData::concatenate(parts)
     }
-}
 
-impl EpochSource<'_> {
-    /// [`Self::map_chunks`] of a score per epoch.
-    pub(crate) fn map_scores(
+    /// A score per epoch by `f`, as [`Self::map_chunks`] reads the epochs.
+    pub(crate) fn map_scores<E>(
         &self,
-        f: &mut dyn FnMut(ArrayView3<f64>) -> Result<Array1<f64>>,
-    ) -> Result<Array1<f64>> {
-        let x =
-            self.map_chunks(&mut |chunk| Ok(FeatureData::Rows(f(chunk)?.insert_axis(Axis(1)))))?;
-        Ok(x.into_rows("scores")?.column(0).to_owned())
+        mut f: impl FnMut(ArrayView3<f64>) -> std::result::Result<Array1<f64>, E>,
+    ) -> std::result::Result<Array1<f64>, E> {
+        match self {
+            EpochSource::Epochs(e) if !e.is_preloaded() && !e.is_empty() => {
+                let mut scores = Vec::with_capacity(e.n_epochs());
+                for (_, chunk) in e.chunks(EPOCH_CHUNK) {
+                    scores.extend(f(chunk.view())?);
+                }
+                Ok(Array1::from(scores))
+            }
+            _ => match self.as_view() {
+                Some(all) => f(all),
+                None => f(self.gather(&[], 1).view()),
+            },
+        }
     }
 
-    /// The epochs at `indices` as a source of their own: windows stay windows (no samples
-    /// copied), an array's epochs are copied.
-    pub(crate) fn subset(&self, indices: &[usize]) -> Subset {
+    /// The epochs at `indices`, every `step`-th sample, as a source of their own: windows read
+    /// at every sample stay windows (no samples copied); otherwise a copy.
+    pub(crate) fn subset(&self, indices: &[usize], step: usize) -> Subset {
         match self {
-            EpochSource::Epochs(e) if !e.is_preloaded() => Subset::Epochs(e.select(indices)),
-            _ => Subset::Array(self.gather(indices, 1)),
+            EpochSource::Epochs(e) if !e.is_preloaded() && step == 1 => {
+                Subset::Epochs(e.select(indices))
+            }
+            _ => Subset::Array(self.gather(indices, step)),
         }
     }
 }
@@ -590,25 +620,19 @@ impl<'a> FrontCache<'a> {
 
     /// The features of every epoch of the cached front at `index` (from [`Self::entry`]).
     pub(crate) fn features(&self, index: usize) -> &FeatureData {
-        &self.entries[index].1
+        &self.entries[index].2
     }
 
     /// The index of `p`'s front among the cached ones, computing its features of all epochs
     /// (timed) on first use; `None` when the front learns from its training data.
     pub(crate) fn entry(&mut self, p: &SingleParams) -> Option<Result<usize>> {
-        if let Some(i) = self.entries.iter().position(|(q, _, _)| q.same_front(p)) {
+        if let Some(i) = self.entries.iter().position(|(q, ..)| q.same_front(p)) {
             return Some(Ok(i));
         }
-        if !p.has_stateless_front() {
-            return None;
-        }
         let t0 = std::time::Instant::now();
-        let x = self
-            .epochs
-            .map_chunks(&mut |chunk| p.stateless_features(chunk).expect("a stateless front"));
-        Some(x.map(|x| {
+        Some(p.stateless_features(self.epochs)?.map(|(f, x)| {
             let per_epoch = t0.elapsed().as_secs_f64() / self.epochs.dim().0.max(1) as f64;
-            self.entries.push((p.clone(), x, per_epoch));
+            self.entries.push((p.clone(), f, x, per_epoch));
             self.entries.len() - 1
         }))
     }
@@ -646,12 +670,12 @@ impl PipelineParams {
             if let Some(i) = cache.entry(&self.main) {
                 let i = i?;
                 check_labels(train.len(), y_train)?;
-                let per_epoch = cache.entries[i].2;
+                let per_epoch = cache.entries[i].3;
                 // A neck (scaler, PCA) fitted on this split by another preset is reused.
                 let necked = match cache.necked(&self.main, train, test) {
                     Some(k) => k,
                     None => {
-                        let x = &cache.entries[i].1;
+                        let x = &cache.entries[i].2;
                         let k = Arc::new(self.main.neck_split(x.select(train), x.select(test))?);
                         if self.main.has_neck() {
                             cache.keep_necked(&self.main, train.to_vec(), test.to_vec(), k.clone());
@@ -670,27 +694,19 @@ impl PipelineParams {
             }
         }
         let epochs = cache.epochs();
-        let t0 = std::time::Instant::now();
-        // A pipeline that reads every k-th sample only is fitted on copies of those samples.
-        let model = match self.decimated() {
-            Some((k, p)) => {
-                let model = p.fit_grouped(epochs.gather(train, k).view(), y_train, groups)?;
-                let fit_s = t0.elapsed().as_secs_f64();
-                let t1 = std::time::Instant::now();
-                let scores = model.decision_function(epochs.gather(test, k).view())?;
-                return Ok(CachedScores {
-                    scores,
-                    fit_s,
-                    score_s: t1.elapsed().as_secs_f64(),
-                });
-            }
-            // Any other on the training part: windows stay windows, read as `fit_source`
-            // reads them; an array's epochs are copied.
-            None => self.fit_source(epochs.subset(train).source(), y_train, groups)?,
+        // A pipeline that reads every k-th sample only is fitted and scored on copies of those
+        // samples; any other on the parts' windows (read as `fit_source` reads them) or on
+        // copies of an array's epochs.
+        let decimated = self.decimated();
+        let (k, params) = match &decimated {
+            Some((k, p)) => (*k, p),
+            None => (1, self),
         };
+        let t0 = std::time::Instant::now();
+        let model = params.fit_source(epochs.subset(train, k).source(), y_train, groups)?;
         let fit_s = t0.elapsed().as_secs_f64();
         let t1 = std::time::Instant::now();
-        let scores = model.decision_function_source(epochs.subset(test).source())?;
+        let scores = model.decision_function_source(epochs.subset(test, k).source())?;
         Ok(CachedScores {
             scores,
             fit_s,
@@ -715,42 +731,20 @@ impl PipelineParams {
             if let Some(i) = cache.entry(&self.main) {
                 let i = i?;
                 check_labels(n_epochs, y)?;
-                let features = self.main.features.fit(source.gather(&[], 1).view(), &[])?;
-                let x = &cache.entries[i].1;
+                let (_, features, x, _) = &cache.entries[i];
                 // Without a scaler or PCA the classifier reads the cached rows as they are.
-                let Head {
-                    scaler,
-                    pca,
-                    classifier,
-                } = if self.main.has_neck() {
+                let head = if self.main.has_neck() {
                     self.main.fit_head(x.clone(), y, n_channels)?
                 } else {
-                    self.main.fit_classifier(
-                        Neck {
-                            scaler: None,
-                            pca: None,
-                        },
-                        x.view(),
-                        y,
-                        n_channels,
-                    )?
+                    self.main
+                        .fit_classifier(Neck::default(), x.view(), y, n_channels)?
                 };
-                return Ok(Pipeline {
-                    main: Single {
-                        name: self.main.name.clone(),
-                        n_channels,
-                        n_times,
-                        channels: None,
-                        features,
-                        scaler,
-                        pca,
-                        classifier,
-                    },
-                    params: Some(self.clone()),
-                    term: FusionTerm::UNIT,
-                    fused: Vec::new(),
-                    fusion_intercept: 0.0,
-                });
+                let front = Front {
+                    channels: None,
+                    features: features.clone(),
+                };
+                let single = self.main.assemble(front, head, n_channels, n_times);
+                return Ok(self.unfused(single));
             }
         }
         self.fit_source(source, y, groups)
@@ -858,7 +852,7 @@ impl Front {
 }
 
 /// The fitted scaler and PCA of a pipeline: what lies between its features and its classifier.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Neck {
     scaler: Option<StandardScaler>,
     pca: Option<Pca>,
@@ -949,7 +943,7 @@ impl Single {
     /// [`Self::decision_function`] of an [`EpochSource`], a part at a time when it is not an
     /// array.
     pub(crate) fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
-        epochs.map_scores(&mut |chunk| self.decision_function(chunk))
+        epochs.map_scores(|chunk| self.decision_function(chunk))
     }
 }
 
@@ -1055,17 +1049,11 @@ impl Pipeline {
         Ok(total + self.fusion_intercept)
     }
 
-    /// [`Self::decision_function`] of [`Epochs`]: of their array when preloaded, otherwise of
-    /// [`EPOCH_CHUNK`] epochs at a time (each epoch's score depends on that epoch alone, so
-    /// the scores are the same).
-    pub fn decision_function_epochs(&self, epochs: &Epochs) -> Result<Array1<f64>> {
-        self.decision_function_source(EpochSource::Epochs(epochs))
-    }
-
-    /// [`Self::decision_function`] of an [`EpochSource`], a part at a time when it is not an
-    /// array.
+    /// [`Self::decision_function`] of an [`EpochSource`] (e.g. `(&epochs).into()`): of their
+    /// array when preloaded, otherwise of [`EPOCH_CHUNK`] epochs at a time (each epoch's score
+    /// depends on that epoch alone, so the scores are the same).
     pub fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
-        epochs.map_scores(&mut |chunk| self.decision_function(chunk))
+        epochs.map_scores(|chunk| self.decision_function(chunk))
     }
 
     /// P(target) per epoch. A score fusion has no calibrated probability: the logistic of its

@@ -384,7 +384,7 @@ fn a_stack_learns_the_same_combination_without_full_copies_per_fold() {
         panic!("stack is stacked");
     };
     let singles: Vec<&SingleParams> = stack.singles().collect();
-    assert!(singles[0].stateless_features(x.view()).is_some());
+    assert!(singles[0].stateless_features(x.view().into()).is_some());
     assert!(singles[1].decimated().is_some() && singles[2].decimated().is_some());
     let folds = crate::tuning::cv_folds(&y, None, n_folds).unwrap();
     let oof = out_of_fold(&singles, &x, &y, &folds);

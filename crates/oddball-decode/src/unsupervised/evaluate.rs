@@ -1,14 +1,14 @@
 //! Speller recordings played as one unlabelled session ([`super::replay`]), then scored: the
 //! labels are read only after the decoder has finished, to count what it got right.
 
-use ndarray::Array1;
 use oddball_io::Speller;
-use oddball_signal::{Epochs, Events, SignalError, EPOCH_CHUNK};
+use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
 use super::{replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams};
 use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
 use crate::metrics::roc_auc;
+use crate::pipeline::EpochSource;
 
 /// Why an unsupervised replay could not run or be scored.
 #[derive(Debug, thiserror::Error)]
@@ -113,15 +113,11 @@ pub fn evaluate_unsupervised(
     // Epochs held as windows are read a part at a time.
     let start = template
         .map(|t| {
-            let mut s = Vec::with_capacity(all.n_epochs());
-            for (_, chunk) in all.chunks(EPOCH_CHUNK) {
-                for e in chunk.outer_iter() {
-                    s.push(t.score(e)?);
-                }
-            }
-            Ok::<_, UnsupervisedError>(s)
+            EpochSource::from(&all)
+                .map_scores(|chunk| chunk.outer_iter().map(|e| t.score(e)).collect())
         })
-        .transpose()?;
+        .transpose()?
+        .map(|s| s.to_vec());
     let r = replay_from(
         params,
         &all,
@@ -155,11 +151,8 @@ pub fn evaluate_unsupervised(
             online_text.push_str(&symbol(speller, online));
             k += 1;
         }
-        let mut scores = Vec::with_capacity(rec.epochs.n_epochs());
-        for (_, chunk) in rec.epochs.chunks(EPOCH_CHUNK) {
-            scores.extend(r.model.decision_function(chunk.view())?);
-        }
-        let scores = Array1::from(scores);
+        let scores =
+            EpochSource::from(&rec.epochs).map_scores(|chunk| r.model.decision_function(chunk))?;
         let s = score_speller(rec, speller, &scores)?;
         posthoc_text.push_str(&s.text);
         auc_by_recording.push(RecordingAuc {
