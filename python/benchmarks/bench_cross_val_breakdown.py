@@ -13,31 +13,21 @@ folds and thread settings as bench_cross_val.py; prints, asserts nothing.
 """
 from __future__ import annotations
 
-import os
+import argparse
+import sys
+import warnings
+from pathlib import Path
 
-for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
-    os.environ[var] = "1"
-
-import argparse  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-import warnings  # noqa: E402
-from pathlib import Path  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+# One thread each (set before numpy loads), the tests' pre-processing and the timer: the same
+# settings as the benchmark this breaks down.
+from bench_cross_val import DATA, epochs_of, median_time, riem  # noqa: E402
 
 import numpy as np  # noqa: E402
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
-from conftest import DATA, epochs_of, riem  # noqa: E402  (the tests' pre-processing)
-
 
 def median_ms(fn, reps):
-    times = []
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
+    return 1e3 * median_time(fn, reps)[0]
 
 
 def main():
