@@ -1,0 +1,89 @@
+#!/usr/bin/env python3
+"""Compares two output folders of tools/relayer/run.sh: every file equal byte for byte, except
+the timings, which vary from run to run of the same binary (found by running it twice):
+JSON keys matched by TIMING_KEYS are left out, and in text (stdout, CSV) the numbers of lines
+matched by TIMING_LINES are masked. Prints each difference; exits 1 if there is any."""
+import json
+import re
+import sys
+from pathlib import Path
+
+TIMING_KEYS = re.compile(
+    r"(wall|elapsed|seconds_wall|fit_s$|score_s$|decode_ms|latency|per_s$|_per_second|"
+    r"epochs_per_s|time_ms|duration_wall|processing|decoding_ms|fit_seconds|score_seconds|"
+    r"decode_s$|wall_s$|realtime_factor)"
+)
+TIMING_LINES = re.compile(
+    r"(wall|elapsed|epochs/s| ms |ms\)|ms,| in [0-9.]+ s|took|latency|decoding|processing|"
+    r"fitted in|scored in|speed|× real time|x real time)"
+)
+
+
+def flat(x, path=""):
+    if isinstance(x, dict):
+        for k, v in x.items():
+            yield from flat(v, f"{path}.{k}")
+    elif isinstance(x, list):
+        for i, v in enumerate(x):
+            yield from flat(v, f"{path}[{i}]")
+    else:
+        yield path, x
+
+
+def json_diffs(a, b):
+    fa = {p: v for p, v in flat(json.loads(a)) if not TIMING_KEYS.search(p)}
+    fb = {p: v for p, v in flat(json.loads(b)) if not TIMING_KEYS.search(p)}
+    for p in sorted(set(fa) | set(fb)):
+        if fa.get(p, "<absent>") != fb.get(p, "<absent>"):
+            yield f"{p}: {fa.get(p, '<absent>')!r} != {fb.get(p, '<absent>')!r}"
+
+
+def mask(line):
+    return re.sub(r"[0-9]+(\.[0-9]+)?", "#", line) if TIMING_LINES.search(line) else line
+
+
+def text_diffs(a, b):
+    la = [mask(x) for x in a.decode(errors="replace").splitlines()]
+    lb = [mask(x) for x in b.decode(errors="replace").splitlines()]
+    if len(la) != len(lb):
+        yield f"{len(la)} lines != {len(lb)} lines"
+    for i, (x, y) in enumerate(zip(la, lb)):
+        if x != y:
+            yield f"line {i + 1}:\n    - {x}\n    + {y}"
+
+
+def main(before, after):
+    before, after = Path(before), Path(after)
+    names = sorted(
+        {p.relative_to(before) for p in before.rglob("*") if p.is_file()}
+        | {p.relative_to(after) for p in after.rglob("*") if p.is_file()}
+    )
+    bad = 0
+    for n in names:
+        a, b = before / n, after / n
+        if not a.exists() or not b.exists():
+            print(f"{n}: only in {'after' if b.exists() else 'before'}")
+            bad += 1
+            continue
+        x, y = a.read_bytes(), b.read_bytes()
+        if x == y:
+            continue
+        if n.suffix == ".json":
+            d = list(json_diffs(x, y))
+        elif n.suffix in (".stdout", ".stderr", ".csv", ".rc", ".txt"):
+            d = list(text_diffs(x, y))
+        else:
+            d = [f"{len(x)} bytes != {len(y)} bytes (binary)"]
+        if d:
+            bad += 1
+            print(f"{n}:")
+            for line in d[:20]:
+                print(f"  {line}")
+            if len(d) > 20:
+                print(f"  … {len(d) - 20} more")
+    print(f"{len(names)} files compared, {bad} differ")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(*sys.argv[1:3]))
