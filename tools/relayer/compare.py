@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
 """Compares two output folders of tools/relayer/run.sh: every file equal byte for byte, except
-the timings, which vary from run to run of the same binary (found by running it twice):
-JSON keys matched by TIMING_KEYS are left out, and in text (stdout, CSV) the numbers of lines
-matched by TIMING_LINES are masked. Prints each difference; exits 1 if there is any."""
+what varies from run to run of the same binary (found by running it twice): the output folder's
+own path (read as OUT), JSON keys matched by TIMING_KEYS are left out, the numbers of timing tokens
+in text (stdout, CSV) matched by TIMING_TOKENS are masked, and an XDF recording's wall-clock stamps (its
+streams' samples, marker texts and headers are compared through pyxdf when it is importable,
+e.g. `python -m venv v && v/bin/pip install -r tools/golden/xdf/requirements.txt`).
+Prints each difference; exits 1 if there is any."""
 import json
 import re
 import sys
@@ -13,9 +16,9 @@ TIMING_KEYS = re.compile(
     r"epochs_per_s|time_ms|duration_wall|processing|decoding_ms|fit_seconds|score_seconds|"
     r"decode_s$|wall_s$|realtime_factor)"
 )
-TIMING_LINES = re.compile(
-    r"(wall|elapsed|epochs/s| ms |ms\)|ms,| in [0-9.]+ s|took|latency|decoding|processing|"
-    r"fitted in|scored in|speed|× real time|x real time)"
+TIMING_TOKENS = re.compile(
+    r"(fit +[0-9.]+ s|[0-9.]+ epochs/s|in [0-9.]+ s|[0-9.]+ ± [0-9.]+ ms \[[0-9., ]+\]|"
+    r"[0-9.]+ ms|took [0-9.]+ s|wall time [0-9.]+ s|[0-9.]+x real time)"
 )
 
 
@@ -39,7 +42,7 @@ def json_diffs(a, b):
 
 
 def mask(line):
-    return re.sub(r"[0-9]+(\.[0-9]+)?", "#", line) if TIMING_LINES.search(line) else line
+    return TIMING_TOKENS.sub(lambda m: re.sub(r"[0-9]+(\.[0-9]+)?", "#", m.group(0)), line)
 
 
 def text_diffs(a, b):
@@ -52,8 +55,34 @@ def text_diffs(a, b):
             yield f"line {i + 1}:\n    - {x}\n    + {y}"
 
 
+def xdf_diffs(a, b):
+    try:
+        import pyxdf
+    except ImportError:
+        yield "XDF bytes differ and pyxdf is not importable to compare the streams"
+        return
+    sa, _ = pyxdf.load_xdf(str(a), synchronize_clocks=False, dejitter_timestamps=False)
+    sb, _ = pyxdf.load_xdf(str(b), synchronize_clocks=False, dejitter_timestamps=False)
+    if len(sa) != len(sb):
+        yield f"{len(sa)} streams != {len(sb)}"
+        return
+    key = lambda s: s["info"]["name"][0]
+    for x, y in zip(sorted(sa, key=key), sorted(sb, key=key)):
+        name = key(x)
+        tx, ty = x["time_series"], y["time_series"]
+        if isinstance(tx, list):
+            if tx != ty:
+                yield f"stream {name}: marker texts differ"
+        elif tx.shape != ty.shape or not (tx == ty).all():
+            yield f"stream {name}: samples differ"
+        if len(x["time_stamps"]) != len(y["time_stamps"]):
+            yield f"stream {name}: {len(x['time_stamps'])} stamps != {len(y['time_stamps'])}"
+
+
 def main(before, after):
     before, after = Path(before), Path(after)
+    out_a = str(before.resolve()).encode() + b"/"
+    out_b = str(after.resolve()).encode() + b"/"
     names = sorted(
         {p.relative_to(before) for p in before.rglob("*") if p.is_file()}
         | {p.relative_to(after) for p in after.rglob("*") if p.is_file()}
@@ -65,10 +94,13 @@ def main(before, after):
             print(f"{n}: only in {'after' if b.exists() else 'before'}")
             bad += 1
             continue
-        x, y = a.read_bytes(), b.read_bytes()
+        x = a.read_bytes().replace(out_a, b"OUT/")
+        y = b.read_bytes().replace(out_b, b"OUT/")
         if x == y:
             continue
-        if n.suffix == ".json":
+        if n.suffix == ".xdf":
+            d = list(xdf_diffs(a, b))
+        elif n.suffix == ".json":
             d = list(json_diffs(x, y))
         elif n.suffix in (".stdout", ".stderr", ".csv", ".rc", ".txt"):
             d = list(text_diffs(x, y))
