@@ -204,14 +204,16 @@ def parse_use_tree(toks, i, prefix, out):
     return i
 
 
-def parse_file(crate, file, modpath, occurrences):
+def parse_file(crate, file, modpath, occurrences, used):
     """Record the modules, uses and definitions of one file in `crate` (a dict modpath ->
-    Module) and append the paths it writes to `occurrences` as (file, context, segments,
-    kind)."""
+    Module), append the paths it writes to `occurrences` as (file, context, segments, kind,
+    name bound by a `use` or None) and the identifiers it writes outside `use` to
+    `used[file]`."""
     with open(file, encoding="utf-8") as f:
         toks = tokens(f.read())
     mod = crate.setdefault(modpath, Module(modpath, file))
     mod.file = file
+    used_here = used.setdefault(file, set())
     stack = [(modpath, None)]  # (module path, brace depth at which its inline block closes)
     depth = 0
     pending_attrs = []
@@ -231,6 +233,8 @@ def parse_file(crate, file, modpath, occurrences):
         if any(is_test_cfg(a) for a in attrs):
             i = skip_item(toks, i)
             continue
+        if is_ident(t):
+            used_here.add(t)
         if t == "{":
             depth += 1
         elif t == "}":
@@ -271,7 +275,7 @@ def parse_file(crate, file, modpath, occurrences):
                     if name != "_":
                         cur.bindings[name] = (segs, ctx)
                 kind = "use-glob" if name == "*" else "use"
-                occurrences.append((file, ctx, segs, "pub-" + kind if public else kind))
+                occurrences.append((file, ctx, segs, "pub-" + kind if public else kind, name))
             i = j
             continue
         elif t in ITEM_KEYWORDS and i + 1 < len(toks) and is_ident(toks[i + 1]):
@@ -287,7 +291,8 @@ def parse_file(crate, file, modpath, occurrences):
             while j + 1 < len(toks) and toks[j] == "::" and is_ident(toks[j + 1]):
                 segs.append(toks[j + 1])
                 j += 2
-            occurrences.append((file, ctx, segs, "code"))
+            used_here.update(segs)
+            occurrences.append((file, ctx, segs, "code", None))
             i = j
             continue
         i += 1
@@ -302,13 +307,13 @@ def module_file(dirpath, name):
 
 def load_tree(root_file):
     """All modules reachable from a crate root file, and the paths written in them."""
-    crate, occurrences = {}, []
+    crate, occurrences, used = {}, [], {}
     todo = [((), root_file)]
     while todo:
         modpath, file = todo.pop()
         if "tests" in file.split(os.sep)[:-1]:
             continue
-        parse_file(crate, file, modpath, occurrences)
+        parse_file(crate, file, modpath, occurrences, used)
         # files of the `mod x;` declared in this file (top level or in an inline module)
         stem = os.path.basename(file)[:-3]
         base = os.path.dirname(file)
@@ -330,7 +335,7 @@ def load_tree(root_file):
                 crate[sub] = Module(sub, cf)
                 mod.children[cname] = crate[sub]
                 todo.append((sub, cf))
-    return crate, occurrences
+    return crate, occurrences, used
 
 
 # ---------------------------------------------------------------- resolving paths
@@ -402,14 +407,16 @@ class Resolver:
         return ("item", mod.file)
 
 
-def edges_of(crate, occurrences, reexports=True):
+def edges_of(crate, occurrences, used, reexports=True):
+    """Edges file -> files it imports. Without `reexports`, a `pub use` is an edge only when
+    the file itself uses the name it binds (a facade `mod.rs` re-exporting a child is no edge)."""
     res = Resolver(crate)
     edges = defaultdict(set)  # file -> {file}
     why = {}
-    for file, ctx, segs, kind in occurrences:
+    for file, ctx, segs, kind, name in occurrences:
         public = kind.startswith("pub-")
         kind = kind[4:] if public else kind
-        if public and not reexports:
+        if public and not reexports and (kind == "use-glob" or name not in used.get(file, ())):
             continue
         st = res.start(ctx, segs, kind != "code")
         if st is None:
@@ -498,7 +505,8 @@ def main():
     ap.add_argument("--edges", action="store_true", help="print every edge with one path that made it")
     ap.add_argument("--max-lines", type=int, default=1000)
     ap.add_argument("--no-reexports", action="store_true",
-                    help="leave out the edges of `pub use` re-exports (facade mod.rs/lib.rs circles)")
+                    help="a `pub use` is an edge only when the file itself uses the name (shows the circles "
+                    "that are not only facade mod.rs/lib.rs re-exports)")
     args = ap.parse_args()
 
     crates_dir = os.path.join(args.root, "crates")
@@ -515,8 +523,8 @@ def main():
             roots += sorted(os.path.join(bindir, f) for f in os.listdir(bindir) if f.endswith(".rs"))
         seen_files = set()
         for root in roots:
-            crate, occ = load_tree(root)
-            edges, why = edges_of(crate, occ, not args.no_reexports)
+            crate, occ, used = load_tree(root)
+            edges, why = edges_of(crate, occ, used, not args.no_reexports)
             files = {m.file for m in crate.values()}
             seen_files |= files
             rel = lambda p: os.path.relpath(p, src)
