@@ -50,7 +50,7 @@ pub mod montage;
 pub mod nic;
 pub mod read_options;
 pub mod speller;
-mod units;
+pub mod units;
 mod writing;
 pub mod xdf;
 

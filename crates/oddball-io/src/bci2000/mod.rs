@@ -17,7 +17,8 @@
 //!
 //! # What the reader makes of it
 //! * Samples in µV: `(raw − SourceChOffset[c]) × SourceChGain[c]`. A gain may carry a voltage
-//!   unit (`0.033muV`, `1e-3mV`); without one it is µV per A/D unit, BCI2000's convention. A list
+//!   unit (`0.033muV`, `1e-3mV`; see [`crate::units::microvolts_per`]); without one it is µV
+//!   per A/D unit, BCI2000's convention. A list
 //!   with one value applies to every channel; missing parameters mean gain 1 and offset 0.
 //! * Channel names from `ChannelNames` when it names every channel; else `ch1..chN`, or, with
 //!   [`Bci2000Options::standard_64_names`], [`STANDARD_64_CHANNELS`] for 64-channel files.
@@ -51,7 +52,7 @@ pub use write::{
 
 use crate::error::read_file;
 use crate::speller::Speller;
-use crate::units::{hz_factor, split_number_unit, volt_factor_to_uv};
+use crate::units::{hz_factor, microvolts_per, split_number_unit};
 use crate::{Details, Format, IoError, Recording};
 
 /// The BCI2000 standard 64-channel order (the 10-10 subset of the Wadsworth cap), as in
@@ -703,7 +704,7 @@ pub fn parse_bci2000(
             if unit.is_empty() {
                 Some(v)
             } else {
-                volt_factor_to_uv(unit).map(|f| v * f)
+                microvolts_per(unit).map(|f| v * f)
             }
         },
         "a number, optionally with a voltage unit (muV, uV, mV, V)",

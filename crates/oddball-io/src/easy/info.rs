@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use crate::csv::csv_err;
-use crate::units::{split_number_unit, volt_factor_to_uv};
+use crate::units::{microvolts_per, split_number_unit};
 use crate::IoError;
 
 use super::*;
@@ -167,7 +167,7 @@ pub(super) fn parse_info(bytes: &[u8], path: &Path) -> Result<ParsedInfo, IoErro
                 });
             }
             "eeg units" => {
-                let f = volt_factor_to_uv(value)
+                let f = microvolts_per(value)
                     .ok_or_else(|| bad("a voltage unit (nV, uV, µV, mV, V)"))?;
                 out.scale = Some(Scale::from_factor(f));
             }

@@ -53,7 +53,8 @@
 //!   layout the channel count gives. Every later line must have as many cells as the first.
 //! * **Samples.** EEG cells are numbers (NIC writes integers) in nV, divided by 1000 to µV (so a
 //!   whole number of nV reads back as the `f64` nearest to its µV value); `EEG units` in the
-//!   `.info` (`nV`, `uV`, `mV`, `V`) or [`EasyOptions::scale_to_uv`] change the factor. A value
+//!   `.info` (`nV`, `uV`, `mV`, `V`; see [`crate::units::microvolts_per`]) or
+//!   [`EasyOptions::scale_to_uv`] change the factor. A value
 //!   beyond ±2 147 483 647 nV (the int32 range, ±2.1 V) is refused as absurd. Accelerometer and
 //!   AddSensor values are kept as written in [`EasyInfo::accelerometer`] and
 //!   [`EasyInfo::add_sensor`] (NIC documents the accelerometer in mm/s²).

@@ -17,7 +17,8 @@
 //! signal after signal, `samples_per_record` little-endian samples: int16 in EDF, 24-bit in BDF
 //! (version field `\xFFBIOSEMI`). Physical value:
 //! `(dig − dig_min) × (phys_max − phys_min) / (dig_max − dig_min) + phys_min`, converted to µV
-//! from the signal's physical dimension (`uV`/`µV` × 1, `mV` × 10³, `V` × 10⁶, `nV` × 10⁻³).
+//! from the signal's physical dimension by [`crate::units::microvolts_per`] (`uV`/`µV` × 1,
+//! `mV` × 10³, `V` × 10⁶, `nV` × 10⁻³, any letter case, also spelled out).
 //! Signals with any other dimension are kept unscaled and listed in
 //! [`EdfInfo::non_voltage_signals`].
 //!

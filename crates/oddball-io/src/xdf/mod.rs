@@ -59,9 +59,10 @@
 //!   `EEG` (case-insensitive) with the most channels; else the regular-rate numeric stream with
 //!   the most channels (ties: the first). Its nominal rate is the [`Raw`](oddball_signal::Raw)'s `sfreq`; channel
 //!   names are the `desc/channels/channel/label`s (`Ch1` … for missing ones); each channel is
-//!   converted to µV from its unit (`volts`/`V` × 10⁶, `millivolts`/`mV` × 10³,
-//!   `microvolts`/`µV`/`uV` × 1, `nanovolts`/`nV` × 10⁻³, case-insensitive; any other or no unit:
-//!   taken as µV, factor 1, see [`XdfInfo::scale_to_uv`]).
+//!   converted to µV from its unit by [`crate::units::stream_microvolts_per`] (`volts`/`V` × 10⁶,
+//!   `millivolts`/`mV` × 10³, `microvolts`/`µV`/`uV` × 1, `nanovolts`/`nV` × 10⁻³, any letter
+//!   case, so `MV` is millivolts; no unit: µV; any other unit: kept unscaled, factor 1, see
+//!   [`XdfInfo::scale_to_uv`]).
 //! * **Clocks**: with [`XdfOptions::synchronize_clocks`] (default), each stream's ClockOffsets
 //!   are fitted by least squares with `offset = a + b·t` and its timestamps become `t + a + b·t`
 //!   (pyxdf's model, without its robust fit and clock-reset detection).
@@ -114,8 +115,7 @@ pub use read::{
     parse_xdf_file, read_xdf_file, XdfFile, XdfFooter, XdfStreamData, XdfStreamInfo, XdfValues,
 };
 pub use recording::{
-    parse_xdf, parse_xdf_with, read_xdf, read_xdf_with, unit_factor_to_uv, XdfInfo, XdfMarker,
-    XdfOptions,
+    parse_xdf, parse_xdf_with, read_xdf, read_xdf_with, XdfInfo, XdfMarker, XdfOptions,
 };
 pub use writer::{sample_timestamp, write_xdf, XdfWriteOptions, XdfWriteSummary, XdfWriter};
 

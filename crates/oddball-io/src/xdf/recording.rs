@@ -7,7 +7,7 @@ use oddball_signal::Event;
 use serde::{Deserialize, Serialize};
 
 use crate::error::read_file;
-use crate::units::volt_factor_to_uv;
+use crate::units::stream_microvolts_per;
 use crate::{Details, Format, IoError, Recording};
 
 use super::read::*;
@@ -102,18 +102,6 @@ pub fn read_xdf_with(path: impl AsRef<Path>, options: &XdfOptions) -> Result<Rec
 /// and the result.
 pub fn parse_xdf(bytes: &[u8], path: &Path) -> Result<Recording, IoError> {
     parse_xdf_with(bytes, path, &XdfOptions::default())
-}
-
-/// The factor from an XDF channel unit to µV (`None`: not a voltage unit).
-pub fn unit_factor_to_uv(unit: &str) -> Option<f64> {
-    let u = unit.trim();
-    match u.to_ascii_lowercase().as_str() {
-        "volt" | "volts" => Some(1e6),
-        "millivolt" | "millivolts" => Some(1e3),
-        "microvolt" | "microvolts" => Some(1.0),
-        "nanovolt" | "nanovolts" => Some(1e-3),
-        _ => volt_factor_to_uv(u),
-    }
 }
 
 /// `(a, b)` of the least-squares line `offset = a + b·t` through the finite clock offsets.
@@ -311,7 +299,7 @@ pub fn parse_xdf_with(
             .get(c)
             .cloned()
             .unwrap_or_default();
-        let f = unit_factor_to_uv(&unit).unwrap_or(1.0);
+        let f = stream_microvolts_per(&unit).unwrap_or(1.0);
         if f != 1.0 {
             data.row_mut(c).mapv_inplace(|x| x * f);
         }
@@ -479,18 +467,6 @@ mod tests {
         assert_eq!(trailing_code("-1"), None);
         assert_eq!(trailing_code("42"), None);
         assert_eq!(trailing_code("flash 99999999999"), None);
-    }
-
-    #[test]
-    fn units() {
-        assert_eq!(unit_factor_to_uv("microvolts"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("Volts"), Some(1e6));
-        assert_eq!(unit_factor_to_uv("millivolts"), Some(1e3));
-        assert_eq!(unit_factor_to_uv("nanovolts"), Some(1e-3));
-        assert_eq!(unit_factor_to_uv("uV"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("µV"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("degC"), None);
-        assert_eq!(unit_factor_to_uv(""), None);
     }
 
     #[test]
