@@ -12,7 +12,7 @@ use crate::{Details, Format, IoError, Recording};
 
 use super::annotations::*;
 use super::header::*;
-use super::*;
+use super::types::*;
 
 /// Reads an EDF, EDF+, BDF or BDF+ file with default options.
 pub fn read_edf(path: impl AsRef<Path>) -> Result<Recording, IoError> {

@@ -10,8 +10,8 @@ use crate::error::read_file;
 use crate::IoError;
 
 use super::chunk::*;
+use super::types::*;
 use super::xml::*;
-use super::*;
 
 /// A StreamFooter's values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::*;
+use super::types::*;
 
 pub(super) fn xml_escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
