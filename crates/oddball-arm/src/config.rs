@@ -33,7 +33,7 @@ use crate::control::{Gains, TaskSpaceController};
 use crate::error::ConfigError;
 use crate::model::{ArmModel, Elbow, LinkParams};
 use crate::reference::TransitionKind;
-use crate::sim::{ControlUpdate, SimSettings};
+use crate::settings::{ControlUpdate, SimSettings};
 use crate::workspace::{Board, Workspace};
 
 /// One link and its proximal joint.

@@ -12,6 +12,7 @@
 //! * [`reference`](mod@reference) — direction [`Command`]s and minimum-jerk / step transitions of `p_d`.
 //! * [`workspace`] — the [`Board`] and the reachability checks that refuse unsafe commands.
 //! * [`trace`] — the pen's timestamped polyline.
+//! * [`settings`] — [`SimSettings`]: the validated runtime settings of the simulation.
 //! * [`sim`] — [`ArmSim`]: the closed loop with actuator saturation, safety stops and per-step
 //!   reports.
 //!
@@ -53,6 +54,7 @@ pub mod error;
 pub mod integrate;
 pub mod model;
 pub mod reference;
+pub mod settings;
 pub mod sim;
 pub mod trace;
 pub mod workspace;
@@ -66,10 +68,8 @@ pub use reference::{
     parse_commands, planned_path, Command, ReferenceSample, Transition, TransitionKind,
     UnknownCommand,
 };
-pub use sim::{
-    ArmSim, ControlUpdate, ProgramReport, Sample, SegmentStats, SimSettings, StepInfo, StepOutcome,
-    StepReport,
-};
+pub use settings::{ControlUpdate, SimSettings};
+pub use sim::{ArmSim, ProgramReport, Sample, SegmentStats, StepInfo, StepOutcome, StepReport};
 pub use trace::{PenTrace, TracePoint};
 pub use workspace::{Board, Workspace};
 

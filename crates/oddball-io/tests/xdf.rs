@@ -437,6 +437,67 @@ fn units_clock_offsets_and_boundaries() {
     );
 }
 
+/// Unit strings as LSL outlets, LabRecorder and careless writers put them in a stream header,
+/// with the µV factor the one rule (`oddball_io::units`) gives a live LSL inlet; `None`: the
+/// inlet refuses the stream.
+const STREAM_UNITS: [(&str, Option<f64>); 24] = [
+    ("", Some(1.0)),
+    ("microvolts", Some(1.0)),
+    ("Microvolt", Some(1.0)),
+    ("micro volts", Some(1.0)),
+    ("uV", Some(1.0)),
+    ("UV", Some(1.0)),
+    ("µV", Some(1.0)),
+    ("μV", Some(1.0)),
+    ("muV", Some(1.0)),
+    ("volts", Some(1e6)),
+    ("V", Some(1e6)),
+    ("millivolts", Some(1e3)),
+    ("mV", Some(1e3)),
+    ("MV", Some(1e3)),
+    ("Mv", Some(1e3)),
+    ("nanovolts", Some(1e-3)),
+    ("nV", Some(1e-3)),
+    ("NV", Some(1e-3)),
+    ("kV", Some(1e9)),
+    ("kilovolts", Some(1e9)),
+    ("counts", None),
+    ("degC", None),
+    ("uvs", None),
+    ("mvolts", None),
+];
+
+/// An XDF recording of a stream reads back scaled by the factor a live inlet applies to the
+/// same stream (an `MV` stream is millivolts both live and read back), with no unit as µV and a
+/// unit the inlet refuses kept unscaled.
+#[test]
+fn every_stream_unit_reads_back_as_the_live_inlet_scales_it() {
+    let tmp = TempDir::new("xdf-unit-rule");
+    for (k, (unit, live)) in STREAM_UNITS.into_iter().enumerate() {
+        assert_eq!(
+            oddball_io::units::stream_microvolts_per(unit),
+            live,
+            "{unit:?}"
+        );
+        let path = tmp.path().join(format!("u{k}.xdf"));
+        let mut w = XdfWriter::create(&path).unwrap();
+        let mut spec = XdfStream::eeg("Amp", labels(2), 100.0);
+        spec.unit = unit.to_string();
+        spec.format = XdfFormat::Double64;
+        let e = w.add_stream(&spec).unwrap();
+        let ts: Vec<f64> = (0..10).map(|i| i as f64 / 100.0).collect();
+        w.push_numeric(e, &ts, Array2::from_elem((2, 10), 2.5).view())
+            .unwrap();
+        w.finish().unwrap();
+        let rec = read_xdf(&path).unwrap();
+        let f = live.unwrap_or(1.0);
+        let info = rec.xdf().unwrap();
+        assert_eq!(info.scale_to_uv, vec![f, f], "{unit:?}");
+        assert_eq!(info.eeg_units, vec![unit.to_string(); 2], "{unit:?}");
+        assert!(rec.raw.data().iter().all(|&x| x == 2.5 * f), "{unit:?}");
+    }
+}
+
 #[test]
 fn the_writer_refuses_bad_input_and_buffers_nothing_then() {
     let tmp = TempDir::new("xdf-refuse");

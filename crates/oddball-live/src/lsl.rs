@@ -32,6 +32,7 @@ use std::time::{Duration, Instant};
 
 use lsl::{ExPushable, Pullable};
 use ndarray::{Array2, ArrayView2};
+use oddball_io::units::stream_microvolts_per;
 
 use crate::LiveError;
 
@@ -179,19 +180,6 @@ impl ClockOffset {
     }
 }
 
-/// Factor from `unit` to µV; `None` for a unit that is not a voltage. An empty unit is µV.
-pub fn microvolts_per(unit: &str) -> Option<f64> {
-    let u = unit.trim().to_lowercase();
-    let u = u.trim_end_matches('s');
-    Some(match u {
-        "" | "uv" | "µv" | "μv" | "microvolt" | "micro volt" => 1.0,
-        "v" | "volt" => 1e6,
-        "mv" | "millivolt" | "milli volt" => 1e3,
-        "nv" | "nanovolt" | "nano volt" => 1e-3,
-        _ => return None,
-    })
-}
-
 /// A live EEG stream: samples in µV with timestamps on this machine's LSL clock.
 #[derive(Debug)]
 pub struct EegInlet {
@@ -268,7 +256,7 @@ impl EegInlet {
         let scale = (0..n)
             .map(|c| {
                 let unit = if described { units[c].as_str() } else { "" };
-                microvolts_per(unit).ok_or_else(|| {
+                stream_microvolts_per(unit).ok_or_else(|| {
                     bad(
                         "channel unit",
                         unit.to_string(),
@@ -638,22 +626,51 @@ mod tests {
         assert!("type=".parse::<StreamQuery>().is_err());
     }
 
+    /// The inlet scales a stream by the rule its XDF recording is read back with: an `MV`
+    /// stream is millivolts both live and read back (it was ×1000 live and ×1 read back).
     #[test]
-    fn units_convert_to_microvolts() {
-        for (unit, f) in [
-            ("", 1.0),
-            ("microvolts", 1.0),
-            ("uV", 1.0),
-            ("µV", 1.0),
-            ("volts", 1e6),
-            ("V", 1e6),
-            ("millivolts", 1e3),
-            ("mV", 1e3),
-            ("nanovolts", 1e-3),
-            ("nV", 1e-3),
-        ] {
-            assert_eq!(microvolts_per(unit), Some(f), "{unit}");
+    fn units_convert_to_microvolts_as_their_xdf_recording_reads_back() {
+        let tmp = oddball_testkit::TempDir::new("lsl-units");
+        for (k, unit) in [
+            "",
+            "microvolts",
+            "uV",
+            "µV",
+            "muV",
+            "volts",
+            "V",
+            "millivolts",
+            "mV",
+            "MV",
+            "nanovolts",
+            "nV",
+            "kV",
+            "counts",
+            "uvs",
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let path = tmp.path().join(format!("u{k}.xdf"));
+            let mut w = oddball_io::XdfWriter::create(&path).unwrap();
+            let mut spec = oddball_io::XdfStream::eeg("Amp", vec!["C3".into()], 100.0);
+            spec.unit = unit.to_string();
+            let e = w.add_stream(&spec).unwrap();
+            w.push_numeric(e, &[0.0, 0.01], Array2::from_elem((1, 2), 2.0).view())
+                .unwrap();
+            w.finish().unwrap();
+            let read_back = oddball_io::read_xdf(&path)
+                .unwrap()
+                .xdf()
+                .unwrap()
+                .scale_to_uv[0];
+            match stream_microvolts_per(unit) {
+                Some(live) => assert_eq!(live, read_back, "{unit:?}"),
+                None => assert_eq!(read_back, 1.0, "{unit:?}: refused live, unscaled read back"),
+            }
         }
-        assert_eq!(microvolts_per("counts"), None);
+        assert_eq!(stream_microvolts_per("MV"), Some(1e3));
+        assert_eq!(stream_microvolts_per(""), Some(1.0));
+        assert_eq!(stream_microvolts_per("counts"), None);
     }
 }

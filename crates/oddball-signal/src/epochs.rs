@@ -16,7 +16,7 @@ use std::fmt;
 use ndarray::{s, Array2, Array3, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::preprocess::NonFinite;
+use crate::non_finite::NonFinite;
 use crate::{Epochs, Event, Raw, SignalError};
 
 /// When an epoch is dropped for its amplitude.
@@ -117,7 +117,7 @@ impl EpochsParams {
     /// The rejection rule for one channel of an epoch (after baseline correction): why it drops
     /// the epoch, if it does. In order: a non-finite sample (in `row`, or at `non_finite_at`,
     /// the first sample of the window where the channel's input was non-finite before it was
-    /// replaced for filtering, see [`crate::preprocess::hold_non_finite`]); a flat channel
+    /// replaced for filtering, see [`crate::non_finite::hold_non_finite`]); a flat channel
     /// (peak-to-peak under [`Self::flat`]); the amplitude threshold ([`Self::reject`]).
     pub fn channel_fault(
         &self,

@@ -9,6 +9,7 @@
 //!   and flat-channel rejection and averaging of repetitions.
 //! * [`resample`]: polyphase resampling by `up / down` (scipy's `resample_poly`), and a
 //!   recording moved to another rate with its events.
+//! * [`non_finite`]: NaN and ±∞ held at their channel's last finite value, and where they were.
 //! * [`preprocess`]: the one path from continuous EEG to epochs (held non-finite samples, detrend,
 //!   band-pass, cut, rejection), MNE's `Epochs(raw, events, tmin, tmax, reject, flat)`.
 //!
@@ -41,6 +42,7 @@ pub mod detrend;
 pub mod epochs;
 mod error;
 pub mod filter;
+pub mod non_finite;
 pub mod preprocess;
 pub mod resample;
 mod types;

@@ -17,7 +17,8 @@
 //!
 //! # What the reader makes of it
 //! * Samples in µV: `(raw − SourceChOffset[c]) × SourceChGain[c]`. A gain may carry a voltage
-//!   unit (`0.033muV`, `1e-3mV`); without one it is µV per A/D unit, BCI2000's convention. A list
+//!   unit (`0.033muV`, `1e-3mV`; see [`crate::units::microvolts_per`]); without one it is µV
+//!   per A/D unit, BCI2000's convention. A list
 //!   with one value applies to every channel; missing parameters mean gain 1 and offset 0.
 //! * Channel names from `ChannelNames` when it names every channel; else `ch1..chN`, or, with
 //!   [`Bci2000Options::standard_64_names`], [`STANDARD_64_CHANNELS`] for 64-channel files.
@@ -33,16 +34,16 @@
 //! a body that is not a whole number of sample records is reported as truncated at the offset
 //! of the incomplete record.
 
+mod info;
 pub mod params;
 mod write;
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
 use oddball_signal::Event;
-use serde::{Deserialize, Serialize};
 
+pub use info::{Bci2000Header, Bci2000Info, DataFormat, StateDef, States};
 pub use params::{ParamCell, ParamValue, Parameter, Parameters};
 pub use write::{
     encode_value, stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary,
@@ -51,7 +52,7 @@ pub use write::{
 
 use crate::error::read_file;
 use crate::speller::Speller;
-use crate::units::{hz_factor, split_number_unit, volt_factor_to_uv};
+use crate::units::{hz_factor, microvolts_per, split_number_unit};
 use crate::{Details, Format, IoError, Recording};
 
 /// The BCI2000 standard 64-channel order (the 10-10 subset of the Wadsworth cap), as in
@@ -71,140 +72,6 @@ pub struct Bci2000Options {
     /// [`STANDARD_64_CHANNELS`] instead of `ch1..ch64`. Off by default: the file itself does not
     /// say which cap was used.
     pub standard_64_names: bool,
-}
-
-/// The sample type of the body.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum DataFormat {
-    Int16,
-    Int32,
-    Float32,
-}
-
-impl DataFormat {
-    /// Bytes per sample.
-    pub fn bytes(self) -> usize {
-        match self {
-            DataFormat::Int16 => 2,
-            DataFormat::Int32 | DataFormat::Float32 => 4,
-        }
-    }
-}
-
-/// The first header line.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Bci2000Header {
-    /// `BCI2000V`, or `"1.0"` when the line has none.
-    pub version: String,
-    /// Header length in bytes (the body starts here).
-    pub header_len: usize,
-    /// Number of channels.
-    pub source_ch: usize,
-    /// State-vector bytes per sample.
-    pub statevector_len: usize,
-    pub data_format: DataFormat,
-}
-
-/// One line of the state vector definition.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct StateDef {
-    pub name: String,
-    /// Bits, 1..=64.
-    pub length: u32,
-    pub default: u64,
-    pub byte_location: usize,
-    /// 0..=7.
-    pub bit_location: u32,
-}
-
-impl StateDef {
-    fn first_bit(&self) -> usize {
-        self.byte_location * 8 + self.bit_location as usize
-    }
-}
-
-/// The state vectors of every sample, decoded on request.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct States {
-    defs: Vec<StateDef>,
-    record_len: usize,
-    n_samples: usize,
-    bytes: Vec<u8>,
-}
-
-impl States {
-    /// The definitions, in file order.
-    pub fn defs(&self) -> &[StateDef] {
-        &self.defs
-    }
-
-    /// The state names, in file order.
-    pub fn names(&self) -> Vec<&str> {
-        self.defs.iter().map(|d| d.name.as_str()).collect()
-    }
-
-    pub fn def(&self, name: &str) -> Option<&StateDef> {
-        self.defs.iter().find(|d| d.name == name)
-    }
-
-    pub fn n_samples(&self) -> usize {
-        self.n_samples
-    }
-
-    /// The raw state-vector bytes of sample `i` (`StatevectorLen` bytes).
-    pub fn vector(&self, i: usize) -> Option<&[u8]> {
-        (i < self.n_samples).then(|| &self.bytes[i * self.record_len..(i + 1) * self.record_len])
-    }
-
-    fn decode_at(&self, d: &StateDef, i: usize) -> u64 {
-        let start = d.first_bit();
-        let (b0, shift) = (start / 8, start % 8);
-        let b1 = (start + d.length as usize - 1) / 8;
-        let base = i * self.record_len;
-        let mut acc: u128 = 0;
-        for (k, &byte) in self.bytes[base + b0..=base + b1].iter().enumerate() {
-            acc |= (byte as u128) << (8 * k);
-        }
-        let mask: u128 = (1u128 << d.length) - 1;
-        ((acc >> shift) & mask) as u64
-    }
-
-    /// The value of state `name` at sample `i`.
-    pub fn value_at(&self, name: &str, i: usize) -> Option<u64> {
-        let d = self.def(name)?;
-        (i < self.n_samples).then(|| self.decode_at(d, i))
-    }
-
-    /// The whole time series of state `name` (one value per sample).
-    pub fn get(&self, name: &str) -> Option<Vec<u64>> {
-        let d = self.def(name)?;
-        Some((0..self.n_samples).map(|i| self.decode_at(d, i)).collect())
-    }
-
-    /// Every state's time series, by name.
-    pub fn all(&self) -> BTreeMap<String, Vec<u64>> {
-        self.defs
-            .iter()
-            .map(|d| {
-                (
-                    d.name.clone(),
-                    (0..self.n_samples).map(|i| self.decode_at(d, i)).collect(),
-                )
-            })
-            .collect()
-    }
-}
-
-/// Everything a BCI2000 file holds besides the µV samples.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Bci2000Info {
-    pub header: Bci2000Header,
-    pub parameters: Parameters,
-    pub states: States,
-    /// µV per A/D unit of each channel (from `SourceChGain`, units applied).
-    pub gains: Vec<f64>,
-    /// A/D offset of each channel (from `SourceChOffset`).
-    pub offsets: Vec<f64>,
 }
 
 /// Reads a BCI2000 `.dat` file (v1.0 or v1.1) with default options.
@@ -703,7 +570,7 @@ pub fn parse_bci2000(
             if unit.is_empty() {
                 Some(v)
             } else {
-                volt_factor_to_uv(unit).map(|f| v * f)
+                microvolts_per(unit).map(|f| v * f)
             }
         },
         "a number, optionally with a voltage unit (muV, uV, mV, V)",

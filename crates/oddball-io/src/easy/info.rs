@@ -3,10 +3,10 @@
 use std::path::Path;
 
 use crate::csv::csv_err;
-use crate::units::{split_number_unit, volt_factor_to_uv};
+use crate::units::{microvolts_per, split_number_unit};
 use crate::IoError;
 
-use super::*;
+use super::types::*;
 
 pub(super) fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoError> {
     let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
@@ -30,14 +30,6 @@ pub(super) fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&
 
 pub(super) fn shorten(s: &str) -> String {
     s.chars().take(80).collect()
-}
-
-/// Lower case, runs of whitespace as one space.
-pub(super) fn normalize_key(k: &str) -> String {
-    k.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .to_ascii_lowercase()
 }
 
 /// How EEG values become µV: a division keeps whole nV bit-exact (`1234 / 1000` is the `f64`
@@ -167,7 +159,7 @@ pub(super) fn parse_info(bytes: &[u8], path: &Path) -> Result<ParsedInfo, IoErro
                 });
             }
             "eeg units" => {
-                let f = volt_factor_to_uv(value)
+                let f = microvolts_per(value)
                     .ok_or_else(|| bad("a voltage unit (nV, uV, µV, mV, V)"))?;
                 out.scale = Some(Scale::from_factor(f));
             }

@@ -10,7 +10,7 @@ use crate::error::read_file;
 use crate::{Details, Format, IoError, Recording};
 
 use super::info::*;
-use super::*;
+use super::types::*;
 
 /// Reads a `.easy` recording and the `.info` beside it with default options.
 pub fn read_easy(path: impl AsRef<Path>) -> Result<Recording, IoError> {

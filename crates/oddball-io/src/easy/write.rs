@@ -10,7 +10,7 @@ use crate::writing::{check_writable, TempFile};
 use crate::IoError;
 
 use super::read::*;
-use super::*;
+use super::types::*;
 
 /// Options of [`write_easy`].
 #[derive(Debug, Clone, PartialEq, Eq)]

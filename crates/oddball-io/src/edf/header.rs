@@ -4,7 +4,7 @@ use std::path::Path;
 
 use crate::IoError;
 
-use super::*;
+use super::types::*;
 
 pub(super) const FIXED: usize = 256;
 /// Signal header fields: name, width.

@@ -7,12 +7,12 @@ use ndarray::Array2;
 use oddball_signal::Event;
 
 use crate::error::read_file;
-use crate::units::volt_factor_to_uv;
+use crate::units::microvolts_per;
 use crate::{Details, Format, IoError, Recording};
 
 use super::annotations::*;
 use super::header::*;
-use super::*;
+use super::types::*;
 
 /// Reads an EDF, EDF+, BDF or BDF+ file with default options.
 pub fn read_edf(path: impl AsRef<Path>) -> Result<Recording, IoError> {
@@ -94,7 +94,7 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         .iter()
         .map(|&i| {
             let s = &header.signals[i];
-            let unit = volt_factor_to_uv(&s.dimension).unwrap_or_else(|| {
+            let unit = microvolts_per(&s.dimension).unwrap_or_else(|| {
                 non_voltage.push(s.label.clone());
                 1.0
             });

@@ -36,7 +36,9 @@ use std::path::Path;
 use ndarray::Array2;
 use oddball_signal::Event;
 
-use super::{MatArray, MatFile, MatHeader, MatValue, MatVariable};
+use super::file::{MatArray, MatFile, MatValue, MatVariable};
+pub use super::info::{MatInfo, MatVarSummary};
+use super::parse::parse_mat_file;
 use crate::bci2000::STANDARD_64_CHANNELS;
 use crate::error::read_file;
 use crate::speller::{CodeOrder, Speller};
@@ -87,35 +89,6 @@ impl Default for MatOptions {
     }
 }
 
-/// One variable of the file, without its values.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MatVarSummary {
-    pub name: String,
-    pub dims: Vec<usize>,
-    /// `"double stored as miINT16"`, `"char"`, `"struct"` …
-    pub kind: String,
-    pub offset: u64,
-    pub compressed: bool,
-}
-
-/// What a MAT recording holds besides the samples and events.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MatInfo {
-    pub header: MatHeader,
-    /// Every variable of the file, in file order.
-    pub variables: Vec<MatVarSummary>,
-    /// Every numeric variable with one value per sample other than the signal (the BCI2000
-    /// states: `StimulusCode`, `Flashing`, `PhaseInSequence` …), as `f64`.
-    pub states: BTreeMap<String, Vec<f64>>,
-    /// Every char variable, its rows joined by newlines (`filename`, `evalstring` …).
-    pub strings: BTreeMap<String, String>,
-    /// Whether the sampling rate came from [`MatOptions::sfreq`] or the file's own variable
-    /// (else it is [`BCI_COMPETITION_SFREQ`]).
-    pub sfreq_given: bool,
-    /// The units of the samples ([`RAW_UNITS`]).
-    pub units: &'static str,
-}
-
 /// Reads a MAT file in the BCI Competition layout with default options.
 pub fn read_mat(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     read_mat_with(path, &MatOptions::default())
@@ -129,7 +102,7 @@ pub fn read_mat_with(path: impl AsRef<Path>, options: &MatOptions) -> Result<Rec
 
 /// Parses the bytes of a MAT file in the BCI Competition layout; `path` names it in errors.
 pub fn parse_mat(bytes: &[u8], path: &Path, options: &MatOptions) -> Result<Recording, IoError> {
-    let file = super::parse_mat_file(bytes, path)?;
+    let file = parse_mat_file(bytes, path)?;
     recording(file, path, options)
 }
 

@@ -9,7 +9,10 @@
 use std::io::Read;
 use std::path::Path;
 
-use super::{MatArray, MatClass, MatFile, MatHeader, MatNumbers, MatType, MatValue, MatVariable};
+use super::file::{
+    MatArray, MatClass, MatFile, MatHeader, MatNumbers, MatType, MatValue, MatVariable,
+};
+use crate::error::read_file;
 use crate::IoError;
 
 /// The header: 116 bytes of text, 8 of subsystem offset, 2 of version, 2 of endian indicator.
@@ -717,4 +720,15 @@ fn parse_chars(buf: &Buf<'_>, e: &Element, what: &str) -> Result<Vec<char>, IoEr
         MI_UTF8 => String::from_utf8_lossy(d).chars().collect(),
         _ => return Err(bad()),
     })
+}
+
+/// Parses the bytes of a MAT v5/v7 file; `path` names it in errors.
+pub fn parse_mat_file(bytes: &[u8], path: &Path) -> Result<MatFile, IoError> {
+    parse(bytes, path)
+}
+
+/// Reads a MAT v5/v7 file's variables (any layout).
+pub fn read_mat_file(path: impl AsRef<Path>) -> Result<MatFile, IoError> {
+    let path = path.as_ref();
+    parse_mat_file(&read_file(path)?, path)
 }

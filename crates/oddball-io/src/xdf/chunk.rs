@@ -1,6 +1,6 @@
 //! The binary layer of XDF: varlen integers, chunks and little-endian values.
 
-use super::*;
+use super::types::*;
 
 pub(super) fn put_varlen(out: &mut Vec<u8>, n: u64) {
     if n <= u64::from(u8::MAX) {

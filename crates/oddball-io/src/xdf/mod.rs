@@ -59,9 +59,10 @@
 //!   `EEG` (case-insensitive) with the most channels; else the regular-rate numeric stream with
 //!   the most channels (ties: the first). Its nominal rate is the [`Raw`](oddball_signal::Raw)'s `sfreq`; channel
 //!   names are the `desc/channels/channel/label`s (`Ch1` … for missing ones); each channel is
-//!   converted to µV from its unit (`volts`/`V` × 10⁶, `millivolts`/`mV` × 10³,
-//!   `microvolts`/`µV`/`uV` × 1, `nanovolts`/`nV` × 10⁻³, case-insensitive; any other or no unit:
-//!   taken as µV, factor 1, see [`XdfInfo::scale_to_uv`]).
+//!   converted to µV from its unit by [`crate::units::stream_microvolts_per`] (`volts`/`V` × 10⁶,
+//!   `millivolts`/`mV` × 10³, `microvolts`/`µV`/`uV` × 1, `nanovolts`/`nV` × 10⁻³, any letter
+//!   case, so `MV` is millivolts; no unit: µV; any other unit: kept unscaled, factor 1, see
+//!   [`XdfInfo::scale_to_uv`]).
 //! * **Clocks**: with [`XdfOptions::synchronize_clocks`] (default), each stream's ClockOffsets
 //!   are fitted by least squares with `offset = a + b·t` and its timestamps become `t + a + b·t`
 //!   (pyxdf's model, without its robust fit and clock-reset detection).
@@ -92,170 +93,27 @@
 
 //!
 //! # Layout
-//! By job: the binary layer (`chunk.rs`: varlen integers, chunks, values), the XML of
-//! headers and footers (`xml.rs`, read with the `roxmltree` crate), the writers (`writer.rs`),
-//! reading chunks into streams (`read.rs`) and making a [`Recording`](crate::Recording) (`recording.rs`: EEG
-//! stream, clocks, markers).
+//! By job, bottom up: what writer and reader share (`types.rs`: magic code, tags, limits,
+//! [`XdfFormat`], [`XdfStream`]), the binary layer (`chunk.rs`: varlen integers, chunks,
+//! values), the XML of headers and footers (`xml.rs`, read with the `roxmltree` crate), the
+//! writers (`writer.rs`), reading chunks into streams and StreamHeaders into [`XdfStreamInfo`]
+//! (`read.rs`), what a recording keeps ([`XdfInfo`], `info.rs`) and making a
+//! [`Recording`](crate::Recording) (`recording.rs`: EEG stream, clocks, markers).
 
 mod chunk;
+mod info;
 mod read;
 mod recording;
 pub mod session_markers;
+mod types;
 mod writer;
 mod xml;
 
-use std::fs::File;
-use std::io::Read;
-use std::path::Path;
-
-use serde::{Deserialize, Serialize};
-
+pub use info::{XdfInfo, XdfMarker};
 pub use read::{
     parse_xdf_file, read_xdf_file, XdfFile, XdfFooter, XdfStreamData, XdfStreamInfo, XdfValues,
 };
-pub use recording::{
-    parse_xdf, parse_xdf_with, read_xdf, read_xdf_with, unit_factor_to_uv, XdfInfo, XdfMarker,
-    XdfOptions,
-};
+pub use recording::{parse_xdf, parse_xdf_with, read_xdf, read_xdf_with, XdfOptions};
+pub(crate) use types::has_magic;
+pub use types::{XdfFormat, XdfStream, BOUNDARY_INTERVAL_S, BOUNDARY_UUID, MAGIC, MAX_CHANNELS};
 pub use writer::{sample_timestamp, write_xdf, XdfWriteOptions, XdfWriteSummary, XdfWriter};
-
-/// The four bytes every XDF file starts with.
-pub const MAGIC: &[u8; 4] = b"XDF:";
-
-/// The content of every Boundary chunk (a fixed UUID readers can search for).
-pub const BOUNDARY_UUID: [u8; 16] = [
-    0x43, 0xA5, 0x46, 0xDC, 0xCB, 0xF5, 0x41, 0x0F, 0xB3, 0x0E, 0xD5, 0x46, 0x73, 0x83, 0xCB, 0xE4,
-];
-
-/// The most channels a stream may have (read or written).
-pub const MAX_CHANNELS: usize = 10_000;
-
-/// Seconds of data between the Boundary chunks [`XdfWriter`] writes.
-pub const BOUNDARY_INTERVAL_S: f64 = 10.0;
-
-const TAG_FILE_HEADER: u16 = 1;
-const TAG_STREAM_HEADER: u16 = 2;
-const TAG_SAMPLES: u16 = 3;
-const TAG_CLOCK_OFFSET: u16 = 4;
-const TAG_BOUNDARY: u16 = 5;
-const TAG_STREAM_FOOTER: u16 = 6;
-
-/// The deepest XML nesting read.
-const MAX_XML_DEPTH: usize = 64;
-
-// ---------------------------------------------------------------------------------------------
-// Types shared by the writer and the reader
-// ---------------------------------------------------------------------------------------------
-
-/// The number type of a stream's values (`channel_format`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum XdfFormat {
-    Int8,
-    Int16,
-    Int32,
-    Int64,
-    Float32,
-    Double64,
-    /// Text (one string per channel and sample); markers.
-    String,
-}
-
-impl XdfFormat {
-    /// The `channel_format` text: `int8`, …, `float32`, `double64`, `string`.
-    pub fn name(self) -> &'static str {
-        match self {
-            XdfFormat::Int8 => "int8",
-            XdfFormat::Int16 => "int16",
-            XdfFormat::Int32 => "int32",
-            XdfFormat::Int64 => "int64",
-            XdfFormat::Float32 => "float32",
-            XdfFormat::Double64 => "double64",
-            XdfFormat::String => "string",
-        }
-    }
-
-    /// The format a `channel_format` text names (trimmed, case-insensitive).
-    pub fn from_name(s: &str) -> Option<Self> {
-        let s = s.trim().to_ascii_lowercase();
-        [
-            XdfFormat::Int8,
-            XdfFormat::Int16,
-            XdfFormat::Int32,
-            XdfFormat::Int64,
-            XdfFormat::Float32,
-            XdfFormat::Double64,
-            XdfFormat::String,
-        ]
-        .into_iter()
-        .find(|f| f.name() == s)
-    }
-
-    /// Bytes per value; `None` for strings.
-    pub fn value_bytes(self) -> Option<usize> {
-        match self {
-            XdfFormat::Int8 => Some(1),
-            XdfFormat::Int16 => Some(2),
-            XdfFormat::Int32 | XdfFormat::Float32 => Some(4),
-            XdfFormat::Int64 | XdfFormat::Double64 => Some(8),
-            XdfFormat::String => None,
-        }
-    }
-
-    pub fn is_numeric(self) -> bool {
-        self != XdfFormat::String
-    }
-}
-
-/// A stream to write: what goes into its StreamHeader.
-#[derive(Debug, Clone, PartialEq)]
-pub struct XdfStream {
-    pub name: String,
-    /// The content type, e.g. `EEG` or `Markers`.
-    pub stream_type: String,
-    /// One label per channel (a string stream has exactly one channel).
-    pub channel_labels: Vec<String>,
-    /// The unit of every channel, e.g. `microvolts` (empty for markers).
-    pub unit: String,
-    /// Samples per second; 0 for an irregular stream (markers).
-    pub nominal_srate: f64,
-    pub format: XdfFormat,
-    /// A unique id of the source device, e.g. its serial number (may be empty).
-    pub source_id: String,
-}
-
-impl XdfStream {
-    /// A float32 EEG stream in microvolts.
-    pub fn eeg(name: impl Into<String>, channel_labels: Vec<String>, nominal_srate: f64) -> Self {
-        Self {
-            name: name.into(),
-            stream_type: "EEG".into(),
-            channel_labels,
-            unit: "microvolts".into(),
-            nominal_srate,
-            format: XdfFormat::Float32,
-            source_id: String::new(),
-        }
-    }
-
-    /// An irregular one-channel string stream of type `Markers`.
-    pub fn markers(name: impl Into<String>) -> Self {
-        Self {
-            name: name.into(),
-            stream_type: "Markers".into(),
-            channel_labels: vec!["marker".into()],
-            unit: String::new(),
-            nominal_srate: 0.0,
-            format: XdfFormat::String,
-            source_id: String::new(),
-        }
-    }
-}
-
-/// Whether the file at `path` starts with the XDF magic code.
-pub(crate) fn has_magic(path: &Path) -> bool {
-    let mut head = [0u8; 4];
-    File::open(path)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .map(|()| &head == MAGIC)
-        .unwrap_or(false)
-}

@@ -10,8 +10,8 @@ use crate::error::read_file;
 use crate::IoError;
 
 use super::chunk::*;
+use super::types::*;
 use super::xml::*;
-use super::*;
 
 /// A StreamFooter's values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -128,6 +128,165 @@ impl Ctx<'_> {
     ) -> IoError {
         IoError::invalid_field(self.path, field, offset as u64, expected, found)
     }
+}
+
+// The XML of StreamHeaders and StreamFooters.
+
+impl Ctx<'_> {
+    /// Parses XML `bytes` starting at file offset `base`.
+    pub(super) fn xml(
+        &self,
+        bytes: &[u8],
+        base: usize,
+        what: &str,
+    ) -> Result<(String, XmlNode), IoError> {
+        let text = std::str::from_utf8(bytes).map_err(|e| {
+            self.invalid(
+                base + e.valid_up_to(),
+                format!("{what} XML"),
+                "UTF-8 text",
+                format!("byte {:#04x}", bytes[e.valid_up_to()]),
+            )
+        })?;
+        let root = parse_xml(text).map_err(|e| {
+            self.invalid(base + e.offset, format!("{what} XML"), e.expected, e.found)
+        })?;
+        Ok((text.to_string(), root))
+    }
+}
+
+pub(super) fn parse_f64_text(s: &str) -> Option<f64> {
+    s.trim().parse::<f64>().ok()
+}
+
+pub(super) fn parse_stream_header(
+    ctx: &Ctx<'_>,
+    id: u32,
+    xml: &[u8],
+    base: usize,
+) -> Result<XdfStreamInfo, IoError> {
+    let (text, root) = ctx.xml(xml, base, "StreamHeader")?;
+    let field = |name: &str| format!("StreamHeader (stream {id}) {name}");
+    if root.name != "info" {
+        return Err(ctx.invalid(
+            base,
+            field("root element"),
+            "<info>",
+            format!("<{}>", root.name),
+        ));
+    }
+    let required = |name: &str| {
+        root.child(name)
+            .ok_or_else(|| ctx.invalid(base, field(name), format!("a <{name}> element"), "none"))
+    };
+    let cc = required("channel_count")?;
+    let channel_count = cc
+        .text
+        .trim()
+        .parse::<usize>()
+        .ok()
+        .filter(|&n| (1..=MAX_CHANNELS).contains(&n))
+        .ok_or_else(|| {
+            ctx.invalid(
+                base + cc.text_offset,
+                field("channel_count"),
+                format!("a whole number from 1 to {MAX_CHANNELS}"),
+                cc.text.trim(),
+            )
+        })?;
+    let sr = required("nominal_srate")?;
+    let nominal_srate = parse_f64_text(&sr.text)
+        .filter(|r| r.is_finite() && *r >= 0.0)
+        .ok_or_else(|| {
+            ctx.invalid(
+                base + sr.text_offset,
+                field("nominal_srate"),
+                "a finite rate >= 0 (0 = irregular)",
+                sr.text.trim(),
+            )
+        })?;
+    let cf = required("channel_format")?;
+    let format = XdfFormat::from_name(&cf.text).ok_or_else(|| {
+        ctx.invalid(
+            base + cf.text_offset,
+            field("channel_format"),
+            "int8, int16, int32, int64, float32, double64 or string",
+            cf.text.trim(),
+        )
+    })?;
+    let text_of = |name: &str| root.child_text(name).unwrap_or("").to_string();
+    let mut labels = Vec::new();
+    let mut units = Vec::new();
+    let mut types = Vec::new();
+    if let Some(chs) = root.child("desc").and_then(|d| d.child("channels")) {
+        for ch in chs.children_named("channel") {
+            labels.push(ch.child_text("label").unwrap_or("").to_string());
+            units.push(ch.child_text("unit").unwrap_or("").to_string());
+            types.push(ch.child_text("type").unwrap_or("").to_string());
+        }
+    }
+    Ok(XdfStreamInfo {
+        id,
+        name: text_of("name"),
+        stream_type: text_of("type"),
+        channel_count,
+        nominal_srate,
+        format,
+        source_id: text_of("source_id"),
+        created_at: root.child_text("created_at").and_then(parse_f64_text),
+        channel_labels: labels,
+        channel_units: units,
+        channel_types: types,
+        header_xml: text,
+        n_samples: 0,
+        n_sample_chunks: 0,
+        first_timestamp: None,
+        last_timestamp: None,
+        clock_offsets: Vec::new(),
+        clock_fit: None,
+        footer: None,
+    })
+}
+
+pub(super) fn parse_footer(
+    ctx: &Ctx<'_>,
+    id: u32,
+    xml: &[u8],
+    base: usize,
+) -> Result<XdfFooter, IoError> {
+    let (text, root) = ctx.xml(xml, base, "StreamFooter")?;
+    let num = |name: &str| -> Result<Option<f64>, IoError> {
+        match root.child(name) {
+            None => Ok(None),
+            Some(n) => parse_f64_text(&n.text).map(Some).ok_or_else(|| {
+                ctx.invalid(
+                    base + n.text_offset,
+                    format!("StreamFooter (stream {id}) {name}"),
+                    "a number",
+                    n.text.trim(),
+                )
+            }),
+        }
+    };
+    let first_timestamp = num("first_timestamp")?;
+    let last_timestamp = num("last_timestamp")?;
+    let sample_count = match root.child("sample_count") {
+        None => None,
+        Some(n) => Some(n.text.trim().parse::<u64>().map_err(|_| {
+            ctx.invalid(
+                base + n.text_offset,
+                format!("StreamFooter (stream {id}) sample_count"),
+                "a whole number",
+                n.text.trim(),
+            )
+        })?),
+    };
+    Ok(XdfFooter {
+        first_timestamp,
+        last_timestamp,
+        sample_count,
+        xml: text,
+    })
 }
 
 /// Parses a Samples chunk's content (after the stream id, which starts at file offset `base`).

@@ -4,12 +4,12 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use oddball_signal::Event;
-use serde::{Deserialize, Serialize};
 
 use crate::error::read_file;
-use crate::units::volt_factor_to_uv;
+use crate::units::stream_microvolts_per;
 use crate::{Details, Format, IoError, Recording};
 
+use super::info::{XdfInfo, XdfMarker};
 use super::read::*;
 
 /// How to read an XDF file into a [`Recording`].
@@ -34,58 +34,6 @@ impl Default for XdfOptions {
     }
 }
 
-/// One marker (a string sample or a marker-stream number).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct XdfMarker {
-    pub stream_id: u32,
-    /// As in the file (before clock synchronization).
-    pub timestamp: f64,
-    /// The full text (channels joined with TAB; a number as Rust prints it).
-    pub text: String,
-    /// The event code given to it.
-    pub code: u32,
-    pub target: Option<bool>,
-    /// The EEG sample it was put at; `None` when outside the EEG's time span.
-    pub sample: Option<usize>,
-}
-
-/// What an XDF file held besides the EEG samples and events.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct XdfInfo {
-    pub version: Option<String>,
-    pub header_xml: Option<String>,
-    /// Every stream (header, counts, timestamps of first and last sample, clock offsets, footer).
-    pub streams: Vec<XdfStreamInfo>,
-    /// Index in [`XdfInfo::streams`] of the stream read as EEG.
-    pub eeg_stream: usize,
-    /// The EEG samples' timestamps (after clock synchronization).
-    pub eeg_timestamps: Vec<f64>,
-    /// The unit of each EEG channel and the factor applied to reach µV.
-    pub eeg_units: Vec<String>,
-    pub scale_to_uv: Vec<f64>,
-    /// Markers of all marker streams, stream after stream, each in file order.
-    pub markers: Vec<XdfMarker>,
-    /// The file ends inside a chunk (a recorder stopped while writing).
-    pub truncated: bool,
-    pub truncated_at: Option<u64>,
-    pub n_chunks: usize,
-    pub n_boundaries: usize,
-    pub n_unknown_chunks: usize,
-}
-
-impl XdfInfo {
-    /// The recording was closed properly: not cut inside a chunk and every stream has a
-    /// StreamFooter.
-    pub fn finished(&self) -> bool {
-        !self.truncated && self.streams.iter().all(|s| s.footer.is_some())
-    }
-
-    /// The stream read as EEG.
-    pub fn eeg(&self) -> &XdfStreamInfo {
-        &self.streams[self.eeg_stream]
-    }
-}
-
 /// Reads an XDF recording with default options (see the module documentation).
 pub fn read_xdf(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     read_xdf_with(path, &XdfOptions::default())
@@ -102,18 +50,6 @@ pub fn read_xdf_with(path: impl AsRef<Path>, options: &XdfOptions) -> Result<Rec
 /// and the result.
 pub fn parse_xdf(bytes: &[u8], path: &Path) -> Result<Recording, IoError> {
     parse_xdf_with(bytes, path, &XdfOptions::default())
-}
-
-/// The factor from an XDF channel unit to µV (`None`: not a voltage unit).
-pub fn unit_factor_to_uv(unit: &str) -> Option<f64> {
-    let u = unit.trim();
-    match u.to_ascii_lowercase().as_str() {
-        "volt" | "volts" => Some(1e6),
-        "millivolt" | "millivolts" => Some(1e3),
-        "microvolt" | "microvolts" => Some(1.0),
-        "nanovolt" | "nanovolts" => Some(1e-3),
-        _ => volt_factor_to_uv(u),
-    }
 }
 
 /// `(a, b)` of the least-squares line `offset = a + b·t` through the finite clock offsets.
@@ -311,7 +247,7 @@ pub fn parse_xdf_with(
             .get(c)
             .cloned()
             .unwrap_or_default();
-        let f = unit_factor_to_uv(&unit).unwrap_or(1.0);
+        let f = stream_microvolts_per(&unit).unwrap_or(1.0);
         if f != 1.0 {
             data.row_mut(c).mapv_inplace(|x| x * f);
         }
@@ -479,18 +415,6 @@ mod tests {
         assert_eq!(trailing_code("-1"), None);
         assert_eq!(trailing_code("42"), None);
         assert_eq!(trailing_code("flash 99999999999"), None);
-    }
-
-    #[test]
-    fn units() {
-        assert_eq!(unit_factor_to_uv("microvolts"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("Volts"), Some(1e6));
-        assert_eq!(unit_factor_to_uv("millivolts"), Some(1e3));
-        assert_eq!(unit_factor_to_uv("nanovolts"), Some(1e-3));
-        assert_eq!(unit_factor_to_uv("uV"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("µV"), Some(1.0));
-        assert_eq!(unit_factor_to_uv("degC"), None);
-        assert_eq!(unit_factor_to_uv(""), None);
     }
 
     #[test]

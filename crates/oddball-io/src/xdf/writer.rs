@@ -13,8 +13,8 @@ use crate::writing::{check_not_empty, check_writable, TempFile};
 use crate::IoError;
 
 use super::chunk::*;
+use super::types::*;
 use super::xml::*;
-use super::*;
 
 // ---------------------------------------------------------------------------------------------
 // The live writer

@@ -19,11 +19,14 @@
 //!   Rows must have as many cells as the header. Blank lines are skipped. By default the last row
 //!   must end with a line end, so a file cut inside its last row is reported, not read short.
 
+mod info;
+
 use std::path::Path;
 
 use ndarray::Array2;
 use oddball_signal::Event;
-use serde::{Deserialize, Serialize};
+
+pub use info::CsvInfo;
 
 use crate::error::read_file;
 use crate::{Details, Format, IoError, Recording};
@@ -123,21 +126,6 @@ impl CsvOptions {
             ..Self::default()
         }
     }
-}
-
-/// What a CSV file held besides the samples.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CsvInfo {
-    /// All header names, in file order.
-    pub columns: Vec<String>,
-    pub time_column: Option<String>,
-    pub marker_column: Option<String>,
-    /// The time column, one value per sample (as in the file, usually seconds).
-    pub timestamps: Option<Vec<f64>>,
-    /// `(n − 1) / (t_last − t_first)` from the time column, when there is one.
-    pub estimated_sfreq: Option<f64>,
-    /// Whether `Raw::sfreq` is that estimate (`false`: it was given in the options).
-    pub sfreq_from_timestamps: bool,
 }
 
 /// Reads a CSV recording with the given column roles.
