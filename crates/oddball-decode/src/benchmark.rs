@@ -13,7 +13,7 @@
 //!   The channel names and the sampling rate of all subjects must agree.
 //!
 //! Everything that can be checked is checked before any EEG is read ([`BenchmarkParams::plan`]):
-//! preset names, folds, which protocol applies to which subject (a subject without test runs has
+//! presets, folds, which protocol applies to which subject (a subject without test runs has
 //! no train → test row; a data set of one subject has no cross-subject rows: both are listed as
 //! skipped, not errors). Subjects are read in parallel, then the evaluations run in parallel
 //! (rayon), each reporting through a [`Progress`] callback.
@@ -40,7 +40,7 @@ use crate::evaluate::{
     self, EpochedRecording, EvaluateError, EvaluateParams, PipelineResult, TrainingSet,
 };
 use crate::preprocess::Preprocess;
-use crate::preset::PRESETS;
+use crate::preset::Preset;
 use crate::stats::{wilcoxon, Alternative};
 
 /// How a subject's data is split into training and test data (MOABB's evaluations).
@@ -99,8 +99,6 @@ impl FromStr for Protocol {
 pub enum BenchmarkError {
     #[error("no presets to run")]
     NoPresets,
-    #[error("unknown preset {0:?}; known: {known}", known = PRESETS.join(", "))]
-    UnknownPreset(String),
     #[error("no protocols to run")]
     NoProtocols,
     #[error("--folds {0}: cross-validation needs at least 2 folds")]
@@ -138,8 +136,8 @@ pub enum BenchmarkError {
 /// Settings of a benchmark (unfitted; [`BenchmarkParams::plan`] checks them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchmarkParams {
-    /// Preset names, in this order.
-    pub presets: Vec<String>,
+    /// Presets, in this order.
+    pub presets: Vec<Preset>,
     pub protocols: Vec<Protocol>,
     /// Folds of the within-session cross-validation.
     pub folds: usize,
@@ -150,7 +148,7 @@ pub struct BenchmarkParams {
 impl Default for BenchmarkParams {
     fn default() -> Self {
         Self {
-            presets: vec!["lda".into()],
+            presets: vec![Preset::Lda],
             protocols: vec![Protocol::TrainTest],
             folds: 5,
             preprocess: Preprocess::peer(),
@@ -183,9 +181,6 @@ impl BenchmarkParams {
     pub fn plan(&self, manifests: &[Manifest]) -> Result<Plan, BenchmarkError> {
         if self.presets.is_empty() {
             return Err(BenchmarkError::NoPresets);
-        }
-        if let Some(p) = self.presets.iter().find(|p| !PRESETS.contains(&p.as_str())) {
-            return Err(BenchmarkError::UnknownPreset(p.clone()));
         }
         if self.protocols.is_empty() {
             return Err(BenchmarkError::NoProtocols);
@@ -362,9 +357,10 @@ pub fn run(
     let mut rows = rows.into_inner().expect("no panic holds the lock");
     rows.sort_by_key(|(i, _)| *i);
     let results: Vec<BenchmarkRow> = rows.into_iter().flat_map(|(_, r)| r).collect();
+    let names: Vec<String> = params.presets.iter().map(Preset::to_string).collect();
     Ok(BenchmarkReport {
-        summary: summarise(&results, &params.presets),
-        comparisons: compare(&results, &params.presets),
+        summary: summarise(&results, &names),
+        comparisons: compare(&results, &names),
         results,
         skipped: plan.skipped,
         wall_s: t0.elapsed().as_secs_f64(),

@@ -7,8 +7,8 @@
 
 use ndarray::{s, Array2};
 use oddball_decode::adaptive::{AdaptiveLdaParams, Update};
-use oddball_decode::amplitude::AmplitudeFeatures;
 use oddball_decode::evaluate::labels;
+use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::metrics::{roc_auc, speller_accuracy_by_repetitions, ScoredFlash};
 use oddball_decode::pipeline::Preprocess;
 use oddball_io::Speller;

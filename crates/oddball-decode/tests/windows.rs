@@ -10,6 +10,7 @@
 use oddball_decode::evaluate::{self, EpochedRecording, EvaluateParams, TrainingSet};
 use oddball_decode::model::Model;
 use oddball_decode::pipeline::{FrontCache, PipelineParams, Preprocess};
+use oddball_decode::preset::Preset;
 use oddball_signal::{Epochs, Event, Events, Raw};
 
 /// `seconds` of 8-channel EEG at 256 Hz with a flash every 0.25 s (epochs overlapping 3.2
@@ -55,9 +56,14 @@ fn bits(v: &[f64]) -> Vec<u64> {
 fn windows_score_and_train_as_preloaded_epochs() {
     let train = [recording(100.0, 3), recording(80.0, 4)];
     let test = [recording(90.0, 5)];
-    let presets = ["lda", "riemann", "paper-svm", "stack"];
+    let presets = [
+        Preset::Lda,
+        Preset::Riemann,
+        Preset::PaperSvm,
+        Preset::Stack,
+    ];
     let cv = EvaluateParams {
-        presets: presets.iter().map(|s| s.to_string()).collect(),
+        presets: presets.to_vec(),
         folds: 3,
         tune: false,
     };
@@ -108,7 +114,7 @@ fn windows_tune_as_preloaded_epochs() {
     let train = [recording(60.0, 6)];
     let test = [recording(40.0, 7)];
     let params = EvaluateParams {
-        presets: vec!["riemann".into(), "paper-svm".into()],
+        presets: vec![Preset::Riemann, Preset::PaperSvm],
         folds: 2,
         tune: true,
     };
@@ -116,7 +122,7 @@ fn windows_tune_as_preloaded_epochs() {
     for windows in [false, true] {
         let set = TrainingSet::pool(recs(&train, windows)).unwrap();
         let held = evaluate::evaluate(&params, &set, &recs(&test, windows), &mut |_| {}).unwrap();
-        let t = evaluate::train("riemann", &set, Some(2), &mut |_| {}).unwrap();
+        let t = evaluate::train(Preset::Riemann, &set, Some(2), &mut |_| {}).unwrap();
         let chosen = serde_json::to_string(&t.tuning).unwrap();
         let model = Model::new(Preprocess::peer(), t.sfreq, vec![], t.pipeline).to_json();
         outcomes.push((held, chosen, model));

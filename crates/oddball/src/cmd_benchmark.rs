@@ -10,7 +10,7 @@ use oddball_decode::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress
 use oddball_decode::pipeline::Preprocess;
 use oddball_io::Manifest;
 
-use crate::preset_arg::{PipelineList, DEFAULT_PIPELINE};
+use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
 
 /// `--protocol a,b` or `all`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -45,9 +45,7 @@ pub struct BenchmarkArgs {
     /// shipped ones in datasets/).
     #[arg(required = true, value_name = "MANIFEST")]
     pub manifests: Vec<PathBuf>,
-    /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
-    /// paper, paper-svm, paper-knn), or `all`.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
     pub pipeline: PipelineList,
     /// Evaluation protocols, comma-separated, or `all`: train-test (the manifest's train runs →
     /// its test runs), within-session (k-fold CV in each session), cross-subject (leave one

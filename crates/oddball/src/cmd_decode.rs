@@ -6,11 +6,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
+use oddball_decode::model_selection::tuning::TuningReport;
 use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_decode::tuning::TuningReport;
 
 use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
-use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
+use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
+use oddball_decode::preset::Preset;
 
 #[derive(Debug, clap::Args)]
 pub struct TrainArgs {
@@ -19,10 +20,8 @@ pub struct TrainArgs {
         help = concat!("Training recordings (targets flagged): ", crate::load::formats!(), ".")
     )]
     pub files: Vec<PathBuf>,
-    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
-    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_parser = parse_preset)]
-    pub pipeline: String,
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_parser = preset, help = one_help())]
+    pub pipeline: Preset,
     /// Where to write the model (JSON).
     #[arg(
         short,
@@ -90,9 +89,7 @@ pub struct EvaluateArgs {
         requires = "test"
     )]
     pub test_text: Vec<String>,
-    /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
-    /// paper, paper-svm, paper-knn), or `all`.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
     pub pipeline: PipelineList,
     /// Folds of the cross-validation (without test files) and of the tuning (`--tune`); speller
     /// data is split by character, other data stratified by label.
@@ -181,9 +178,9 @@ impl Report {
             } => self.say(|| match fold {
                 Some((k, n)) => {
                     println!("fold {k}/{n}:");
-                    print_tuning(preset, report, "  ");
+                    print_tuning(preset.name(), report, "  ");
                 }
-                None => print_tuning(preset, report, ""),
+                None => print_tuning(preset.name(), report, ""),
             }),
             Progress::Scored(r) => self.say(|| print_row(r)),
         }
@@ -227,9 +224,9 @@ fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
     let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[])?)?;
-    let mut report = Report::new(&args.pipeline);
+    let mut report = Report::new(args.pipeline.name());
     let trained = evaluate::train(
-        &args.pipeline,
+        args.pipeline,
         &set,
         args.tune.then_some(args.folds),
         &mut |p| report.on(p),
@@ -242,7 +239,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     // What a session runs: the same settings on the causally band-passed epochs.
     let live_pre = pre.as_causal();
     let live_set = TrainingSet::pool(load_epochs(&args.files, &live_pre, &args.events, &[])?)?;
-    let mut report = Report::new(&args.pipeline);
+    let mut report = Report::new(args.pipeline.name());
     let live = evaluate::train_with(
         &trained.params,
         &live_set,

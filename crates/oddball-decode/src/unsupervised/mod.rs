@@ -49,7 +49,7 @@ use ndarray::{Array1, ArrayView2, ArrayView3};
 use oddball_io::Speller;
 use serde::{Deserialize, Serialize};
 
-use crate::amplitude::AmplitudeFeatures;
+use crate::features::amplitude::AmplitudeFeatures;
 use crate::DecodeError;
 
 pub use replay::{replay, replay_from, OnlineChoice, Replay};
