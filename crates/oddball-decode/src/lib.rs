@@ -36,12 +36,9 @@
 //! ```
 
 pub mod adaptive;
-pub mod benchmark;
 pub mod classifiers;
-pub mod dataset;
 pub mod decision;
 mod error;
-pub mod evaluate;
 pub mod features;
 mod linalg;
 pub mod metrics;
@@ -51,7 +48,6 @@ pub mod pipeline;
 pub mod preprocess;
 pub mod preset;
 pub mod riemann;
-pub mod stats;
 pub mod stopping;
 #[cfg(test)]
 mod testutil;

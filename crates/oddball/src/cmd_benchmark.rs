@@ -1,13 +1,13 @@
 //! `oddball benchmark`: the arguments, the progress bar, the tables and the files. The
-//! evaluation itself is `oddball_decode::benchmark`'s.
+//! evaluation itself is `oddball_eval::benchmark`'s.
 
 use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use oddball_decode::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
 use oddball_decode::pipeline::Preprocess;
+use oddball_eval::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
 use oddball_io::Manifest;
 
 use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
@@ -122,6 +122,14 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
         }
         Progress::Loaded { .. } | Progress::Done { .. } => bar.inc(1),
+        Progress::Resampled { run, resampled, of } => bar.suspend(|| {
+            eprintln!(
+                "{}: resampled from {} Hz to {} Hz (polyphase) to match {of}",
+                run.display(),
+                resampled.from,
+                resampled.to
+            )
+        }),
     };
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();

@@ -530,8 +530,8 @@ impl<'a> EpochSource<'a> {
         FeatureData::concatenate(parts)
     }
 
-    /// A score per epoch by `f`, as [`Self::map_chunks`] reads the epochs.
-    pub(crate) fn map_scores<E>(
+    /// A score per epoch by `f`, read a part at a time (windows are never all copied at once).
+    pub fn map_scores<E>(
         &self,
         mut f: impl FnMut(ArrayView3<f64>) -> std::result::Result<Array1<f64>, E>,
     ) -> std::result::Result<Array1<f64>, E> {

@@ -39,7 +39,6 @@
 //! property tests (posteriors sum to one; the objective never falls) in `tests/unsupervised.rs`.
 
 mod em;
-pub mod evaluate;
 mod replay;
 mod template;
 

@@ -5,10 +5,12 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use super::{replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams};
 use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
-use crate::metrics::{character_of_flashes, roc_auc};
-use crate::pipeline::EpochSource;
+use oddball_decode::metrics::{character_of_flashes, roc_auc};
+use oddball_decode::pipeline::EpochSource;
+use oddball_decode::unsupervised::{
+    replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams,
+};
 
 /// Why an unsupervised replay could not run or be scored.
 #[derive(Debug, thiserror::Error)]

@@ -39,9 +39,10 @@ use crate::dataset::{self, DatasetError, Labelling};
 use crate::evaluate::{
     self, EpochedRecording, EvaluateError, EvaluateParams, PipelineResult, TrainingSet,
 };
-use crate::preprocess::Preprocess;
-use crate::preset::Preset;
+use crate::layout::{Layout, Resampled};
 use crate::stats::{wilcoxon, Alternative};
+use oddball_decode::preprocess::Preprocess;
+use oddball_decode::preset::Preset;
 
 /// How a subject's data is split into training and test data (MOABB's evaluations).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -307,6 +308,12 @@ pub enum Progress<'a> {
     Plan { subjects: usize, units: usize },
     /// A subject's runs were read and epoched.
     Loaded { dataset: &'a str, subject: &'a str },
+    /// A run was resampled to its subject's first run's rate ([`Layout`]).
+    Resampled {
+        run: &'a std::path::Path,
+        resampled: Resampled,
+        of: &'a str,
+    },
     /// One evaluation finished with these rows.
     Done { rows: &'a [BenchmarkRow] },
 }
@@ -339,7 +346,7 @@ pub fn run(
     let loaded: BTreeMap<(usize, usize), Vec<EpochedRecording>> = needed
         .par_iter()
         .map(|&(d, s)| {
-            let recs = load_subject(&manifests[d], s, &params.preprocess)?;
+            let recs = load_subject(&manifests[d], s, &params.preprocess, on)?;
             on(Progress::Loaded {
                 dataset: &manifests[d].name,
                 subject: &manifests[d].subjects[s].id,
@@ -370,12 +377,16 @@ pub fn run(
 
 /// Every run of a subject, labelled (the manifest's event mapping, speller geometry and spelled
 /// texts) and epoched, in the order train then test.
+/// A subject's runs, read, labelled, matched to the first run's [`Layout`] (the one channel and
+/// rate policy `evaluate` applies to its files too) and epoched.
 fn load_subject(
     m: &Manifest,
     s: usize,
     pre: &Preprocess,
+    on: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<Vec<EpochedRecording>, BenchmarkError> {
     let subj = &m.subjects[s];
+    let mut layout: Option<Layout> = None;
     subj.runs()
         .map(|run| {
             let how = Labelling {
@@ -384,7 +395,26 @@ fn load_subject(
                 speller: m.speller.as_ref(),
                 read: m.read.as_ref(),
             };
-            dataset::read_labelled(run, how).and_then(|rec| dataset::epoch(rec, pre))
+            let rec = dataset::read_labelled(run, how)?;
+            let rec = match &layout {
+                Some(l) => {
+                    let (rec, resampled) =
+                        l.fit(rec).map_err(|e| DatasetError::Layout(Box::new(e)))?;
+                    if let Some(resampled) = resampled {
+                        on(Progress::Resampled {
+                            run,
+                            resampled,
+                            of: &l.of,
+                        });
+                    }
+                    rec
+                }
+                None => {
+                    layout = Some(Layout::of_recording(&rec));
+                    rec
+                }
+            };
+            dataset::epoch(rec, pre)
         })
         .collect::<Result<_, _>>()
         .map_err(|source| BenchmarkError::Dataset {
@@ -502,18 +532,9 @@ fn check_layout(
     other: &str,
     b: &EpochedRecording,
 ) -> Result<(), BenchmarkError> {
-    let what = if a.epochs.ch_names() != b.epochs.ch_names() {
-        Some("their channels".to_string())
-    } else if a.epochs.sfreq() != b.epochs.sfreq() {
-        Some(format!(
-            "sampling rate ({} and {} Hz)",
-            a.epochs.sfreq(),
-            b.epochs.sfreq()
-        ))
-    } else {
-        None
-    };
-    match what {
+    // A model of one subject scores the other's epochs as they are: no matching.
+    let layout = |r: &EpochedRecording| Layout::of_epochs(&r.epochs, r.name.clone());
+    match layout(a).differs(&layout(b)) {
         Some(what) => Err(BenchmarkError::Layout {
             dataset: m.name.clone(),
             subject: subject.to_string(),

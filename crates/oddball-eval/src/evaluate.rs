@@ -1,7 +1,7 @@
 //! Scoring pipelines on epoched recordings: held-out test recordings, k-fold cross-validation
 //! (with the hyper-parameter search nested in each fold), and speller character accuracy by
 //! repetitions with the Wolpaw ITR — never letting test data into any fitted step, nor into the
-//! choice of hyper-parameters ([`crate::model_selection::tuning`] sees the training epochs only).
+//! choice of hyper-parameters ([`oddball_decode::model_selection::tuning`] sees the training epochs only).
 //!
 //! The input is [`EpochedRecording`]s (the epochs of one recording each, cut by
 //! `oddball_signal::preprocess`): the training ones as one [`TrainingSet`] (pooled once, moved
@@ -18,16 +18,16 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use crate::decision::{DecisionModel, DecisionRule, ScoreModelParams};
-use crate::metrics::{
+use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams};
+use oddball_decode::metrics::{
     character_of_flashes, roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash,
 };
-use crate::model_selection::tuning::{cv_folds, tune_cached, Folds, TuningReport};
-use crate::model_selection::{cross_val_predict, cross_val_scores};
-use crate::pipeline::FrontCache;
-use crate::pipeline::{Pipeline, PipelineParams};
-use crate::preset::Preset;
-use crate::DecodeError;
+use oddball_decode::model_selection::tuning::{cv_folds, tune_cached, Folds, TuningReport};
+use oddball_decode::model_selection::{cross_val_predict, cross_val_scores};
+use oddball_decode::pipeline::FrontCache;
+use oddball_decode::pipeline::{Pipeline, PipelineParams};
+use oddball_decode::preset::Preset;
+use oddball_decode::DecodeError;
 
 /// Why an evaluation could not run.
 #[derive(Debug, thiserror::Error)]

@@ -18,9 +18,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use oddball_decode::dataset::{self, Labelling};
-use oddball_decode::evaluate::{self, EvaluateParams, TrainingSet};
 use oddball_decode::preprocess::Preprocess;
+use oddball_eval::dataset::{self, Labelling};
+use oddball_eval::evaluate::{self, EvaluateParams, TrainingSet};
 use oddball_signal::{Event, Events, Raw};
 use oddball_testkit::TempDir;
 
