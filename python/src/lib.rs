@@ -13,12 +13,12 @@
 
 use numpy::PyReadonlyArray3;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
-use oddball_decode::covariance::CovEstimator;
-use oddball_decode::lda::{LdaParams, Shrinkage};
+use oddball_decode::riemann::covariance::CovEstimator;
+use oddball_decode::classifiers::lda::{LdaParams, Shrinkage};
 use oddball_decode::pipeline::PipelineParams;
 use oddball_decode::riemann::{MdmParams, TangentSpaceParams};
-use oddball_decode::toeplitz_lda::ToeplitzLdaParams;
-use oddball_decode::xdawn::{XdawnCovariancesParams, XdawnParams};
+use oddball_decode::classifiers::toeplitz_lda::ToeplitzLdaParams;
+use oddball_decode::riemann::xdawn::{XdawnCovariancesParams, XdawnParams};
 use oddball_decode::DecodeError;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -89,10 +89,10 @@ macro_rules! methods_with_json {
 /// Fitted xDAWN spatial filters (pyRiemann's `Xdawn`).
 #[pyclass(module = "oddball._oddball", frozen)]
 struct Xdawn {
-    inner: oddball_decode::xdawn::Xdawn,
+    inner: oddball_decode::riemann::xdawn::Xdawn,
 }
 
-methods_with_json!(Xdawn, oddball_decode::xdawn::Xdawn, {
+methods_with_json!(Xdawn, oddball_decode::riemann::xdawn::Xdawn, {
     #[staticmethod]
     fn fit(
         py: Python<'_>,
@@ -140,10 +140,10 @@ methods_with_json!(Xdawn, oddball_decode::xdawn::Xdawn, {
 /// Fitted xDAWN covariances (pyRiemann's `XdawnCovariances`).
 #[pyclass(module = "oddball._oddball", frozen)]
 struct XdawnCovariances {
-    inner: oddball_decode::xdawn::XdawnCovariances,
+    inner: oddball_decode::riemann::xdawn::XdawnCovariances,
 }
 
-methods_with_json!(XdawnCovariances, oddball_decode::xdawn::XdawnCovariances, {
+methods_with_json!(XdawnCovariances, oddball_decode::riemann::xdawn::XdawnCovariances, {
     #[staticmethod]
     fn fit(
         py: Python<'_>,
@@ -323,10 +323,10 @@ methods_with_json!(Mdm, oddball_decode::riemann::Mdm, {
 /// Fitted binary shrinkage LDA (scikit-learn's `LinearDiscriminantAnalysis(solver="lsqr")`).
 #[pyclass(module = "oddball._oddball", frozen)]
 struct Lda {
-    inner: oddball_decode::lda::Lda,
+    inner: oddball_decode::classifiers::lda::Lda,
 }
 
-methods_with_json!(Lda, oddball_decode::lda::Lda, {
+methods_with_json!(Lda, oddball_decode::classifiers::lda::Lda, {
     /// `shrinkage`: `None` (none), a weight in `[0, 1]`, or `auto` = `True` (Ledoit–Wolf).
     #[staticmethod]
     #[pyo3(signature = (x, y, shrinkage, auto))]
@@ -404,10 +404,10 @@ methods_with_json!(Lda, oddball_decode::lda::Lda, {
 /// Fitted block-Toeplitz LDA (`toeplitzlda`'s `ToeplitzLDA`), on channel-major features.
 #[pyclass(module = "oddball._oddball", frozen)]
 struct ToeplitzLda {
-    inner: oddball_decode::toeplitz_lda::ToeplitzLda,
+    inner: oddball_decode::classifiers::toeplitz_lda::ToeplitzLda,
 }
 
-methods_with_json!(ToeplitzLda, oddball_decode::toeplitz_lda::ToeplitzLda, {
+methods_with_json!(ToeplitzLda, oddball_decode::classifiers::toeplitz_lda::ToeplitzLda, {
     /// `x` `(n, n_channels · n_times)`, feature `ch · n_times + t`.
     #[staticmethod]
     fn fit(
@@ -481,7 +481,8 @@ methods_with_json!(Pipeline, oddball_decode::pipeline::Pipeline, {
         name: &str,
         sfreq: f64,
     ) -> PyResult<Self> {
-        let params = PipelineParams::preset(name, sfreq).map_err(value_err)?;
+        let preset: oddball_decode::preset::Preset = name.parse().map_err(value_err)?;
+        let params = preset.params(sfreq).map_err(value_err)?;
         let (x, y) = (x.as_array(), labels(&y));
         let inner = py.detach(|| params.fit(x, &y)).map_err(value_err)?;
         Ok(Self { inner })

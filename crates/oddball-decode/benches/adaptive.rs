@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use ndarray::Array2;
 use oddball_decode::adaptive::AdaptiveLdaParams;
-use oddball_decode::amplitude::AmplitudeFeatures;
+use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::unsupervised::{Constraint, UnsupervisedParams};
 
 fn rows(n: usize, p: usize, seed: u64) -> (Array2<f64>, Vec<bool>) {

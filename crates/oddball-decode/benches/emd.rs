@@ -14,7 +14,7 @@
 //! ```
 
 use criterion::{criterion_group, Criterion, Throughput};
-use oddball_decode::emd::{Emd, EmdParams};
+use oddball_decode::features::emd::{Emd, EmdParams};
 use oddball_decode::pipeline::Preprocess;
 
 mod speller;

@@ -8,8 +8,8 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use ndarray::s;
 use oddball_decode::pipeline::Preprocess;
+use oddball_decode::riemann::xdawn::XdawnCovariancesParams;
 use oddball_decode::riemann::{mean_riemann, MeanRiemannParams, TangentSpaceParams};
-use oddball_decode::xdawn::XdawnCovariancesParams;
 
 mod speller;
 use speller::speller_epochs;

@@ -2,7 +2,7 @@
 //! the decision's epochs (labelled by the decision when the person does not correct it) through
 //! incremental statistics, so the model follows slow drifts of the person's ERP without a refit.
 //!
-//! The covariance is the calibration's (shrunk, [`crate::lda`]) and stays fixed: its inverse is
+//! The covariance is the calibration's (shrunk, [`crate::classifiers::lda`]) and stays fixed: its inverse is
 //! factorised once, and each epoch costs one product `Σ⁻¹x` (`p²`) and two running means:
 //!
 //! ```text
@@ -14,14 +14,14 @@
 //! (checked against that refit in the tests). A guard keeps a run of wrong decisions from
 //! dragging the model away: an update that would turn the weights more than
 //! [`AdaptiveLdaParams::min_cosine`] away from the calibrated weights is undone
-//! ([`Update::Rejected`]). Written here: a few lines over [`crate::lda`]; no crate adapts an LDA
+//! ([`Update::Rejected`]). Written here: a few lines over [`crate::classifiers::lda`]; no crate adapts an LDA
 //! this way.
 
 use nalgebra::{DMatrix, DVector};
 use ndarray::{Array1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::lda::{Lda, LdaParams};
+use crate::classifiers::lda::{Lda, LdaParams};
 use crate::linalg::to_dmatrix;
 use crate::DecodeError;
 
@@ -168,7 +168,12 @@ impl AdaptiveLda {
     /// Log-odds of target per row of `x` `(n, n_features)`.
     pub fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
         let coef = Array1::from_iter(self.coef.iter().copied());
-        crate::lda::linear_decision("adaptive LDA input", x, coef.view(), self.intercept)
+        crate::classifiers::lda::linear_decision(
+            "adaptive LDA input",
+            x,
+            coef.view(),
+            self.intercept,
+        )
     }
 
     /// Epochs per class taken in so far (calibration included): `[non-target, target]`.

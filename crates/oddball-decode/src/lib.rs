@@ -19,9 +19,8 @@
 //! [`metrics`] measures them, [`stopping`] picks the stopping rule that maximises the bit rate;
 //! [`dataset`] turns recordings into labelled epochs, [`evaluate`] scores presets on them,
 //! [`benchmark`] runs presets over data sets and subjects, and [`unsupervised`] decodes without
-//! labels (EM over the paradigm's constraint). The modules keep their former paths too
-//! (`oddball_decode::svm`,
-//! `oddball_decode::tuning`, …).
+//! labels (EM over the paradigm's constraint). Every module is named by its one path
+//! (`oddball_decode::classifiers::svm`, `oddball_decode::model_selection::tuning`, …).
 //!
 //! # Example
 //! The ROC AUC of target scores: 1 when every target scores above every non-target, 0.5 for a
@@ -37,12 +36,9 @@
 //! ```
 
 pub mod adaptive;
-pub mod benchmark;
 pub mod classifiers;
-pub mod dataset;
 pub mod decision;
 mod error;
-pub mod evaluate;
 pub mod features;
 mod linalg;
 pub mod metrics;
@@ -52,17 +48,10 @@ pub mod pipeline;
 pub mod preprocess;
 pub mod preset;
 pub mod riemann;
-pub mod stats;
 pub mod stopping;
 #[cfg(test)]
 mod testutil;
 pub mod traits;
 pub mod unsupervised;
-
-// The modules at their paths before the grouping by role.
-pub use classifiers::{ensemble, knn, lda, logistic, svm, toeplitz_lda};
-pub use features::{amplitude, channel_select, emd, hilbert, pca, scaler, wavelet};
-pub use model_selection::tuning;
-pub use riemann::{covariance, xdawn};
 
 pub use error::DecodeError;

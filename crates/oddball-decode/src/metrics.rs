@@ -233,6 +233,17 @@ pub fn speller_accuracy_by_repetitions(
     ))
 }
 
+/// The speller character each of `n_flashes` consecutive flashes of one recording belongs to
+/// (0-based): blocks of the speller's flashes per character (the last may be shorter), as
+/// [`oddball_io::Speller::character_blocks`] cuts them, or one character of all the flashes when
+/// that is unknown. The one rule for cross-validation groups, character scoring and replays.
+pub fn character_of_flashes(speller: &oddball_io::Speller, n_flashes: usize) -> Vec<usize> {
+    match speller.flashes_per_character {
+        Some(per) if per > 0 => (0..n_flashes).map(|i| i / per).collect(),
+        _ => vec![0; n_flashes],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -295,5 +306,13 @@ mod tests {
         ];
         let acc = choice_accuracy_by_repetitions(&[block], 2).unwrap();
         assert_eq!(acc, vec![0.0, 1.0]);
+    }
+
+    #[test]
+    fn flashes_belong_to_blocks_of_a_character() {
+        let mut speller = oddball_io::Speller::from_rows(&["AB", "CD"]).unwrap();
+        assert_eq!(character_of_flashes(&speller, 3), [0, 0, 0]);
+        speller.flashes_per_character = Some(2);
+        assert_eq!(character_of_flashes(&speller, 5), [0, 0, 1, 1, 2]);
     }
 }

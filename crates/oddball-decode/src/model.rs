@@ -5,15 +5,15 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::channel_select::{ChannelSelection, ChannelSelectionParams};
 use crate::classifiers::{Classifier, ClassifierParams};
+use crate::features::channel_select::{ChannelSelection, ChannelSelectionParams};
+use crate::features::pca::{Pca, PcaParams};
+use crate::features::scaler::{StandardScaler, StandardScalerParams};
 use crate::features::{FeatureParams, Features};
-use crate::pca::{Pca, PcaParams};
 use crate::pipeline::{
     FusedMember, Fusion, FusionTerm, Pipeline, PipelineParams, Single, SingleParams,
 };
 use crate::preprocess::Preprocess;
-use crate::scaler::{StandardScaler, StandardScalerParams};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -54,7 +54,7 @@ pub struct Model {
     /// How the pipeline's settings were chosen by cross-validation on the training data
     /// (`oddball train --tune`); absent when the preset's defaults were used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tuning: Option<crate::tuning::TuningReport>,
+    pub tuning: Option<crate::model_selection::tuning::TuningReport>,
     /// What a session runs when this model's band-pass is zero-phase (`oddball train`, from
     /// format version 4): the same settings fitted on the same files' epochs band-passed
     /// causally, as a session cuts them, with its own decision model. A session cannot filter

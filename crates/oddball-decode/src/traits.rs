@@ -22,7 +22,7 @@ use crate::DecodeError;
 type Result<T> = std::result::Result<T, DecodeError>;
 
 /// A fitted binary classifier of feature rows `(n_samples, n_features)` that scores and gives
-/// P(target); a member of a [`crate::ensemble::SoftVote`].
+/// P(target); a member of a [`crate::classifiers::ensemble::SoftVote`].
 pub trait ProbabilisticClassifier {
     /// P(target) per row of `x` `(n_samples, n_features)`.
     fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>>;
@@ -207,6 +207,11 @@ pub trait FitClassifier: Clone {
         let _ = gamma;
         self.clone()
     }
+    /// The settings a preset of this classifier is tuned over (besides its front's), each with
+    /// a short label naming what differs; none by default.
+    fn grid(&self) -> Vec<(String, Self)> {
+        Vec::new()
+    }
 }
 
 /// A fitted classifier's decision function.
@@ -230,8 +235,8 @@ impl<T: ProbabilisticClassifier> Scorer for T {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::classifiers::lda::LdaParams;
     use crate::classifiers::ClassifierParams;
-    use crate::lda::LdaParams;
     use crate::riemann::MdmParams;
 
     #[test]

@@ -7,8 +7,7 @@
 
 use ndarray::{s, Array2};
 use oddball_decode::adaptive::{AdaptiveLdaParams, Update};
-use oddball_decode::amplitude::AmplitudeFeatures;
-use oddball_decode::evaluate::labels;
+use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::metrics::{roc_auc, speller_accuracy_by_repetitions, ScoredFlash};
 use oddball_decode::pipeline::Preprocess;
 use oddball_io::Speller;
@@ -43,7 +42,7 @@ fn load(path: &std::path::Path, text: Option<&str>) -> Run {
         start += b.len();
     }
     Run {
-        y: labels(&epochs).unwrap(),
+        y: epochs.events().iter().map(|e| e.target.unwrap()).collect(),
         codes: epochs.events().iter().map(|e| e.code).collect(),
         x,
         chars,

@@ -19,11 +19,11 @@
 //! Run with `--nocapture` to see the observed errors.
 
 use ndarray::{Array1, Array2, Array3, ArrayView2, Axis};
-use oddball_decode::covariance::{ledoit_wolf, oas, sample_covariance, CovEstimator};
-use oddball_decode::lda::{LdaParams, Shrinkage};
-use oddball_decode::logistic::LogisticParams;
+use oddball_decode::classifiers::lda::{LdaParams, Shrinkage};
+use oddball_decode::classifiers::logistic::LogisticParams;
+use oddball_decode::riemann::covariance::{ledoit_wolf, oas, sample_covariance, CovEstimator};
+use oddball_decode::riemann::xdawn::{XdawnCovariancesParams, XdawnParams};
 use oddball_decode::riemann::{mean_riemann, MdmParams, MeanRiemannParams, TangentSpaceParams};
-use oddball_decode::xdawn::{XdawnCovariancesParams, XdawnParams};
 use serde::Deserialize;
 use std::collections::HashMap;
 

@@ -8,18 +8,18 @@
 //! compared by correlation (> 0.9999), maximum difference (< 5e-3) and support-vector count.
 
 use ndarray::{Array1, Array2, Array3, ArrayView1};
-use oddball_decode::amplitude::PaperFeatures;
-use oddball_decode::emd::{Emd, EmdParams};
-use oddball_decode::ensemble::{MemberParams, ProbabilisticClassifier, SoftVoteParams};
-use oddball_decode::hilbert::{analytic_signal, HilbertTransform};
-use oddball_decode::knn::KnnParams;
-use oddball_decode::pca::{NComponents, PcaParams};
-use oddball_decode::scaler::StandardScalerParams;
-use oddball_decode::svm::{
-    stratified_folds, stratified_folds_shuffled, Calibration, Gamma, Kernel, PlattSigmoid,
-    SvmParams,
+use oddball_decode::classifiers::ensemble::{
+    MemberParams, ProbabilisticClassifier, SoftVoteParams,
 };
-use oddball_decode::wavelet::{wavedec_bior22, DwtFeatures};
+use oddball_decode::classifiers::knn::KnnParams;
+use oddball_decode::classifiers::svm::{Calibration, Gamma, Kernel, PlattSigmoid, SvmParams};
+use oddball_decode::features::amplitude::PaperFeatures;
+use oddball_decode::features::emd::{Emd, EmdParams};
+use oddball_decode::features::hilbert::{analytic_signal, HilbertTransform};
+use oddball_decode::features::pca::{NComponents, PcaParams};
+use oddball_decode::features::scaler::StandardScalerParams;
+use oddball_decode::features::wavelet::{wavedec_bior22, DwtFeatures};
+use oddball_decode::model_selection::folds::{stratified_folds, stratified_folds_shuffled};
 use serde::Deserialize;
 
 #[derive(Deserialize)]

@@ -24,7 +24,7 @@
 //! `--nocapture` to see the observed errors.
 
 use ndarray::{Array1, Array2, ArrayView2};
-use oddball_decode::toeplitz_lda::{ToeplitzLda, ToeplitzLdaParams};
+use oddball_decode::classifiers::toeplitz_lda::{ToeplitzLda, ToeplitzLdaParams};
 use serde::Deserialize;
 use std::collections::HashMap;
 

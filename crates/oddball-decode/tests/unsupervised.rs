@@ -4,7 +4,7 @@
 //! falls across iterations), and what it recovers from synthetic P300 epochs without labels.
 
 use ndarray::{Array2, Array3};
-use oddball_decode::amplitude::AmplitudeFeatures;
+use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::unsupervised::{
     replay, replay_from, Constraint, Init, UnsupervisedError, UnsupervisedParams,
 };

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::PlotError;
-use oddball_decode::evaluate::PipelineResult;
+use oddball_eval::evaluate::PipelineResult;
 
 /// Character accuracy (%) vs repetitions, one line per preset, chance level dashed.
 pub fn draw_accuracy(path: &Path, results: &[PipelineResult]) -> Result<(), PlotError> {

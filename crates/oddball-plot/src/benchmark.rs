@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use oddball_decode::benchmark::{BenchmarkReport, Protocol};
+use oddball_eval::benchmark::{BenchmarkReport, Protocol};
 
 use crate::PlotError;
 

@@ -618,11 +618,11 @@ impl SessionOptions {
     /// and calibrates on the calibration files; prints the calibration.
     pub fn calibrated_replay(&self, files: &ReplayFiles, rule: DecisionRule) -> Result<Replayed> {
         let read = |p: &PathBuf, text: Option<&String>| {
-            let how = oddball_decode::dataset::Labelling {
+            let how = oddball_eval::dataset::Labelling {
                 text: text.map(String::as_str),
                 ..Default::default()
             };
-            oddball_decode::dataset::read_labelled(p, how)
+            oddball_eval::dataset::read_labelled(p, how)
         };
         let cal = files
             .calibration

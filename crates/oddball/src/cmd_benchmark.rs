@@ -1,16 +1,16 @@
 //! `oddball benchmark`: the arguments, the progress bar, the tables and the files. The
-//! evaluation itself is `oddball_decode::benchmark`'s.
+//! evaluation itself is `oddball_eval::benchmark`'s.
 
 use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use oddball_decode::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
 use oddball_decode::pipeline::Preprocess;
+use oddball_eval::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
 use oddball_io::Manifest;
 
-use crate::preset_arg::{PipelineList, DEFAULT_PIPELINE};
+use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
 
 /// `--protocol a,b` or `all`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -45,9 +45,7 @@ pub struct BenchmarkArgs {
     /// shipped ones in datasets/).
     #[arg(required = true, value_name = "MANIFEST")]
     pub manifests: Vec<PathBuf>,
-    /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
-    /// paper, paper-svm, paper-knn), or `all`.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
     pub pipeline: PipelineList,
     /// Evaluation protocols, comma-separated, or `all`: train-test (the manifest's train runs →
     /// its test runs), within-session (k-fold CV in each session), cross-subject (leave one
@@ -124,6 +122,14 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
         }
         Progress::Loaded { .. } | Progress::Done { .. } => bar.inc(1),
+        Progress::Resampled { run, resampled, of } => bar.suspend(|| {
+            eprintln!(
+                "{}: resampled from {} Hz to {} Hz (polyphase) to match {of}",
+                run.display(),
+                resampled.from,
+                resampled.to
+            )
+        }),
     };
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();

@@ -1,16 +1,17 @@
 //! `oddball train` and `oddball evaluate`: the arguments, the files and what is printed. The
-//! fitting, cross-validation, tuning and scoring are `oddball_decode::evaluate`'s.
+//! fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use oddball_decode::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
+use oddball_decode::model_selection::tuning::TuningReport;
 use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_decode::tuning::TuningReport;
+use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
 
 use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
-use crate::preset_arg::{parse_preset, PipelineList, DEFAULT_PIPELINE};
+use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
+use oddball_decode::preset::Preset;
 
 #[derive(Debug, clap::Args)]
 pub struct TrainArgs {
@@ -19,10 +20,8 @@ pub struct TrainArgs {
         help = concat!("Training recordings (targets flagged): ", crate::load::formats!(), ".")
     )]
     pub files: Vec<PathBuf>,
-    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
-    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_parser = parse_preset)]
-    pub pipeline: String,
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_parser = preset, help = one_help())]
+    pub pipeline: Preset,
     /// Where to write the model (JSON).
     #[arg(
         short,
@@ -90,9 +89,7 @@ pub struct EvaluateArgs {
         requires = "test"
     )]
     pub test_text: Vec<String>,
-    /// Pipeline presets, comma-separated (lda, toeplitz-lda, riemann, lda+riemann, stack, mdm,
-    /// paper, paper-svm, paper-knn), or `all`.
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all")]
+    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
     pub pipeline: PipelineList,
     /// Folds of the cross-validation (without test files) and of the tuning (`--tune`); speller
     /// data is split by character, other data stratified by label.
@@ -125,10 +122,14 @@ fn progress(len: u64, what: &str) -> ProgressBar {
     pb
 }
 
-/// What a run reports: the progress bar, the tuning tables and the result rows.
+/// What a run reports: the progress bar, the tuning tables and the result rows (under their
+/// header), and for training what its fits are for.
 struct Report {
     what: String,
     bar: Option<ProgressBar>,
+    /// Training: what the fits are fitted on, said with their number before they start.
+    training: Option<String>,
+    header_printed: bool,
 }
 
 impl Report {
@@ -136,6 +137,16 @@ impl Report {
         Self {
             what: what.to_string(),
             bar: None,
+            training: None,
+            header_printed: false,
+        }
+    }
+
+    /// A training run's report: `on` says on what epochs it fits.
+    fn training(what: &str, on: &str) -> Self {
+        Self {
+            training: Some(on.to_string()),
+            ..Self::new(what)
         }
     }
 
@@ -154,6 +165,15 @@ impl Report {
                 cross_validation,
             } => {
                 self.bar = Some(progress(fits as u64, &self.what));
+                if let Some(on) = &self.training {
+                    let what = &self.what;
+                    self.say(|| {
+                        println!(
+                            "training {what} on {on}: {fits} cross-validation fits for its \
+                             decision model, then one fit on all epochs"
+                        )
+                    });
+                }
                 if let Some(f) = cross_validation {
                     self.say(|| {
                         println!(
@@ -181,11 +201,19 @@ impl Report {
             } => self.say(|| match fold {
                 Some((k, n)) => {
                     println!("fold {k}/{n}:");
-                    print_tuning(preset, report, "  ");
+                    print_tuning(preset.name(), report, "  ");
                 }
-                None => print_tuning(preset, report, ""),
+                None => print_tuning(preset.name(), report, ""),
             }),
-            Progress::Scored(r) => self.say(|| print_row(r)),
+            Progress::Scored(r) => {
+                let header = !std::mem::replace(&mut self.header_printed, true);
+                self.say(|| {
+                    if header {
+                        print_header();
+                    }
+                    print_row(r)
+                })
+            }
         }
     }
 
@@ -227,9 +255,10 @@ fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
     let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[])?)?;
-    let mut report = Report::new(&args.pipeline);
+    let t0 = std::time::Instant::now();
+    let mut report = Report::training(args.pipeline.name(), "zero-phase band-passed epochs");
     let trained = evaluate::train(
-        &args.pipeline,
+        args.pipeline,
         &set,
         args.tune.then_some(args.folds),
         &mut |p| report.on(p),
@@ -242,7 +271,10 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     // What a session runs: the same settings on the causally band-passed epochs.
     let live_pre = pre.as_causal();
     let live_set = TrainingSet::pool(load_epochs(&args.files, &live_pre, &args.events, &[])?)?;
-    let mut report = Report::new(&args.pipeline);
+    let mut report = Report::training(
+        args.pipeline.name(),
+        "causally band-passed epochs (as a session runs it)",
+    );
     let live = evaluate::train_with(
         &trained.params,
         &live_set,
@@ -265,7 +297,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     oddball_io::write_atomic(&args.out, model.to_json())
         .with_context(|| format!("writing {}", args.out.display()))?;
     println!(
-        "trained {}{} on {} epochs ({} targets) from {} file(s) in {:.3} s; wrote {}",
+        "trained {}{} on {} epochs ({} targets) from {} file(s) in {:.3} s (the final fit {:.3} s); wrote {}",
         args.pipeline,
         model
             .tuning
@@ -275,6 +307,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
         trained.n_epochs,
         trained.n_targets,
         args.files.len(),
+        t0.elapsed().as_secs_f64(),
         trained.fit_s,
         args.out.display()
     );
@@ -317,6 +350,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         }
         let mut r = evaluate::score_test(&model.pipeline, 0.0, &test)?;
         r.tuning = model.tuning.clone();
+        print_header();
         print_row(&r);
         return finish(args, &[r]);
     }
@@ -370,6 +404,16 @@ fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
     Ok(())
 }
 
+/// The legend of [`print_row`]'s columns.
+fn print_header() {
+    println!(
+        "pipeline   epoch AUC   mean fit time  scoring speed     [speller test files: characters \
+         right by repetitions, picks, best Wolpaw ITR]"
+    );
+}
+
+/// One preset's result: epoch AUC, fit time, scoring speed, and for speller test files the
+/// characters right by repetitions, the picks and the best ITR.
 fn print_row(r: &PipelineResult) {
     let acc = r
         .speller_accuracy
@@ -382,7 +426,7 @@ fn print_row(r: &PipelineResult) {
         })
         .unwrap_or_default();
     println!(
-        "{:<10} AUC {:.3}  fit {:>7.3} s  {:>9.0} epochs/s{}{}{}{}",
+        "{:<10} AUC {:.3}  fit {:>7.3} s  {:>9.0} epochs/s{}{}{}{}{}",
         r.pipeline,
         r.auc,
         r.fit_s,
@@ -398,6 +442,14 @@ fn print_row(r: &PipelineResult) {
             .unwrap_or_default(),
         r.reps_for_all_correct
             .map(|n| format!("  all right from {n} reps"))
+            .unwrap_or_default(),
+        r.itr_at_best
+            .map(|i| format!(
+                "  best ITR {:.1} bits/min ({:.0} % right, {:.1} s a character)",
+                i.bits_per_minute,
+                100.0 * i.accuracy,
+                i.seconds_per_selection
+            ))
             .unwrap_or_default(),
         r.tuning
             .as_ref()
@@ -448,9 +500,8 @@ pub enum EmStart {
 
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    use oddball_decode::unsupervised::{
-        evaluate::evaluate_unsupervised, P300Template, UnsupervisedParams,
-    };
+    use oddball_decode::unsupervised::{P300Template, UnsupervisedParams};
+    use oddball_eval::unsupervised::evaluate_unsupervised;
 
     let pre = Preprocess::peer();
     let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;

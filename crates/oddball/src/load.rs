@@ -3,9 +3,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use oddball_decode::dataset;
-use oddball_decode::evaluate::EpochedRecording;
 use oddball_decode::pipeline::{Model, Preprocess};
+use oddball_eval::dataset;
+use oddball_eval::evaluate::EpochedRecording;
+pub use oddball_eval::layout::Layout;
+use oddball_eval::layout::LayoutError;
 use oddball_io::{EventMapping, ReadOptions, Recording};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
@@ -107,86 +109,36 @@ pub fn read_mapped(
     Ok(rec)
 }
 
-/// The channels (by name, in order) and the rate every recording of a run must have: a model's,
-/// or the first training file's. Recordings are matched to it by channel name (any order, extra
-/// channels left out) and resampled to its rate (`oddball_signal::resample`, polyphase) before
-/// anything is filtered; a missing channel is an error naming it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Layout {
-    pub ch_names: Vec<String>,
-    pub sfreq: f64,
-    /// What it is, for messages ("model.json", "the training file a.dat").
-    pub of: String,
-}
-
-impl Layout {
-    pub fn of_model(model: &Model, path: &Path) -> Self {
-        Self {
-            ch_names: model.ch_names.clone(),
-            sfreq: model.sfreq,
-            of: format!("the model {}", path.display()),
+/// `rec` matched to `layout` ([`Layout::fit`]): errors say which flags name a file's channels,
+/// a resampling is noted on stderr.
+fn fit_layout(layout: &Layout, rec: Recording) -> Result<Recording> {
+    match layout.fit(rec) {
+        Ok((rec, resampled)) => {
+            if let Some(r) = resampled {
+                eprintln!(
+                    "{}: resampled from {} Hz to {} Hz (polyphase) to match {}",
+                    rec.path.display(),
+                    r.from,
+                    r.to,
+                    layout.of
+                );
+            }
+            Ok(rec)
         }
-    }
-
-    fn of_recording(rec: &Recording) -> Self {
-        Self {
-            ch_names: rec.raw.ch_names().to_vec(),
-            sfreq: rec.raw.sfreq(),
-            of: format!("the training file {}", rec.path.display()),
-        }
-    }
-
-    /// `rec` with this layout's channels in its order.
-    fn fit(&self, mut rec: Recording) -> Result<Recording> {
-        let raw = &rec.raw;
-        let what = || {
-            format!(
-                "matching the channels of {} to those of {}",
-                rec.path.display(),
-                self.of
-            )
-        };
-        if raw.ch_names() != self.ch_names.as_slice() {
-            let order = oddball_decode::model::match_channels(&self.ch_names, raw.ch_names())
-                .with_context(|| {
-                    format!(
-                        "{}; name the file's channels with --montage FILE (an EEGLAB .loc, e.g. \
-                         eeg64.loc) or --channels",
-                        what()
-                    )
-                })?;
-            let names: Vec<&str> = order.iter().map(|&i| raw.ch_names()[i].as_str()).collect();
-            rec.raw = raw
-                .pick_channels(&names)
-                .and_then(|r| r.with_ch_names(self.ch_names.clone()))
-                .with_context(what)?;
-        }
-        let from = rec.raw.sfreq();
-        if (from - self.sfreq).abs() > 1e-9 * self.sfreq {
-            // Another rate is resampled (polyphase, as MNE's resample), not refused.
-            rec.raw = oddball_signal::resample::resample_raw(&rec.raw, self.sfreq).with_context(
-                || {
-                    format!(
-                        "{} is sampled at {from} Hz, {} at {} Hz; resampling it",
-                        rec.path.display(),
-                        self.of,
-                        self.sfreq
-                    )
-                },
-            )?;
-            eprintln!(
-                "{}: resampled from {from} Hz to {} Hz (polyphase) to match {}",
-                rec.path.display(),
-                self.sfreq,
-                self.of
-            );
-        }
-        Ok(rec)
+        Err(LayoutError::Channels {
+            recording,
+            of,
+            source,
+        }) => Err(anyhow::Error::new(source).context(format!(
+            "matching the channels of {recording} to those of {of}; name the file's channels \
+             with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc) or --channels"
+        ))),
+        Err(e) => Err(e.into()),
     }
 }
 
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
-/// recorded without labels) and epochs each recording ([`oddball_decode::dataset`]); a
+/// recorded without labels) and epochs each recording ([`oddball_eval::dataset`]); a
 /// recording whose events carry no labels is an error saying how to label them. Every file's
 /// channels are matched by name to the first's ([`Layout`]).
 pub fn load_epochs(
@@ -236,7 +188,7 @@ pub fn load_epochs_in(
                 }
             }
             rec = match &layout {
-                Some(l) => l.fit(rec)?,
+                Some(l) => fit_layout(l, rec)?,
                 None => {
                     layout = Some(Layout::of_recording(&rec));
                     rec

@@ -1,44 +1,56 @@
-//! The `--pipeline` argument: preset names checked when the command line is parsed, one default
-//! for every command.
+//! The `--pipeline` argument: presets parsed (by [`Preset`]'s one `FromStr`) when the command
+//! line is parsed, one default for every command, and the help text listing them.
 
 use std::str::FromStr;
 
-use oddball_decode::pipeline::PRESETS;
+use oddball_decode::preset::Preset;
 
 /// The pipeline every command uses when none is named.
 pub const DEFAULT_PIPELINE: &str = "lda";
 
-/// One preset name, checked against [`PRESETS`].
+/// One preset, by name.
+pub fn preset(name: &str) -> Result<Preset, String> {
+    name.parse::<Preset>()
+        .map_err(|_| format!("unknown pipeline {name:?}; known: {}", Preset::names()))
+}
+
+/// One preset's name, checked as [`preset`] does (for settings that still hold the name).
 pub fn parse_preset(name: &str) -> Result<String, String> {
-    if PRESETS.contains(&name) {
-        Ok(name.to_string())
-    } else {
-        Err(format!(
-            "unknown pipeline {name:?}; known: {}",
-            PRESETS.join(", ")
-        ))
-    }
+    preset(name).map(|p| p.name().to_string())
+}
+
+/// The help of a `--pipeline` taking one preset.
+pub fn one_help() -> String {
+    format!("Pipeline preset: {}", Preset::names())
+}
+
+/// The help of a `--pipeline` taking a list.
+pub fn list_help() -> String {
+    format!(
+        "Pipeline presets, comma-separated ({}), or `all`",
+        Preset::names()
+    )
 }
 
 /// `--pipeline a,b,c` or `--pipeline all`: presets in the order given, each once.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct PipelineList(pub Vec<String>);
+pub struct PipelineList(pub Vec<Preset>);
 
 impl FromStr for PipelineList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
         if s.trim() == "all" {
-            return Ok(Self(PRESETS.iter().map(|p| p.to_string()).collect()));
+            return Ok(Self(Preset::ALL.to_vec()));
         }
-        let mut names: Vec<String> = Vec::new();
+        let mut presets: Vec<Preset> = Vec::new();
         for name in s.split(',').map(str::trim) {
-            let name = parse_preset(name).map_err(|e| format!("{e}, or all"))?;
-            if !names.contains(&name) {
-                names.push(name);
+            let p = preset(name).map_err(|e| format!("{e}, or all"))?;
+            if !presets.contains(&p) {
+                presets.push(p);
             }
         }
-        Ok(Self(names))
+        Ok(Self(presets))
     }
 }
 
@@ -49,13 +61,15 @@ mod tests {
     #[test]
     fn lists_all_and_unknown_names() {
         let l: PipelineList = "lda, riemann,lda".parse().unwrap();
-        assert_eq!(l.0, ["lda", "riemann"]);
+        assert_eq!(l.0, [Preset::Lda, Preset::Riemann]);
         assert_eq!(
             "all".parse::<PipelineList>().unwrap().0.len(),
-            PRESETS.len()
+            Preset::ALL.len()
         );
         let err = "lda,nope".parse::<PipelineList>().unwrap_err();
         assert!(err.contains("\"nope\"") && err.contains("stack"), "{err}");
-        assert!(parse_preset(DEFAULT_PIPELINE).is_ok());
+        assert_eq!(preset(DEFAULT_PIPELINE), Ok(Preset::Lda));
+        assert_eq!(parse_preset("mdm").as_deref(), Ok("mdm"));
+        assert!(one_help().contains("paper-knn") && list_help().contains("lda+riemann"));
     }
 }

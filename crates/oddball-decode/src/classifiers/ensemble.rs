@@ -21,9 +21,9 @@ use std::sync::OnceLock;
 use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::knn::{Knn, KnnParams};
-use crate::scaler::{check_finite, check_n_features};
-use crate::svm::{Svm, SvmParams};
+use crate::classifiers::knn::{Knn, KnnParams};
+use crate::features::scaler::{check_finite, check_n_features};
+use crate::classifiers::svm::{Svm, SvmParams};
 use crate::traits::{FeatureView, FitClassifier};
 use crate::DecodeError;
 
@@ -360,7 +360,7 @@ mod tests {
             .fit(x2.view(), &y2)
             .unwrap();
         let linear = MemberParams::Svm(SvmParams {
-            kernel: crate::svm::Kernel::Linear,
+            kernel: crate::classifiers::svm::Kernel::Linear,
             ..SvmParams::default()
         })
         .fit(x.view(), &y)

@@ -11,7 +11,7 @@
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::scaler::{check_finite, check_labels, check_n_features};
+use crate::features::scaler::{check_finite, check_labels, check_n_features};
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
@@ -92,7 +92,7 @@ impl Knn {
         crate::linalg::sq_distances(q, self.x.view(), x_sq)
     }
 
-    /// The training rows, which [`crate::ensemble::SoftVote`] may measure queries against once for
+    /// The training rows, which [`crate::classifiers::ensemble::SoftVote`] may measure queries against once for
     /// several members.
     pub fn training_rows(&self) -> ArrayView2<'_, f64> {
         self.x.view()

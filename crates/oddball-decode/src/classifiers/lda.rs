@@ -7,7 +7,7 @@
 //!   covariance, shrunk:
 //!   * [`Shrinkage::Auto`]: the class's features are standardised (`StandardScaler`: centred, divided
 //!     by their population standard deviation; near-constant features keep scale 1), Ledoit–Wolf
-//!     shrunk ([`crate::covariance::ledoit_wolf`]), and scaled back `Σ_k = D·LW·D`;
+//!     shrunk ([`crate::riemann::covariance::ledoit_wolf`]), and scaled back `Σ_k = D·LW·D`;
 //!   * [`Shrinkage::Fixed`]`(s)`: `(1 − s)·S_k + s·(tr S_k / p)·I`;
 //! * `w_k = Σ⁺ μ_k` (least squares, singular values below `ε·σ_max` dropped, as `scipy.linalg.lstsq`),
 //!   `b_k = −½ μ_k·w_k + ln π_k`; the binary model is `coef = w_target − w_nontarget`,
@@ -23,7 +23,7 @@ use nalgebra::{DMatrix, DVector};
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::covariance::{estimate_columns, shrink_in_place, CovEstimator};
+use crate::riemann::covariance::{estimate_columns, shrink_in_place, CovEstimator};
 use crate::linalg::{
     check_finite, check_labels, sigmoid, standardise_columns, sym_eigen, to_array2,
 };

@@ -22,7 +22,7 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 use ndarray::{Array1, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::lda::linear_decision;
+use crate::classifiers::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid};
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;

@@ -3,16 +3,24 @@
 //!
 //! Each classifier lives in its own file with its [`FitClassifier`] (settings → fitted) and
 //! [`crate::traits::Scorer`] implementations. [`ClassifierParams`] / [`Classifier`] are the
-//! tagged forms a saved model names them by, generated from the one `registry!` list below:
-//! a new classifier adds its file and one line there. The tags are the variant names, as saved
-//! by every model format so far.
-
-pub mod ensemble;
-pub mod knn;
-pub mod lda;
-pub mod logistic;
-pub mod svm;
-pub mod toeplitz_lda;
+//! tagged forms a saved model names them by, generated from the one `registry!` list below.
+//! The tags are the variant names, as saved by every model format so far.
+//!
+//! # Adding a classifier
+//! 1. Write `classifiers/NAME.rs` with `NameParams` (settings: `Clone`, `PartialEq`, `Default`,
+//!    serde) implementing [`FitClassifier`] with `type Fitted = Name`, and `Name` (fitted, serde)
+//!    implementing [`crate::traits::Scorer`]. A hyper-parameter grid, if any, is
+//!    [`FitClassifier::grid`] (none by default).
+//! 2. Add ONE line at the end of the `registry!` list:
+//!    `Name(NAME::NameParams => NAME::Name), mod NAME, preset Name = "name";`
+//!    * `mod NAME` declares the module (the file beside this one);
+//!    * `preset Name = "name"` (optional) also makes it a [`crate::preset::Preset`] on the
+//!      amplitude front of `lda` (bin-averaged amplitudes), listed after the other classifier
+//!      presets, parsed and printed as `name`, tuned over the amplitude bin widths × the
+//!      classifier's grid.
+//!
+//! Nothing else changes: the saved-model tag, the pipeline's dispatch, the preset's name,
+//! parsing, help text and grid all come from that line.
 
 use serde::{Deserialize, Serialize};
 
@@ -21,10 +29,35 @@ use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
 
-/// Generates the settings enum, the fitted enum and their dispatch from one list of
-/// `Tag(Settings => Fitted)`.
+/// Generates the modules, the settings enum, the fitted enum, their dispatch and
+/// `with_classifier_presets!` (the classifier presets, put first in [`crate::preset`]'s list)
+/// from one list of `Tag(Settings => Fitted)[, mod module][, preset Preset = "name"];`. The
+/// leading `$` is passed through to the generated macro.
 macro_rules! registry {
-    ($($(#[$doc:meta])* $tag:ident($params:ty => $fitted:ty),)*) => {
+    (
+        $d:tt
+        $($(#[$doc:meta])* $tag:ident($params:ty => $fitted:ty)
+            $(, mod $m:ident)? $(, preset $ptag:ident = $pname:literal)?;)*
+    ) => {
+        $($(pub mod $m;)?)*
+
+        /// Calls `presets!` with the classifier presets of the registry first, then the
+        /// tokens given (the other presets).
+        macro_rules! with_classifier_presets {
+            ($d($d rest:tt)*) => {
+                presets! {
+                    $($(
+                        #[doc = concat!("`", $pname, "`: [`ClassifierParams::", stringify!($tag),
+                            "`] on bin-averaged amplitudes (bins of round(sfreq/25) samples).")]
+                        $ptag = $pname => $tag,
+                    )?)*
+                    ;
+                    $d($d rest)*
+                }
+            };
+        }
+        pub(crate) use with_classifier_presets;
+
         /// The classifier at the end of a pipeline (unfitted settings).
         #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
         pub enum ClassifierParams {
@@ -56,6 +89,18 @@ macro_rules! registry {
                     $(Self::$tag(p) => Self::$tag(p.with_scale_gamma(gamma)),)*
                 }
             }
+
+            /// The classifier's own tuning grid: (label, settings) per point, empty when it
+            /// has nothing to tune ([`FitClassifier::grid`]).
+            pub fn grid(&self) -> Vec<(String, Self)> {
+                match self {
+                    $(Self::$tag(p) => p
+                        .grid()
+                        .into_iter()
+                        .map(|(label, q)| (label, Self::$tag(q)))
+                        .collect(),)*
+                }
+            }
         }
 
         impl Classifier {
@@ -69,17 +114,19 @@ macro_rules! registry {
     };
 }
 
-registry! {
-    Lda(lda::LdaParams => lda::Lda),
+registry! { $
+    /// Shrinkage LDA.
+    Lda(lda::LdaParams => lda::Lda), mod lda, preset Lda = "lda";
     /// Block-Toeplitz shrinkage LDA on channel-major spatio-temporal features (amplitudes); the
     /// channel count is the epochs' (after channel selection).
-    ToeplitzLda(toeplitz_lda::ToeplitzLdaParams => toeplitz_lda::ToeplitzLda),
-    Logistic(logistic::LogisticParams => logistic::Logistic),
-    Svm(svm::SvmParams => svm::Svm),
-    Knn(knn::KnnParams => knn::Knn),
+    ToeplitzLda(toeplitz_lda::ToeplitzLdaParams => toeplitz_lda::ToeplitzLda), mod toeplitz_lda,
+        preset ToeplitzLda = "toeplitz-lda";
+    Logistic(logistic::LogisticParams => logistic::Logistic), mod logistic;
+    Svm(svm::SvmParams => svm::Svm), mod svm;
+    Knn(knn::KnnParams => knn::Knn), mod knn;
     /// Soft vote of members' P(target) (the paper's multi-classifier).
-    Vote(ensemble::SoftVoteParams => ensemble::SoftVote),
+    Vote(ensemble::SoftVoteParams => ensemble::SoftVote), mod ensemble;
     /// Minimum distance to (Riemannian) mean on SPD matrices
     /// ([`crate::features::FeatureParams::XdawnCovariances`]).
-    Mdm(crate::riemann::MdmParams => crate::riemann::Mdm),
+    Mdm(crate::riemann::MdmParams => crate::riemann::Mdm);
 }

@@ -17,7 +17,8 @@
 //!   `(N₊+1)/(N₊+2)` and `1/(N₋+2)`, decision values rescaled when |f| ≥ 30), solved by Newton's method
 //!   to convergence. [`Calibration::CrossValidated`] fits it on out-of-fold decision values from
 //!   `n_folds` folds made exactly as scikit-learn's `StratifiedKFold(n_folds)`, unshuffled
-//!   ([`stratified_folds`]) or shuffled with `random_state=seed` ([`stratified_folds_shuffled`],
+//!   ([`stratified_folds`](crate::model_selection::folds::stratified_folds)) or shuffled with
+//!   `random_state=seed` ([`stratified_folds_shuffled`](crate::model_selection::folds::stratified_folds_shuffled),
 //!   numpy's MT19937 stream reproduced), then refits the SVM on all data —
 //!   `CalibratedClassifierCV(sigmoid, cv=StratifiedKFold(k, …), ensemble=False)`, the peer's
 //!   twin with its seed 0 by default. (libsvm's own
@@ -29,7 +30,8 @@ use linfa::prelude::*;
 use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::scaler::{check_finite, check_labels, check_n_features};
+use crate::features::scaler::{check_finite, check_labels, check_n_features};
+use crate::model_selection::folds::stratified;
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
@@ -64,7 +66,7 @@ pub enum Calibration {
     TrainingSet,
     /// Sigmoid fitted on out-of-fold decision values of stratified folds: in blocks, or shuffled
     /// as scikit-learn's `StratifiedKFold(n_folds, shuffle=True, random_state=seed)` shuffles them
-    /// ([`stratified_folds_shuffled`]).
+    /// ([`crate::model_selection::folds::stratified_folds_shuffled`]).
     CrossValidated {
         n_folds: usize,
         /// Absent in models saved before it existed: unshuffled folds.
@@ -207,93 +209,6 @@ impl PlattSigmoid {
             1.0 / (1.0 + z.exp())
         }
     }
-}
-
-/// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=False)`:
-/// each class (in order of first appearance) is dealt to folds in contiguous blocks whose sizes
-/// follow scikit-learn's allocation. Every class needs at least `n_splits` samples.
-pub fn stratified_folds(y: &[bool], n_splits: usize) -> Result<Vec<usize>> {
-    stratified(y, n_splits, None)
-}
-
-/// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=True,
-/// random_state=seed)` (scikit-learn 1.x, numpy's legacy `RandomState`): the fold labels of each
-/// class, in blocks as [`stratified_folds`] deals them, are shuffled in class order by one
-/// MT19937 stream seeded with `seed` (`init_genrand`, from the `rand_mt` crate), each with
-/// numpy's Fisher–Yates `shuffle` drawing `j ≤ i` by masked rejection of 32-bit outputs
-/// (numpy's `random_interval`).
-pub fn stratified_folds_shuffled(y: &[bool], n_splits: usize, seed: u32) -> Result<Vec<usize>> {
-    stratified(y, n_splits, Some(seed))
-}
-
-/// numpy's legacy `RandomState.shuffle` of a 1-D array.
-fn numpy_shuffle(v: &mut [usize], rng: &mut rand_mt::Mt) {
-    for i in (1..v.len()).rev() {
-        // numpy's random_interval(i): the smallest all-ones mask covering i, redrawn until ≤ i
-        let max = i as u64;
-        let mask = u64::MAX >> max.leading_zeros();
-        let j = loop {
-            let value = u64::from(rng.next_u32()) & mask;
-            if value <= max {
-                break value as usize;
-            }
-        };
-        v.swap(i, j);
-    }
-}
-
-fn stratified(y: &[bool], n_splits: usize, shuffle_seed: Option<u32>) -> Result<Vec<usize>> {
-    if n_splits < 2 {
-        return Err(DecodeError::InvalidParameter {
-            name: "n_folds",
-            value: n_splits.to_string(),
-            reason: "cross-validation needs at least 2 folds".into(),
-        });
-    }
-    let (n_t, n_n) = check_labels(y.len(), y)?;
-    if n_t.min(n_n) < n_splits {
-        return Err(DecodeError::TooFewSamples {
-            what: format!(
-                "{n_splits} stratified folds need {n_splits} samples of each class, got {n_t} \
-                 targets and {n_n} non-targets"
-            ),
-        });
-    }
-    // classes encoded by first appearance; y_order = sorted codes
-    let first = y[0];
-    let counts = [
-        y.iter().filter(|&&v| v == first).count(),
-        y.iter().filter(|&&v| v != first).count(),
-    ];
-    // allocation[i][k] = number of code-k entries among y_order[i::n_splits]
-    let mut alloc = vec![[0usize; 2]; n_splits];
-    for pos in 0..y.len() {
-        let code = usize::from(pos >= counts[0]);
-        alloc[pos % n_splits][code] += 1;
-    }
-    // per class, its fold labels in blocks (numpy's arange(n_splits).repeat(allocation[:, k]))
-    let mut rng = shuffle_seed.map(rand_mt::Mt::new);
-    let per_class: Vec<Vec<usize>> = (0..2)
-        .map(|code| {
-            let mut labels: Vec<usize> = (0..n_splits)
-                .flat_map(|fold| std::iter::repeat_n(fold, alloc[fold][code]))
-                .collect();
-            if let Some(rng) = rng.as_mut() {
-                numpy_shuffle(&mut labels, rng);
-            }
-            labels
-        })
-        .collect();
-    let mut next = [0usize; 2];
-    let folds = y
-        .iter()
-        .map(|&v| {
-            let code = usize::from(v != first);
-            next[code] += 1;
-            per_class[code][next[code] - 1]
-        })
-        .collect();
-    Ok(folds)
 }
 
 /// A fitted SVM: its support vectors and dual coefficients (the linfa model is not kept, so saved
@@ -538,7 +453,7 @@ impl Svm {
         })
     }
 
-    /// The support vectors of an RBF SVM, which [`crate::ensemble::SoftVote`] may measure queries
+    /// The support vectors of an RBF SVM, which [`crate::classifiers::ensemble::SoftVote`] may measure queries
     /// against once for several members (`None` for the linear kernel).
     pub fn rbf_support_vectors(&self) -> Option<ArrayView2<'_, f64>> {
         self.dual
@@ -660,19 +575,6 @@ mod tests {
             "{s:?}"
         );
         assert!(s.probability(10.0) > 0.99 && s.probability(-10.0) < 0.01);
-    }
-
-    #[test]
-    fn folds_follow_sklearn_allocation() {
-        // 3 targets first seen, 7 non-targets; 3 folds
-        let y = [
-            true, false, false, true, false, false, true, false, false, false,
-        ];
-        let f = stratified_folds(&y, 3).unwrap();
-        // class "true" (first seen) gets one per fold; non-targets 3/2/2 in order
-        assert_eq!(f, vec![0, 0, 0, 1, 0, 1, 2, 1, 2, 2]);
-        assert!(stratified_folds(&y, 4).is_err());
-        assert!(stratified_folds(&y, 1).is_err());
     }
 
     #[test]

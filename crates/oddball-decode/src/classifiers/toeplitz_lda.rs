@@ -31,7 +31,7 @@ use nalgebra::{DMatrix, DVector};
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use crate::lda::linear_decision;
+use crate::classifiers::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid, standardise_columns, to_array2};
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;

@@ -8,13 +8,13 @@
 //!
 //! [`PaperFeatures`] concatenates, per epoch and in this order (each block channel-major): amplitude
 //! bins, first-IMF instantaneous-amplitude bins, first-IMF instantaneous-frequency bins
-//! ([`crate::hilbert::HhtFeatures`]), the DWT approximation and the DWT detail
-//! ([`crate::wavelet::DwtFeatures`]) — the peer's `paper` map, 656 features for 8 channels × 205
+//! ([`crate::features::hilbert::HhtFeatures`]), the DWT approximation and the DWT detail
+//! ([`crate::features::wavelet::DwtFeatures`]) — the peer's `paper` map, 656 features for 8 channels × 205
 //! samples at 256 Hz. Checked offline on all 720 epochs of the eeg3_1 recording: every one of the
 //! 656 features agrees with the peer's to ≤ 6e-13 (the golden test repeats this on synthetic epochs).
 //! Batches are split over threads with rayon; each thread owns one EMD engine, one planned FFT and
-//! its buffers. Written here: the maps are a few lines over [`crate::emd`],
-//! [`crate::hilbert`] and [`crate::wavelet`].
+//! its buffers. Written here: the maps are a few lines over [`crate::features::emd`],
+//! [`crate::features::hilbert`] and [`crate::features::wavelet`].
 
 use std::cell::RefCell;
 
@@ -22,9 +22,9 @@ use ndarray::{Array2, ArrayView2, ArrayView3, Axis};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::hilbert::{HhtExtractor, HhtFeatures};
+use crate::features::hilbert::{HhtExtractor, HhtFeatures};
+use crate::features::wavelet::{DwtExtractor, DwtFeatures};
 use crate::traits::{FeatureData, FitTransformer, Transformer};
-use crate::wavelet::{DwtExtractor, DwtFeatures};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;

@@ -12,9 +12,9 @@
 //! phase `atan2(im, re)`, its first difference times `sfreq / 2π`, and the last difference repeated so
 //! the output keeps the input's length (`f[n−1] = f[n−2]`).
 //!
-//! [`HhtFeatures`] is the peer's HHT block: per channel, the first IMF ([`crate::emd`]), its
+//! [`HhtFeatures`] is the peer's HHT block: per channel, the first IMF ([`crate::features::emd`]), its
 //! instantaneous amplitude and frequency, each averaged in bins of `bin` samples
-//! ([`crate::amplitude::bin_mean_into`]); all amplitude bins (channel-major) come before all frequency
+//! ([`crate::features::amplitude::bin_mean_into`]); all amplitude bins (channel-major) come before all frequency
 //! bins.
 //!
 //! Two shortcuts make the features cheaper than their definition, and both are checked against it
@@ -39,8 +39,8 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use crate::amplitude::{bin_mean_into, vec_bin};
-use crate::emd::{Emd, EmdParams};
+use crate::features::amplitude::{bin_mean_into, vec_bin};
+use crate::features::emd::{Emd, EmdParams};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;

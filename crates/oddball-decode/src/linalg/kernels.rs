@@ -105,7 +105,7 @@ pub(crate) fn sq_distances(
     rows: ndarray::ArrayView2<f64>,
     rows_sq: &ndarray::Array1<f64>,
 ) -> ndarray::Array2<f64> {
-    let mut d = crate::scaler::dot_transposed(q, rows);
+    let mut d = crate::features::scaler::dot_transposed(q, rows);
     for (mut row, qr) in d.outer_iter_mut().zip(q.outer_iter()) {
         let q_sq = qr.dot(&qr);
         for (v, s) in row.iter_mut().zip(rows_sq) {

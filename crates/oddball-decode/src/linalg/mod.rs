@@ -18,7 +18,7 @@
 //! **Two symmetric eigensolvers, on purpose.** Every eigendecomposition in the crate is this
 //! module's [`sym_eigen`] / [`sym_eigenvalues`] (Riemannian means, distances, tangent space and
 //! MDM; xDAWN's generalized problem through [`generalized_eigh`]; shrinkage LDA) except one: PCA
-//! ([`crate::pca`]) diagonalises its Gram matrix with nalgebra's `SymmetricEigen`. (The Riemannian
+//! ([`crate::features::pca`]) diagonalises its Gram matrix with nalgebra's `SymmetricEigen`. (The Riemannian
 //! mean and tangent space run the same solver on four matrices at once, [`spd_eigen4`]: the same
 //! operations lane by lane, the same bits.) They are not
 //! merged because the rule of the project is bit-identical scores unless a disagreement is

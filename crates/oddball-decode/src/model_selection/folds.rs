@@ -1,6 +1,9 @@
-//! Cross-validation folds of epochs: groups (speller characters) kept whole, or stratified by
-//! label as scikit-learn's `StratifiedKFold` without shuffling.
+//! Cross-validation folds of epochs, the one home of every fold rule: groups (speller
+//! characters) kept whole ([`cv_folds`]), or stratified by label as scikit-learn's
+//! `StratifiedKFold` without shuffling ([`stratified_folds`]) or shuffled as with its
+//! `random_state` ([`stratified_folds_shuffled`], the SVM's probability calibration).
 
+use crate::features::scaler::check_labels;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -92,7 +95,7 @@ pub fn cv_folds(y: &[bool], groups: Option<&[usize]>, k: usize) -> Result<Folds>
         None => {
             let n_folds = k.min(n_targets).min(n_nontargets);
             Folds {
-                fold_of: crate::svm::stratified_folds(y, n_folds)?,
+                fold_of: stratified_folds(y, n_folds)?,
                 n_folds,
                 grouped: false,
             }
@@ -116,4 +119,114 @@ pub fn cv_folds(y: &[bool], groups: Option<&[usize]>, k: usize) -> Result<Folds>
         }
     }
     Ok(folds)
+}
+
+/// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=False)`:
+/// each class (in order of first appearance) is dealt to folds in contiguous blocks whose sizes
+/// follow scikit-learn's allocation. Every class needs at least `n_splits` samples.
+pub fn stratified_folds(y: &[bool], n_splits: usize) -> Result<Vec<usize>> {
+    stratified(y, n_splits, None)
+}
+
+/// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=True,
+/// random_state=seed)` (scikit-learn 1.x, numpy's legacy `RandomState`): the fold labels of each
+/// class, in blocks as [`stratified_folds`] deals them, are shuffled in class order by one
+/// MT19937 stream seeded with `seed` (`init_genrand`, from the `rand_mt` crate), each with
+/// numpy's Fisher–Yates `shuffle` drawing `j ≤ i` by masked rejection of 32-bit outputs
+/// (numpy's `random_interval`).
+pub fn stratified_folds_shuffled(y: &[bool], n_splits: usize, seed: u32) -> Result<Vec<usize>> {
+    stratified(y, n_splits, Some(seed))
+}
+
+/// numpy's legacy `RandomState.shuffle` of a 1-D array.
+fn numpy_shuffle(v: &mut [usize], rng: &mut rand_mt::Mt) {
+    for i in (1..v.len()).rev() {
+        // numpy's random_interval(i): the smallest all-ones mask covering i, redrawn until ≤ i
+        let max = i as u64;
+        let mask = u64::MAX >> max.leading_zeros();
+        let j = loop {
+            let value = u64::from(rng.next_u32()) & mask;
+            if value <= max {
+                break value as usize;
+            }
+        };
+        v.swap(i, j);
+    }
+}
+
+/// [`stratified_folds`], shuffled as [`stratified_folds_shuffled`] when `shuffle_seed` is given.
+pub(crate) fn stratified(
+    y: &[bool],
+    n_splits: usize,
+    shuffle_seed: Option<u32>,
+) -> Result<Vec<usize>> {
+    if n_splits < 2 {
+        return Err(DecodeError::InvalidParameter {
+            name: "n_folds",
+            value: n_splits.to_string(),
+            reason: "cross-validation needs at least 2 folds".into(),
+        });
+    }
+    let (n_t, n_n) = check_labels(y.len(), y)?;
+    if n_t.min(n_n) < n_splits {
+        return Err(DecodeError::TooFewSamples {
+            what: format!(
+                "{n_splits} stratified folds need {n_splits} samples of each class, got {n_t} \
+                 targets and {n_n} non-targets"
+            ),
+        });
+    }
+    // classes encoded by first appearance; y_order = sorted codes
+    let first = y[0];
+    let counts = [
+        y.iter().filter(|&&v| v == first).count(),
+        y.iter().filter(|&&v| v != first).count(),
+    ];
+    // allocation[i][k] = number of code-k entries among y_order[i::n_splits]
+    let mut alloc = vec![[0usize; 2]; n_splits];
+    for pos in 0..y.len() {
+        let code = usize::from(pos >= counts[0]);
+        alloc[pos % n_splits][code] += 1;
+    }
+    // per class, its fold labels in blocks (numpy's arange(n_splits).repeat(allocation[:, k]))
+    let mut rng = shuffle_seed.map(rand_mt::Mt::new);
+    let per_class: Vec<Vec<usize>> = (0..2)
+        .map(|code| {
+            let mut labels: Vec<usize> = (0..n_splits)
+                .flat_map(|fold| std::iter::repeat_n(fold, alloc[fold][code]))
+                .collect();
+            if let Some(rng) = rng.as_mut() {
+                numpy_shuffle(&mut labels, rng);
+            }
+            labels
+        })
+        .collect();
+    let mut next = [0usize; 2];
+    let folds = y
+        .iter()
+        .map(|&v| {
+            let code = usize::from(v != first);
+            next[code] += 1;
+            per_class[code][next[code] - 1]
+        })
+        .collect();
+    Ok(folds)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folds_follow_sklearn_allocation() {
+        // 3 targets first seen, 7 non-targets; 3 folds
+        let y = [
+            true, false, false, true, false, false, true, false, false, false,
+        ];
+        let f = stratified_folds(&y, 3).unwrap();
+        // class "true" (first seen) gets one per fold; non-targets 3/2/2 in order
+        assert_eq!(f, vec![0, 0, 0, 1, 0, 1, 2, 1, 2, 2]);
+        assert!(stratified_folds(&y, 4).is_err());
+        assert!(stratified_folds(&y, 1).is_err());
+    }
 }

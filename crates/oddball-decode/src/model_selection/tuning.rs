@@ -1,8 +1,10 @@
 //! Choosing a pipeline's hyper-parameters by cross-validation on the training data only.
 //!
-//! * [`preset_grid`]: a small grid of settings around each preset (its defaults included):
-//!   - `lda`, `toeplitz-lda`: the amplitude bin width, round(sfreq/32), round(sfreq/25) (the
-//!     default) and round(sfreq/20) samples;
+//! * [`Preset::grid`](crate::preset::Preset::grid): a small grid of settings around each preset
+//!   (its defaults included), written beside the preset's settings in [`crate::preset`]:
+//!   - `lda`, `toeplitz-lda` (and every classifier preset on amplitudes): the amplitude bin
+//!     width, round(sfreq/32), round(sfreq/25) (the default) and round(sfreq/20) samples, ×
+//!     the classifier's own grid (none for these two);
 //!   - `lda+riemann`, `stack`: none (the stack learns its weights by its own inner folds);
 //!   - `riemann`: xDAWN filters per class {2, 4, 6} × logistic-regression `C` {0.1, 1, 10};
 //!   - `mdm`: xDAWN filters per class {2, 4, 6};
@@ -10,7 +12,7 @@
 //!   - `paper-knn`: neighbours k {3, 5, 9}.
 //! * [`cv_folds`]: k folds that keep each group (a speller character: its flashes overlap in time
 //!   and share one attended symbol) in one fold, contiguous runs of groups per fold; without
-//!   groups, scikit-learn's `StratifiedKFold(k)` without shuffling ([`crate::svm::stratified_folds`]:
+//!   groups, scikit-learn's `StratifiedKFold(k)` without shuffling ([`super::folds::stratified_folds`]:
 //!   each class dealt to folds in contiguous blocks, so neighbouring, overlapping epochs mostly
 //!   stay together). `k` is lowered to the number of groups (or to the smaller class's size).
 //! * [`grid_search`]: mean epoch ROC-AUC over the folds for each candidate; the best mean wins
@@ -32,126 +34,16 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
-use crate::amplitude::AmplitudeFeatures;
-use crate::classifiers::ClassifierParams;
-use crate::ensemble::MemberParams;
-use crate::features::FeatureParams;
-use crate::knn::KnnParams;
 use crate::metrics::roc_auc;
 use crate::pipeline::{FrontCache, Necked, PipelineParams};
-use crate::preset::Preset;
-use crate::svm::SvmParams;
 use crate::DecodeError;
 
+pub use crate::preset::Candidate;
+
 pub use super::folds::{cv_folds, Folds};
+use super::Split;
 
 type Result<T> = std::result::Result<T, DecodeError>;
-
-/// One point of a grid: pipeline settings and a short label naming what differs.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Candidate {
-    pub label: String,
-    pub params: PipelineParams,
-}
-
-/// The grid [`PipelineParams::preset`]`(name, sfreq)` is tuned over (see the module doc); the
-/// preset's own settings are one of the candidates.
-pub fn preset_grid(name: &str, sfreq: f64) -> Result<Vec<Candidate>> {
-    grid(name.parse()?, sfreq)
-}
-
-/// The grid `preset` is tuned over at `sfreq` Hz (see the module doc); the preset's own
-/// settings are one of the candidates.
-pub fn grid(preset: Preset, sfreq: f64) -> Result<Vec<Candidate>> {
-    let base = preset.params(sfreq)?;
-    let mut out = Vec::new();
-    match preset {
-        Preset::Lda | Preset::ToeplitzLda => {
-            let mut bins: Vec<usize> = [32.0, 25.0, 20.0]
-                .iter()
-                .map(|&f| crate::amplitude::samples_per(sfreq, f))
-                .collect();
-            bins.dedup();
-            for bin in bins {
-                let mut p = base.clone();
-                p.main.features = FeatureParams::Amplitude(AmplitudeFeatures::bin_mean(bin)?);
-                out.push(Candidate {
-                    label: format!("bin {bin} samples ({:.0} ms)", 1000.0 * bin as f64 / sfreq),
-                    params: p,
-                });
-            }
-        }
-        Preset::Riemann | Preset::Mdm => {
-            let cs: &[f64] = if preset == Preset::Riemann {
-                &[0.1, 1.0, 10.0]
-            } else {
-                &[1.0]
-            };
-            for nfilter in [2, 4, 6] {
-                for &c in cs {
-                    let mut p = base.clone();
-                    match &mut p.main.features {
-                        FeatureParams::XdawnTangent(f) => f.xdawn.nfilter = nfilter,
-                        FeatureParams::XdawnCovariances(f) => f.xdawn.nfilter = nfilter,
-                        _ => unreachable!("the {preset} preset has xDAWN features"),
-                    }
-                    let label = if let ClassifierParams::Logistic(l) = &mut p.main.classifier {
-                        l.c = c;
-                        format!("nfilter {nfilter}, C {c}")
-                    } else {
-                        format!("nfilter {nfilter}")
-                    };
-                    out.push(Candidate { label, params: p });
-                }
-            }
-        }
-        Preset::Paper | Preset::PaperSvm => {
-            for c in [1.0, 10.0] {
-                for factor in [1.0, 0.5] {
-                    let mut p = base.clone();
-                    let set = |s: &mut SvmParams| s.c = c;
-                    match &mut p.main.classifier {
-                        ClassifierParams::Svm(s) => set(s),
-                        ClassifierParams::Vote(v) => {
-                            for m in &mut v.members {
-                                if let MemberParams::Svm(s) = m {
-                                    set(s);
-                                }
-                            }
-                        }
-                        _ => unreachable!("the {preset} preset has an SVM"),
-                    }
-                    p.main.svm_gamma_scale = factor;
-                    out.push(Candidate {
-                        label: format!("C {c}, gamma {factor}×scale"),
-                        params: p,
-                    });
-                }
-            }
-        }
-        // Equal-weight score fusion has nothing to tune: its members keep their presets' settings.
-        Preset::LdaRiemann => out.push(Candidate {
-            label: "lda + riemann, equal weights (no grid)".into(),
-            params: base.clone(),
-        }),
-        // Stacking learns its weights by its own inner cross-validation.
-        Preset::Stack => out.push(Candidate {
-            label: "toeplitz-lda + riemann + mdm, stacked (no grid)".into(),
-            params: base.clone(),
-        }),
-        Preset::PaperKnn => {
-            for k in [3, 5, 9] {
-                let mut p = base.clone();
-                p.main.classifier = ClassifierParams::Knn(KnnParams { k });
-                out.push(Candidate {
-                    label: format!("k {k}"),
-                    params: p,
-                });
-            }
-        }
-    }
-    Ok(out)
-}
 
 /// Cross-validated scores of a grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -233,18 +125,7 @@ pub fn grid_search_cached(
     let full = |idx: &[usize]| -> Vec<usize> { idx.iter().map(|&i| subset[i]).collect() };
     let epochs = cache.epochs();
     // The labels and groups of each fold's two parts.
-    let parts: Vec<FoldParts> = (0..folds.n_folds())
-        .map(|f| {
-            let (tr, te) = folds.split(f);
-            FoldParts {
-                ytr: tr.iter().map(|&e| y[e]).collect(),
-                yte: te.iter().map(|&e| y[e]).collect(),
-                gtr: groups.map(|g| tr.iter().map(|&e| g[e]).collect()),
-                tr,
-                te,
-            }
-        })
-        .collect();
+    let parts: Vec<Split> = folds.splits(y, groups).collect();
     // The folds of one candidate group run in parallel (rayon); each is fitted on its own
     // training part only, so the scores do not depend on the number of threads.
     for i in 0..n {
@@ -257,13 +138,13 @@ pub fn grid_search_cached(
                 .par_iter()
                 .map(|p| {
                     let m = candidates[i].fit_source(
-                        epochs.subset(&full(&p.tr), 1).source(),
-                        &p.ytr,
-                        p.gtr.as_deref(),
+                        epochs.subset(&full(&p.train), 1).source(),
+                        &p.y_train,
+                        p.groups_train.as_deref(),
                     )?;
                     let scores =
-                        m.decision_function_source(epochs.subset(&full(&p.te), 1).source())?;
-                    roc_auc(&scores.to_vec(), &p.yte)
+                        m.decision_function_source(epochs.subset(&full(&p.test), 1).source())?;
+                    roc_auc(&scores.to_vec(), &p.y_test)
                 })
                 .collect::<Result<Vec<f64>>>()?;
             for (f, auc) in aucs.into_iter().enumerate() {
@@ -299,7 +180,7 @@ pub fn grid_search_cached(
                 None => groups_of_neck.push(vec![j]),
             }
         }
-        let split_of = |p: &FoldParts| (full(&p.tr), full(&p.te));
+        let split_of = |p: &Split| (full(&p.train), full(&p.test));
         let known: Vec<Vec<Option<Arc<Necked>>>> = parts
             .iter()
             .map(|p| {
@@ -321,13 +202,14 @@ pub fn grid_search_cached(
             .zip(known.par_iter())
             .map(|(p, known)| -> Result<FoldOut> {
                 let (xtr, xte, n_front) = match &shared {
-                    Some(x) => (x.select(&full(&p.tr)), x.select(&full(&p.te)), n_in),
+                    Some(x) => (x.select(&full(&p.train)), x.select(&full(&p.test)), n_in),
                     None => {
-                        let (front, xtr) = candidates[i]
-                            .main
-                            .fit_front_source(epochs.subset(&full(&p.tr), 1).source(), &p.ytr)?;
+                        let (front, xtr) = candidates[i].main.fit_front_source(
+                            epochs.subset(&full(&p.train), 1).source(),
+                            &p.y_train,
+                        )?;
                         let xte = epochs
-                            .subset(&full(&p.te), 1)
+                            .subset(&full(&p.test), 1)
                             .source()
                             .map_chunks(&mut |chunk| front.transform(chunk))?;
                         (xtr, xte, front.n_channels(n_in))
@@ -361,8 +243,8 @@ pub fn grid_search_cached(
                     for &j in g {
                         let (scores, _, _) = candidates[j]
                             .main
-                            .classifier_scores(&necked, &p.ytr, n_front)?;
-                        aucs.push((j, roc_auc(&scores.to_vec(), &p.yte)?));
+                            .classifier_scores(&necked, &p.y_train, n_front)?;
+                        aucs.push((j, roc_auc(&scores.to_vec(), &p.y_test)?));
                     }
                 }
                 Ok((aucs, fitted))
@@ -399,15 +281,6 @@ pub fn grid_search_cached(
         n_folds: folds.n_folds(),
         grouped: folds.grouped(),
     })
-}
-
-/// One fold's training and test epochs (indices into the searched subset), labels and groups.
-struct FoldParts {
-    tr: Vec<usize>,
-    te: Vec<usize>,
-    ytr: Vec<bool>,
-    yte: Vec<bool>,
-    gtr: Option<Vec<usize>>,
 }
 
 /// A candidate's cross-validated score, as reported and saved with a tuned model.
@@ -486,7 +359,9 @@ pub fn tune_cached(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::PRESETS;
+    use crate::features::amplitude::AmplitudeFeatures;
+    use crate::features::FeatureParams;
+    use crate::preset::Preset;
     use ndarray::{Array3, Axis};
 
     /// Synthetic epochs at 64 Hz: targets (every 6th) carry a bump at 300 ms; groups of 24.
@@ -540,35 +415,9 @@ mod tests {
     }
 
     #[test]
-    fn every_preset_has_a_grid_holding_its_defaults() {
-        for name in PRESETS {
-            let grid = preset_grid(name, 256.0).unwrap();
-            // The fusions have nothing of their own to tune.
-            let least = if name == "lda+riemann" || name == "stack" {
-                1
-            } else {
-                3
-            };
-            assert!(grid.len() >= least, "{name}: {} candidates", grid.len());
-            let default = PipelineParams::preset(name, 256.0).unwrap();
-            assert!(
-                grid.iter().any(|c| c.params == default),
-                "{name}: the preset's own settings are a candidate"
-            );
-            let mut labels: Vec<&str> = grid.iter().map(|c| c.label.as_str()).collect();
-            labels.sort_unstable();
-            labels.dedup();
-            assert_eq!(labels.len(), grid.len(), "{name}: labels are distinct");
-        }
-        let lda = preset_grid("lda", 256.0).unwrap();
-        assert_eq!(lda[0].label, "bin 8 samples (31 ms)");
-        assert!(preset_grid("nope", 256.0).is_err());
-    }
-
-    #[test]
     fn the_informative_candidate_wins() {
         let (x, y, groups) = synthetic(24 * 6, 2);
-        let base = PipelineParams::preset("lda", 64.0).unwrap();
+        let base = Preset::Lda.params(64.0).unwrap();
         // Only the first sample of each channel: no sight of the 300 ms bump.
         let mut blind = base.clone();
         blind.main.features = FeatureParams::Amplitude(AmplitudeFeatures::decimate(64).unwrap());
@@ -587,19 +436,21 @@ mod tests {
     #[test]
     fn shared_fits_equal_whole_pipeline_fits() {
         let (x, y, groups) = synthetic(24 * 5, 3);
-        let mut cands: Vec<PipelineParams> = preset_grid("riemann", 64.0)
+        let mut cands: Vec<PipelineParams> = Preset::Riemann
+            .grid(64.0)
             .unwrap()
             .into_iter()
             .filter(|c| c.label.starts_with("nfilter 2"))
             .map(|c| c.params)
             .collect();
         cands.extend(
-            preset_grid("lda", 64.0)
+            Preset::Lda
+                .grid(64.0)
                 .unwrap()
                 .into_iter()
                 .map(|c| c.params),
         );
-        cands.push(PipelineParams::preset("mdm", 64.0).unwrap());
+        cands.push(Preset::Mdm.params(64.0).unwrap());
         let mut fits = 0;
         let g =
             grid_search_with(&cands, x.view(), &y, Some(&groups), 3, &mut || fits += 1).unwrap();
@@ -626,8 +477,15 @@ mod tests {
         let (x, y, groups) = synthetic(24 * 4, 5);
         let mut cache = FrontCache::new(x.view());
         let outer = cv_folds(&y, Some(&groups), 2).unwrap();
-        for name in ["lda", "paper-knn", "paper-svm", "riemann", "lda+riemann"] {
-            let grid: Vec<PipelineParams> = preset_grid(name, 64.0)
+        for name in [
+            Preset::Lda,
+            Preset::PaperKnn,
+            Preset::PaperSvm,
+            Preset::Riemann,
+            Preset::LdaRiemann,
+        ] {
+            let grid: Vec<PipelineParams> = name
+                .grid(64.0)
                 .unwrap()
                 .into_iter()
                 .map(|c| c.params)
@@ -664,7 +522,7 @@ mod tests {
     #[test]
     fn tune_reports_every_candidate_and_returns_the_chosen_settings() {
         let (x, y, groups) = synthetic(24 * 4, 4);
-        let grid = preset_grid("mdm", 64.0).unwrap();
+        let grid = Preset::Mdm.grid(64.0).unwrap();
         let (chosen, report) = tune(&grid, x.view(), &y, Some(&groups), 4, &mut || {}).unwrap();
         assert_eq!(report.candidates.len(), 3);
         assert_eq!(report.n_folds, 4);

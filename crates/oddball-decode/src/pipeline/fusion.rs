@@ -6,8 +6,9 @@ use ndarray::{Array1, Array2};
 use serde::{Deserialize, Serialize};
 
 use super::{EpochSource, Pipeline, PipelineParams, Single, SingleParams};
-use crate::logistic::LogisticParams;
-use crate::scaler::StandardScalerParams;
+use crate::classifiers::logistic::LogisticParams;
+use crate::features::scaler::StandardScalerParams;
+use crate::model_selection::Split;
 use crate::traits::FeatureData;
 use crate::DecodeError;
 
@@ -22,7 +23,7 @@ pub enum Fusion {
     Standardised,
     /// Stacking (scikit-learn's `StackingClassifier` with `cv`, a logistic-regression final
     /// estimator on standardised scores): each pipeline is fitted on the training part of
-    /// `n_folds` inner folds ([`crate::tuning::cv_folds`]: speller characters kept whole when the
+    /// `n_folds` inner folds ([`crate::model_selection::cv_folds`]: speller characters kept whole when the
     /// fit is given groups, otherwise stratified) and scores the held-out part; a logistic
     /// regression (`C = 1`) on those out-of-fold scores, each standardised by its mean and
     /// standard deviation, learns the weights. The pipelines are then fitted on all the epochs,
@@ -143,7 +144,7 @@ fn fit_stacker(
     groups: Option<&[usize]>,
     n_folds: usize,
 ) -> Result<Stacker> {
-    let folds = crate::tuning::cv_folds(y, groups, n_folds)?;
+    let folds = crate::model_selection::cv_folds(y, groups, n_folds)?;
     let singles: Vec<&SingleParams> = params.singles().collect();
     let n = y.len();
     let n_channels = epochs.dim().1;
@@ -164,8 +165,12 @@ fn fit_stacker(
     let per_fold = (0..folds.n_folds())
         .into_par_iter()
         .map(|f| {
-            let (tr, te) = folds.split(f);
-            let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
+            let Split {
+                train: tr,
+                test: te,
+                y_train: ytr,
+                ..
+            } = folds.split_of(f, y, None);
             let scores = singles
                 .iter()
                 .enumerate()

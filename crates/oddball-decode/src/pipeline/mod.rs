@@ -12,7 +12,7 @@
 //! A [`PipelineParams`] is one single pipeline plus, optionally, further single pipelines fused
 //! with it ([`fusion`]); a member of a fusion is a single pipeline by its type, so fusions do not
 //! nest. A fitted [`Pipeline`] keeps the [`PipelineParams`] it was fitted with, so a saved model
-//! carries its settings (e.g. those chosen by [`crate::tuning`]). Named settings are
+//! carries its settings (e.g. those chosen by [`crate::model_selection::tuning`]). Named settings are
 //! [`crate::preset::Preset`]s; the saved form is [`crate::model`]'s.
 
 pub mod fusion;
@@ -23,15 +23,15 @@ use ndarray::{s, Array1, Array3, ArrayView2, ArrayView3, Axis};
 use oddball_signal::{Epochs, EPOCH_CHUNK};
 use serde::{Deserialize, Serialize};
 
-use crate::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
 pub use crate::classifiers::{Classifier, ClassifierParams};
+use crate::features::channel_select::{ChannelCount, ChannelSelection, ChannelSelectionParams};
+use crate::features::pca::{Pca, PcaParams};
+use crate::features::scaler::{StandardScaler, StandardScalerParams};
 pub use crate::features::{FeatureParams, Features};
 pub use crate::model::{Model, MODEL_FORMAT_VERSION, READABLE_MODEL_VERSIONS};
-use crate::pca::{Pca, PcaParams};
 pub use crate::preprocess::{Preprocess, FLAT_UV};
 pub use crate::preset::{Preset, PRESETS};
 pub use crate::riemann::{XdawnCovFeatures, XdawnTangent};
-use crate::scaler::{StandardScaler, StandardScalerParams};
 use crate::traits::{FeatureData, FeatureView};
 use crate::DecodeError;
 pub use fusion::{FusedMember, Fusion, FusionTerm};
@@ -107,7 +107,7 @@ impl PipelineParams {
 
     /// [`fit`](Self::fit) where epochs belong to `groups` (one id per epoch, e.g. the speller
     /// character): a stacked fusion's inner folds keep each group whole, as
-    /// [`crate::tuning::cv_folds`] does. Only a stacked fusion reads the groups.
+    /// [`crate::model_selection::tuning::cv_folds`] does. Only a stacked fusion reads the groups.
     pub fn fit_grouped(
         &self,
         epochs: ArrayView3<f64>,
@@ -530,8 +530,8 @@ impl<'a> EpochSource<'a> {
         FeatureData::concatenate(parts)
     }
 
-    /// A score per epoch by `f`, as [`Self::map_chunks`] reads the epochs.
-    pub(crate) fn map_scores<E>(
+    /// A score per epoch by `f`, read a part at a time (windows are never all copied at once).
+    pub fn map_scores<E>(
         &self,
         mut f: impl FnMut(ArrayView3<f64>) -> std::result::Result<Array1<f64>, E>,
     ) -> std::result::Result<Array1<f64>, E> {
@@ -787,7 +787,7 @@ fn check_labels(n_epochs: usize, y: &[bool]) -> Result<()> {
 }
 
 /// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
-/// variance is 0), as [`crate::svm`] resolves it.
+/// variance is 0), as [`crate::classifiers::svm`] resolves it.
 fn gamma_scale(x: FeatureView<'_>) -> f64 {
     let (sum, len, n_features) = match x {
         FeatureView::Rows(r) => (r.sum(), r.len(), r.ncols()),

@@ -1,5 +1,5 @@
 use super::*;
-use crate::logistic::LogisticParams;
+use crate::classifiers::logistic::LogisticParams;
 use ndarray::{Array1, Array2, Array3};
 
 /// Synthetic epochs: targets (every 5th) carry a positive bump at 300 ms on the later channels.
@@ -128,7 +128,7 @@ fn out_of_fold(
     singles: &[&SingleParams],
     x: &Array3<f64>,
     y: &[bool],
-    folds: &crate::tuning::Folds,
+    folds: &crate::model_selection::tuning::Folds,
 ) -> Array2<f64> {
     let mut oof = Array2::<f64>::zeros((y.len(), singles.len()));
     for f in 0..folds.n_folds() {
@@ -160,7 +160,7 @@ fn a_stacked_fusion_is_a_logistic_regression_on_out_of_fold_scores() {
     // Independently: the three presets alone, scored out of fold on folds keeping the
     // groups whole, then scikit-learn's recipe (StandardScaler → LogisticRegression).
     let names = ["toeplitz-lda", "riemann", "mdm"];
-    let folds = crate::tuning::cv_folds(&ytr, Some(&groups), 5).unwrap();
+    let folds = crate::model_selection::tuning::cv_folds(&ytr, Some(&groups), 5).unwrap();
     assert!(folds.grouped());
     let fold_of = folds.fold_of();
     assert!((0..200).all(|i| fold_of[i] == fold_of[25 * groups[i]]));
@@ -386,7 +386,7 @@ fn a_stack_learns_the_same_combination_without_full_copies_per_fold() {
     let singles: Vec<&SingleParams> = stack.singles().collect();
     assert!(singles[0].stateless_features(x.view().into()).is_some());
     assert!(singles[1].decimated().is_some() && singles[2].decimated().is_some());
-    let folds = crate::tuning::cv_folds(&y, None, n_folds).unwrap();
+    let folds = crate::model_selection::tuning::cv_folds(&y, None, n_folds).unwrap();
     let oof = out_of_fold(&singles, &x, &y, &folds);
     let scaler = StandardScalerParams::default().fit(oof.view()).unwrap();
     let lr = LogisticParams::default()

@@ -7,9 +7,9 @@ use ndarray::parallel::prelude::*;
 use ndarray::{s, Array2, Array3, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
+use crate::riemann::xdawn::{XdawnCovariances, XdawnCovariancesParams};
 use crate::riemann::{TangentSpace, TangentSpaceParams};
 use crate::traits::{FeatureData, FitTransformer, Transformer};
-use crate::xdawn::{XdawnCovariances, XdawnCovariancesParams};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -103,7 +103,7 @@ impl Transformer for XdawnTangent {
             .try_for_each_init(
                 || {
                     (
-                        crate::xdawn::Buffers::default(),
+                        crate::riemann::xdawn::Buffers::default(),
                         crate::riemann::Scratch::default(),
                         <[DMatrix<f64>; 4]>::default(),
                         <[DMatrix<f64>; 4]>::default(),
@@ -143,7 +143,7 @@ impl Transformer for XdawnCovFeatures {
             .into_par_iter()
             .zip(x.axis_iter(Axis(0)).into_par_iter())
             .try_for_each_init(
-                crate::xdawn::Buffers::default,
+                crate::riemann::xdawn::Buffers::default,
                 |buf, (mut m, epoch)| -> Result<()> {
                     let cov = self.xdawn.covariance_of(epoch, buf)?;
                     m.iter_mut().zip(cov.iter()).for_each(|(o, &v)| *o = v);

@@ -31,10 +31,10 @@ use nalgebra::DMatrix;
 use ndarray::{Array2, Array3, ArrayView2, ArrayView3, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::covariance::{estimate_columns, CovEstimator};
 use crate::linalg::{
     check_finite, check_labels, copy_transposed_into, generalized_eigh, to_array2,
 };
+use crate::riemann::covariance::{estimate_columns, CovEstimator};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;

@@ -117,7 +117,7 @@ impl Prepared {
 }
 
 /// scikit-learn's `ledoit_wolf_shrinkage` of the standardised rows `zᵢⱼ = x̃ᵢⱼ / √dⱼ`, from the
-/// centred rows and their covariance (the formula of `crate::covariance`, on the correlation
+/// centred rows and their covariance (the formula of `crate::riemann::covariance`, on the correlation
 /// matrix).
 pub(crate) fn ledoit_wolf_standardised(
     xc: &DMatrix<f64>,

@@ -39,7 +39,6 @@
 //! property tests (posteriors sum to one; the objective never falls) in `tests/unsupervised.rs`.
 
 mod em;
-pub mod evaluate;
 mod replay;
 mod template;
 
@@ -49,7 +48,7 @@ use ndarray::{Array1, ArrayView2, ArrayView3};
 use oddball_io::Speller;
 use serde::{Deserialize, Serialize};
 
-use crate::amplitude::AmplitudeFeatures;
+use crate::features::amplitude::AmplitudeFeatures;
 use crate::DecodeError;
 
 pub use replay::{replay, replay_from, OnlineChoice, Replay};

@@ -1,6 +1,6 @@
 //! The Wilcoxon signed-rank test against scipy.stats.wilcoxon 1.17.1 (tools/golden/stats).
 
-use oddball_decode::stats::{wilcoxon, Alternative, WilcoxonMethod};
+use oddball_eval::stats::{wilcoxon, Alternative, WilcoxonMethod};
 
 #[test]
 fn wilcoxon_matches_scipy_on_every_case_and_alternative() {

@@ -5,10 +5,12 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use super::{replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams};
 use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
-use crate::metrics::roc_auc;
-use crate::pipeline::EpochSource;
+use oddball_decode::metrics::{character_of_flashes, roc_auc};
+use oddball_decode::pipeline::EpochSource;
+use oddball_decode::unsupervised::{
+    replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams,
+};
 
 /// Why an unsupervised replay could not run or be scored.
 #[derive(Debug, thiserror::Error)]
@@ -98,13 +100,15 @@ pub fn evaluate_unsupervised(
             }
             .into());
         }
-        let events = Events::new(rec.epochs.events().to_vec());
-        let blocks = speller.character_blocks(&events);
-        for b in &blocks {
-            let k = trials.last().map_or(0, |&l: &usize| l + 1);
-            codes.extend(b.iter().map(|e| e.code));
-            trials.extend(std::iter::repeat_n(k, b.len()));
-        }
+        // Characters numbered on from the previous recording's.
+        let first_char = trials.last().map_or(0, |&l: &usize| l + 1);
+        let events = rec.epochs.events();
+        codes.extend(events.iter().map(|e| e.code));
+        trials.extend(
+            character_of_flashes(speller, events.len())
+                .into_iter()
+                .map(|c| first_char + c),
+        );
     }
     let constraint = constraint.expect("at least one recording");
     let parts: Vec<&Epochs> = recs.iter().map(|r| &r.epochs).collect();

@@ -13,7 +13,7 @@
 //!   The channel names and the sampling rate of all subjects must agree.
 //!
 //! Everything that can be checked is checked before any EEG is read ([`BenchmarkParams::plan`]):
-//! preset names, folds, which protocol applies to which subject (a subject without test runs has
+//! presets, folds, which protocol applies to which subject (a subject without test runs has
 //! no train → test row; a data set of one subject has no cross-subject rows: both are listed as
 //! skipped, not errors). Subjects are read in parallel, then the evaluations run in parallel
 //! (rayon), each reporting through a [`Progress`] callback.
@@ -39,9 +39,10 @@ use crate::dataset::{self, DatasetError, Labelling};
 use crate::evaluate::{
     self, EpochedRecording, EvaluateError, EvaluateParams, PipelineResult, TrainingSet,
 };
-use crate::preprocess::Preprocess;
-use crate::preset::PRESETS;
+use crate::layout::{Layout, Resampled};
 use crate::stats::{wilcoxon, Alternative};
+use oddball_decode::preprocess::Preprocess;
+use oddball_decode::preset::Preset;
 
 /// How a subject's data is split into training and test data (MOABB's evaluations).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
@@ -99,8 +100,6 @@ impl FromStr for Protocol {
 pub enum BenchmarkError {
     #[error("no presets to run")]
     NoPresets,
-    #[error("unknown preset {0:?}; known: {known}", known = PRESETS.join(", "))]
-    UnknownPreset(String),
     #[error("no protocols to run")]
     NoProtocols,
     #[error("--folds {0}: cross-validation needs at least 2 folds")]
@@ -138,8 +137,8 @@ pub enum BenchmarkError {
 /// Settings of a benchmark (unfitted; [`BenchmarkParams::plan`] checks them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchmarkParams {
-    /// Preset names, in this order.
-    pub presets: Vec<String>,
+    /// Presets, in this order.
+    pub presets: Vec<Preset>,
     pub protocols: Vec<Protocol>,
     /// Folds of the within-session cross-validation.
     pub folds: usize,
@@ -150,7 +149,7 @@ pub struct BenchmarkParams {
 impl Default for BenchmarkParams {
     fn default() -> Self {
         Self {
-            presets: vec!["lda".into()],
+            presets: vec![Preset::Lda],
             protocols: vec![Protocol::TrainTest],
             folds: 5,
             preprocess: Preprocess::peer(),
@@ -183,9 +182,6 @@ impl BenchmarkParams {
     pub fn plan(&self, manifests: &[Manifest]) -> Result<Plan, BenchmarkError> {
         if self.presets.is_empty() {
             return Err(BenchmarkError::NoPresets);
-        }
-        if let Some(p) = self.presets.iter().find(|p| !PRESETS.contains(&p.as_str())) {
-            return Err(BenchmarkError::UnknownPreset(p.clone()));
         }
         if self.protocols.is_empty() {
             return Err(BenchmarkError::NoProtocols);
@@ -312,6 +308,12 @@ pub enum Progress<'a> {
     Plan { subjects: usize, units: usize },
     /// A subject's runs were read and epoched.
     Loaded { dataset: &'a str, subject: &'a str },
+    /// A run was resampled to its subject's first run's rate ([`Layout`]).
+    Resampled {
+        run: &'a std::path::Path,
+        resampled: Resampled,
+        of: &'a str,
+    },
     /// One evaluation finished with these rows.
     Done { rows: &'a [BenchmarkRow] },
 }
@@ -344,7 +346,7 @@ pub fn run(
     let loaded: BTreeMap<(usize, usize), Vec<EpochedRecording>> = needed
         .par_iter()
         .map(|&(d, s)| {
-            let recs = load_subject(&manifests[d], s, &params.preprocess)?;
+            let recs = load_subject(&manifests[d], s, &params.preprocess, on)?;
             on(Progress::Loaded {
                 dataset: &manifests[d].name,
                 subject: &manifests[d].subjects[s].id,
@@ -362,9 +364,10 @@ pub fn run(
     let mut rows = rows.into_inner().expect("no panic holds the lock");
     rows.sort_by_key(|(i, _)| *i);
     let results: Vec<BenchmarkRow> = rows.into_iter().flat_map(|(_, r)| r).collect();
+    let names: Vec<String> = params.presets.iter().map(Preset::to_string).collect();
     Ok(BenchmarkReport {
-        summary: summarise(&results, &params.presets),
-        comparisons: compare(&results, &params.presets),
+        summary: summarise(&results, &names),
+        comparisons: compare(&results, &names),
         results,
         skipped: plan.skipped,
         wall_s: t0.elapsed().as_secs_f64(),
@@ -374,12 +377,16 @@ pub fn run(
 
 /// Every run of a subject, labelled (the manifest's event mapping, speller geometry and spelled
 /// texts) and epoched, in the order train then test.
+/// A subject's runs, read, labelled, matched to the first run's [`Layout`] (the one channel and
+/// rate policy `evaluate` applies to its files too) and epoched.
 fn load_subject(
     m: &Manifest,
     s: usize,
     pre: &Preprocess,
+    on: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<Vec<EpochedRecording>, BenchmarkError> {
     let subj = &m.subjects[s];
+    let mut layout: Option<Layout> = None;
     subj.runs()
         .map(|run| {
             let how = Labelling {
@@ -388,7 +395,26 @@ fn load_subject(
                 speller: m.speller.as_ref(),
                 read: m.read.as_ref(),
             };
-            dataset::read_labelled(run, how).and_then(|rec| dataset::epoch(rec, pre))
+            let rec = dataset::read_labelled(run, how)?;
+            let rec = match &layout {
+                Some(l) => {
+                    let (rec, resampled) =
+                        l.fit(rec).map_err(|e| DatasetError::Layout(Box::new(e)))?;
+                    if let Some(resampled) = resampled {
+                        on(Progress::Resampled {
+                            run,
+                            resampled,
+                            of: &l.of,
+                        });
+                    }
+                    rec
+                }
+                None => {
+                    layout = Some(Layout::of_recording(&rec));
+                    rec
+                }
+            };
+            dataset::epoch(rec, pre)
         })
         .collect::<Result<_, _>>()
         .map_err(|source| BenchmarkError::Dataset {
@@ -506,18 +532,9 @@ fn check_layout(
     other: &str,
     b: &EpochedRecording,
 ) -> Result<(), BenchmarkError> {
-    let what = if a.epochs.ch_names() != b.epochs.ch_names() {
-        Some("their channels".to_string())
-    } else if a.epochs.sfreq() != b.epochs.sfreq() {
-        Some(format!(
-            "sampling rate ({} and {} Hz)",
-            a.epochs.sfreq(),
-            b.epochs.sfreq()
-        ))
-    } else {
-        None
-    };
-    match what {
+    // A model of one subject scores the other's epochs as they are: no matching.
+    let layout = |r: &EpochedRecording| Layout::of_epochs(&r.epochs, r.name.clone());
+    match layout(a).differs(&layout(b)) {
         Some(what) => Err(BenchmarkError::Layout {
             dataset: m.name.clone(),
             subject: subject.to_string(),

@@ -1,7 +1,7 @@
 //! Scoring pipelines on epoched recordings: held-out test recordings, k-fold cross-validation
 //! (with the hyper-parameter search nested in each fold), and speller character accuracy by
 //! repetitions with the Wolpaw ITR — never letting test data into any fitted step, nor into the
-//! choice of hyper-parameters ([`crate::tuning`] sees the training epochs only).
+//! choice of hyper-parameters ([`oddball_decode::model_selection::tuning`] sees the training epochs only).
 //!
 //! The input is [`EpochedRecording`]s (the epochs of one recording each, cut by
 //! `oddball_signal::preprocess`): the training ones as one [`TrainingSet`] (pooled once, moved
@@ -18,12 +18,16 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use crate::decision::{DecisionModel, DecisionRule, ScoreModelParams};
-use crate::metrics::{roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash};
-use crate::pipeline::FrontCache;
-use crate::pipeline::{Pipeline, PipelineParams};
-use crate::tuning::{cv_folds, preset_grid, tune_cached, Folds, TuningReport};
-use crate::DecodeError;
+use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams};
+use oddball_decode::metrics::{
+    character_of_flashes, roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash,
+};
+use oddball_decode::model_selection::tuning::{cv_folds, tune_cached, Folds, TuningReport};
+use oddball_decode::model_selection::{cross_val_predict, cross_val_scores};
+use oddball_decode::pipeline::FrontCache;
+use oddball_decode::pipeline::{Pipeline, PipelineParams};
+use oddball_decode::preset::Preset;
+use oddball_decode::DecodeError;
 
 /// Why an evaluation could not run.
 #[derive(Debug, thiserror::Error)]
@@ -41,7 +45,7 @@ pub enum EvaluateError {
     /// The hyper-parameter search of a preset failed (`fold`: 1-based outer fold).
     #[error("tuning {preset}{}", .fold.map(|f| format!(" in fold {f}")).unwrap_or_default())]
     Tuning {
-        preset: String,
+        preset: Preset,
         fold: Option<usize>,
         #[source]
         source: DecodeError,
@@ -76,13 +80,13 @@ pub enum Progress<'a> {
         cross_validation: Option<&'a Folds>,
     },
     /// A preset starts.
-    Preset(&'a str),
+    Preset(Preset),
     /// One pipeline was fitted.
     Fit,
     /// A preset's hyper-parameters were chosen; `fold` is (1-based outer fold, number of outer
     /// folds) when the search ran inside a cross-validation fold.
     Tuned {
-        preset: &'a str,
+        preset: Preset,
         fold: Option<(usize, usize)>,
         report: &'a TuningReport,
     },
@@ -125,8 +129,8 @@ pub struct PipelineResult {
 /// Settings of an evaluation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EvaluateParams {
-    /// Preset names ([`crate::pipeline::PRESETS`]), scored in this order.
-    pub presets: Vec<String>,
+    /// Presets, scored in this order.
+    pub presets: Vec<Preset>,
     /// Folds of the cross-validation (without test recordings) and of the tuning.
     pub folds: usize,
     /// Choose each preset's hyper-parameters by cross-validation on the training data only.
@@ -159,11 +163,10 @@ pub fn character_groups(recs: &[EpochedRecording]) -> Option<Vec<usize>> {
         if rec.epochs.n_epochs() != rec.n_events {
             return None;
         }
-        let events = Events::new(rec.epochs.events().to_vec());
-        for block in speller.character_blocks(&events) {
-            groups.extend(std::iter::repeat_n(next, block.len()));
-            next += 1;
-        }
+        let chars = character_of_flashes(speller, rec.epochs.n_epochs());
+        let n_chars = chars.last().map_or(0, |&c| c + 1);
+        groups.extend(chars.into_iter().map(|c| next + c));
+        next += n_chars;
     }
     (next >= 2 && groups.len() == recs.iter().map(|r| r.epochs.n_epochs()).sum::<usize>())
         .then_some(groups)
@@ -263,7 +266,7 @@ pub const DECISION_FOLDS: usize = 5;
 /// model is fitted on out-of-fold scores of the chosen settings (`tune_folds` folds, else
 /// [`DECISION_FOLDS`]), so its evidence is not over-confident.
 pub fn train(
-    preset: &str,
+    preset: Preset,
     set: &TrainingSet<'_>,
     tune_folds: Option<usize>,
     on: &mut dyn FnMut(Progress<'_>),
@@ -275,7 +278,7 @@ pub fn train(
     let mut cache = FrontCache::new(epochs);
     let (params, tuning) = match tune_folds {
         Some(k) => {
-            let grid = preset_grid(preset, epochs.sfreq())?;
+            let grid = preset.grid(epochs.sfreq())?;
             on(Progress::Plan {
                 fits: (grid.len() + 1) * folds.n_folds(),
                 cross_validation: None,
@@ -285,7 +288,7 @@ pub fn train(
                 on(Progress::Fit)
             })
             .map_err(|source| EvaluateError::Tuning {
-                preset: preset.to_string(),
+                preset,
                 fold: None,
                 source,
             })?;
@@ -301,7 +304,7 @@ pub fn train(
                 fits: folds.n_folds(),
                 cross_validation: None,
             });
-            (PipelineParams::preset(preset, epochs.sfreq())?, None)
+            (preset.params(epochs.sfreq())?, None)
         }
     };
     let mut trained = fit_with_decision(&params, &mut cache, epochs, y, groups, &folds, on)?;
@@ -346,7 +349,7 @@ fn fit_with_decision(
     folds: &Folds,
     on: &mut dyn FnMut(Progress<'_>),
 ) -> Result<Trained> {
-    let oof = out_of_fold_scores(params, cache, y, groups, folds, on)?;
+    let oof = cross_val_predict(params, cache, y, groups, folds, || on(Progress::Fit))?;
     let cv_auc = roc_auc(&oof, y)?;
     let decision = DecisionModel {
         scores: ScoreModelParams::default().fit(&oof, y)?,
@@ -369,34 +372,6 @@ fn fit_with_decision(
     })
 }
 
-/// Every epoch of `cache`'s score by `params` fitted on the other folds (`groups` kept together
-/// in the fits, as in the final fit): a front that learns nothing is computed once for every
-/// fold, and no fold copies the epochs of a cached front (other fronts are fitted on a copy of
-/// the fold's epochs).
-fn out_of_fold_scores(
-    params: &PipelineParams,
-    cache: &mut FrontCache<'_>,
-    y: &[bool],
-    groups: Option<&[usize]>,
-    folds: &Folds,
-    on: &mut dyn FnMut(Progress<'_>),
-) -> Result<Vec<f64>> {
-    let mut oof = vec![0.0; y.len()];
-    for f in 0..folds.n_folds() {
-        let (tr, te) = folds.split(f);
-        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
-        let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
-        let s = params
-            .fit_score_cached(cache, &tr, &ytr, gtr.as_deref(), &te)?
-            .scores;
-        on(Progress::Fit);
-        for (&i, &v) in te.iter().zip(s.iter()) {
-            oof[i] = v;
-        }
-    }
-    Ok(oof)
-}
-
 /// Scores every preset of `params`: fitted on `train` and scored on `test`, or by k-fold
 /// cross-validation on `train` when `test` is empty.
 pub fn evaluate(
@@ -411,9 +386,9 @@ pub fn evaluate(
         .iter()
         .map(|n| {
             if params.tune {
-                preset_grid(n, train_epochs.sfreq()).map(|g| g.len())
+                n.grid(train_epochs.sfreq()).map(|g| g.len())
             } else {
-                PipelineParams::preset(n, train_epochs.sfreq()).map(|_| 0)
+                n.params(train_epochs.sfreq()).map(|_| 0)
             }
         })
         .collect::<std::result::Result<Vec<usize>, _>>()?;
@@ -449,7 +424,7 @@ pub fn evaluate(
     // fold and grid point with such a front shares them.
     let mut cache = FrontCache::new(train_epochs);
     let all: Vec<usize> = (0..ytr.len()).collect();
-    for name in &params.presets {
+    for &name in &params.presets {
         on(Progress::Preset(name));
         let r = match &outer {
             Some(folds) => cross_validate(
@@ -464,7 +439,7 @@ pub fn evaluate(
             )?,
             None => {
                 let (p, tuning) = if params.tune {
-                    let grid = preset_grid(name, train_epochs.sfreq())?;
+                    let grid = name.grid(train_epochs.sfreq())?;
                     let (p, report) = tune_cached(
                         &grid,
                         &mut cache,
@@ -475,7 +450,7 @@ pub fn evaluate(
                         &mut || on(Progress::Fit),
                     )
                     .map_err(|source| EvaluateError::Tuning {
-                        preset: name.clone(),
+                        preset: name,
                         fold: None,
                         source,
                     })?;
@@ -486,7 +461,7 @@ pub fn evaluate(
                     });
                     (p, Some(report))
                 } else {
-                    (PipelineParams::preset(name, train_epochs.sfreq())?, None)
+                    (name.params(train_epochs.sfreq())?, None)
                 };
                 let mut r = held_out(&p, &mut cache, ytr, groups, test)?;
                 on(Progress::Fit);
@@ -718,7 +693,7 @@ pub fn reps_from_which_all_correct(acc: &[f64]) -> Option<usize> {
 /// changing a score.
 #[allow(clippy::too_many_arguments)] // the data, its labels and groups, the folds, the cache, progress
 pub fn cross_validate(
-    name: &str,
+    name: Preset,
     data: &Epochs,
     y: &[bool],
     groups: Option<&[usize]>,
@@ -734,45 +709,52 @@ pub fn cross_validate(
             reason: format!("a cache over other epochs than {:?}", data.dim()),
         }));
     }
+    let reports = std::cell::RefCell::new(Vec::new());
+    let on = std::cell::RefCell::new(on);
+    let per_fold = cross_val_scores(
+        cache,
+        y,
+        groups,
+        folds,
+        |cache, split| -> Result<PipelineParams> {
+            let Some(k) = tune_folds else {
+                return Ok(name.params(data.sfreq())?);
+            };
+            let grid = name.grid(data.sfreq())?;
+            let (params, report) = tune_cached(
+                &grid,
+                cache,
+                &split.train,
+                &split.y_train,
+                split.groups_train.as_deref(),
+                k,
+                &mut || (on.borrow_mut())(Progress::Fit),
+            )
+            .map_err(|source| EvaluateError::Tuning {
+                preset: name,
+                fold: Some(split.fold + 1),
+                source,
+            })?;
+            (on.borrow_mut())(Progress::Tuned {
+                preset: name,
+                fold: Some((split.fold + 1, folds.n_folds())),
+                report: &report,
+            });
+            reports.borrow_mut().push(report);
+            Ok(params)
+        },
+        || (on.borrow_mut())(Progress::Fit),
+    )?;
+    let reports = reports.into_inner();
     let mut aucs = Vec::new();
     let mut fit_s = 0.0;
     let mut score_s = 0.0;
     let mut n_scored = 0;
-    let mut reports = Vec::new();
-    for f in 0..folds.n_folds() {
-        let (tr, te) = folds.split(f);
-        let ytr: Vec<bool> = tr.iter().map(|&i| y[i]).collect();
-        let yte: Vec<bool> = te.iter().map(|&i| y[i]).collect();
-        let gtr: Option<Vec<usize>> = groups.map(|g| tr.iter().map(|&i| g[i]).collect());
-        let params = match tune_folds {
-            Some(k) => {
-                let grid = preset_grid(name, data.sfreq())?;
-                let (params, report) =
-                    tune_cached(&grid, cache, &tr, &ytr, gtr.as_deref(), k, &mut || {
-                        on(Progress::Fit)
-                    })
-                    .map_err(|source| EvaluateError::Tuning {
-                        preset: name.to_string(),
-                        fold: Some(f + 1),
-                        source,
-                    })?;
-                on(Progress::Tuned {
-                    preset: name,
-                    fold: Some((f + 1, folds.n_folds())),
-                    report: &report,
-                });
-                reports.push(report);
-                params
-            }
-            None => PipelineParams::preset(name, data.sfreq())?,
-        };
-        let c = params.fit_score_cached(cache, &tr, &ytr, gtr.as_deref(), &te)?;
-        fit_s += c.fit_s;
-        score_s += c.score_s;
-        on(Progress::Fit);
-        n_scored += te.len();
-        let s = c.scores;
-        aucs.push(roc_auc(&s.to_vec(), &yte)?);
+    for f in &per_fold {
+        fit_s += f.scores.fit_s;
+        score_s += f.scores.score_s;
+        n_scored += f.split.test.len();
+        aucs.push(roc_auc(&f.scores.scores.to_vec(), &f.split.y_test)?);
     }
     Ok(PipelineResult {
         pipeline: name.to_string(),

@@ -18,9 +18,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use oddball_decode::dataset::{self, Labelling};
-use oddball_decode::evaluate::{self, EvaluateParams, TrainingSet};
 use oddball_decode::preprocess::Preprocess;
+use oddball_eval::dataset::{self, Labelling};
+use oddball_eval::evaluate::{self, EvaluateParams, TrainingSet};
 use oddball_signal::{Event, Events, Raw};
 use oddball_testkit::TempDir;
 
@@ -127,7 +127,7 @@ fn run(paths: &[std::path::PathBuf], n_ch: usize, n_times: usize) -> Peaks {
     let set = TrainingSet::pool(recs).unwrap();
     let pool = since(LIVE.load(Ordering::SeqCst));
     let params = EvaluateParams {
-        presets: vec!["lda".into()],
+        presets: vec![oddball_decode::preset::Preset::Lda],
         folds: 5,
         tune: false,
     };
@@ -138,7 +138,8 @@ fn run(paths: &[std::path::PathBuf], n_ch: usize, n_times: usize) -> Peaks {
         "the bump is found: AUC {}",
         results[0].auc
     );
-    let trained = evaluate::train("lda", &set, None, &mut |_| {}).unwrap();
+    let trained =
+        evaluate::train(oddball_decode::preset::Preset::Lda, &set, None, &mut |_| {}).unwrap();
     let train = since(LIVE.load(Ordering::SeqCst));
     assert!(trained.cv_auc > 0.7, "AUC {}", trained.cv_auc);
     Peaks {

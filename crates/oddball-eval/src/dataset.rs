@@ -15,7 +15,7 @@ use oddball_signal::SignalError;
 use thiserror::Error;
 
 use crate::evaluate::EpochedRecording;
-use crate::preprocess::Preprocess;
+use oddball_decode::preprocess::Preprocess;
 
 /// Why a recording could not become labelled epochs; every variant names the file.
 #[derive(Debug, Error)]
@@ -62,6 +62,9 @@ pub enum DatasetError {
         /// The drop log's summary: which rule dropped how many, on which channels.
         why: String,
     },
+    /// A run's channels or rate could not be matched to its subject's first run's.
+    #[error(transparent)]
+    Layout(Box<crate::layout::LayoutError>),
     #[error("epoching {}", path.display())]
     Epoch {
         path: PathBuf,

@@ -1,0 +1,20 @@
+//! The evaluation harness around [`oddball_decode`]'s estimators, as MOABB is around
+//! scikit-learn and pyRiemann: it reads files, scores presets and reports; the estimators,
+//! folds, cross-validation spine and tuning stay in the decoding crate.
+//!
+//! * [`layout`]: the one channel and rate policy of a run (a model's or the first training
+//!   recording's channels by name, its rate by polyphase resampling);
+//! * [`dataset`]: recordings read, labelled and cut into epochs;
+//! * [`evaluate`]: presets fitted on training recordings and scored on test recordings or by
+//!   k-fold cross-validation (tuning nested), speller characters and the Wolpaw ITR; training a
+//!   preset with its decision model;
+//! * [`benchmark`]: every preset on every subject of data sets, with MOABB's protocols, and
+//!   [`stats`] (the Wilcoxon signed-rank test) for the comparisons;
+//! * [`unsupervised`]: the EM decoder replayed over speller recordings without labels, scored.
+
+pub mod benchmark;
+pub mod dataset;
+pub mod evaluate;
+pub mod layout;
+pub mod stats;
+pub mod unsupervised;
