@@ -129,4 +129,5 @@ registry! { $
     /// Minimum distance to (Riemannian) mean on SPD matrices
     /// ([`crate::features::FeatureParams::XdawnCovariances`]).
     Mdm(crate::riemann::MdmParams => crate::riemann::Mdm);
+    Blda(blda::BldaParams => blda::Blda), mod blda, preset Blda = "blda";
 }
