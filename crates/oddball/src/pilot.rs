@@ -6,50 +6,14 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use oddball_decode::decision::DecisionRule;
 use oddball_live::clock::Clock;
-use oddball_live::live::{EegSource, LiveSubject};
 use oddball_live::pilot::decisions_csv;
 pub use oddball_live::pilot::{AnyPilot, Prepared};
-use oddball_live::source::{AnySource, SourceSpec};
+use oddball_live::source::SourceSpec;
+use oddball_session::decision::Decision;
 use oddball_session::replay::ReplaySource;
-use oddball_session::task::{ReplayPilot, Step};
+use oddball_session::tasks::ReplayPilot;
 
 use crate::args::{Replayed, SessionOptions, SourceArgs};
-
-/// The live subject over `--source` (the simulated subject of `opts` for `sim`), paced by the
-/// wall clock when `paced`.
-pub fn live_subject(
-    opts: &SessionOptions,
-    source: &SourceArgs,
-    paced: bool,
-    clock: Clock,
-) -> Result<LiveSubject<AnySource>> {
-    let sim = opts.simulated()?;
-    let (eeg, markers) = source
-        .source
-        .open(source.open_options(sim, paced)?, clock)
-        .with_context(|| format!("--source {}", source.source))?;
-    // A model at another rate than the EEG's: the stream is resampled to it as it streams.
-    let eeg = match &opts.model {
-        Some(path) => {
-            let sfreq = crate::load::load_model(path)?.sfreq;
-            if (eeg.sfreq() - sfreq).abs() > 1e-9 * sfreq {
-                println!(
-                    "resampling the EEG from {} Hz to the model's {sfreq} Hz as it streams (polyphase)",
-                    eeg.sfreq()
-                );
-                eeg.resampled(sfreq).context("resampling the EEG")?
-            } else {
-                eeg
-            }
-        }
-        None => eeg,
-    };
-    let mut subject = LiveSubject::new(eeg, opts.paradigm(), clock);
-    if let Some(m) = markers {
-        subject = subject.with_markers(m);
-    }
-    Ok(subject)
-}
 
 /// Calibrates a pilot: a replayed recording (`--subject replay:FILE`, offline, so only with
 /// `--source sim`), or a session over `--source`, its calibration paced by the wall clock when
@@ -77,7 +41,7 @@ pub fn prepare(
         let arm = opts.arm()?;
         let pen_start = arm.pen();
         return Ok(Prepared {
-            pilot: AnyPilot::Replay(ReplayPilot::new(replay, arm, r.params.paradigm)),
+            pilot: AnyPilot::Replay(ReplayPilot::new(replay, arm)),
             calibration: r.calibration,
             erp: r.calibration_epochs,
             model_json: r.model.to_json(),
@@ -88,8 +52,8 @@ pub fn prepare(
     let preset = opts
         .preset()
         .expect("a simulated preset when not replaying");
-    let subject = live_subject(opts, source, paced, Clock::new())?;
-    let (session, calibration, pen_start) = opts.calibrated(subject, rule, true)?;
+    let plan = opts.plan(source, rule, paced, opts.session_model(rule)?)?;
+    let (session, calibration, pen_start) = opts.open(&plan, Clock::new(), true)?;
     let erp = session.calibration_epochs()?;
     // An uncalibrated session has no model yet (see `model_json`).
     let model_json = session.model().map(|m| m.to_json()).unwrap_or_default();
@@ -154,7 +118,7 @@ pub fn adaptation(prep: &Prepared) -> Option<oddball_session::engine::Adaptation
 }
 
 /// decisions.csv: one row per step.
-pub fn write_decisions_csv(path: &Path, steps: &[Step]) -> Result<()> {
+pub fn write_decisions_csv(path: &Path, steps: &[Decision]) -> Result<()> {
     oddball_io::write_atomic(path, decisions_csv(steps))
         .with_context(|| format!("writing {}", path.display()))
 }
