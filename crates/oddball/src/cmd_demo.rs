@@ -80,7 +80,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let (fixed, rule) = args.session.rules()?;
     args.session.check_commands(&args.commands)?;
     let opts = &args.session;
-    let replay_files = opts.replay_files()?;
+    let replay_files = crate::pilot::replay_files(opts)?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
 
     let mut comparison = None;

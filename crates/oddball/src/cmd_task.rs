@@ -96,7 +96,7 @@ fn prepare_task(
     view: impl Fn(&ArmSim) -> Result<TaskView>,
 ) -> Result<Prepared> {
     let (_, rule) = opts.rules()?;
-    match (opts.replay_files()?, opts.preset()) {
+    match (crate::pilot::replay_files(opts)?, opts.preset()) {
         (Some(files), _) => {
             if panel.serve.is_some() {
                 anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
