@@ -11,6 +11,8 @@
 //! * [`nic`]: Neuroelectrics NIC's TCP stream as a live source (reconnecting), and a simulated
 //!   Starstim serving one; the byte codec is `oddball_io::nic`.
 //! * [`online`]: what `oddball online` reports of a live session (`summary.json`, its lines).
+//! * [`plan`]: a live session assembled from its plan (source, open options, settings, start,
+//!   montage, arm), checked, opened and started: what every front end runs.
 //! * [`pilot`]: the calibrated pilot of `demo` and `task` (a live session or a replayed
 //!   recording) and what its run leaves behind.
 //! * [`playback`]: a recording played back as a live source (`--source replay:FILE`).
@@ -43,6 +45,7 @@ pub mod nic;
 pub mod online;
 pub mod panel;
 pub mod pilot;
+pub mod plan;
 pub mod playback;
 pub mod record;
 pub mod source;

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use oddball_session::decision::Decision;
 use oddball_session::engine::ShownFlash;
-use oddball_session::task::Step;
 use oddball_session::SessionError;
 use serde::Serialize;
 
@@ -70,7 +70,7 @@ impl OnlineSummary {
     /// The summary of `steps` with the panel's `timing` and the decision latencies (ms).
     pub fn new(
         source: String,
-        steps: &[Step],
+        steps: &[Decision],
         timing: &FlashTiming,
         latency_ms: &[f64],
         recording: &Path,
@@ -131,7 +131,7 @@ impl OnlineSummary {
 }
 
 /// One decision as printed: `decision 1: up → up ✓ (p 0.998, 4 rounds, 2.40 s)`.
-pub fn decision_line(index: usize, s: &Step) -> String {
+pub fn decision_line(index: usize, s: &Decision) -> String {
     format!(
         "decision {}: {} → {}{} (p {:.3}, {} rounds, {:.2} s)",
         index + 1,

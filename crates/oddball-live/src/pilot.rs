@@ -6,11 +6,12 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use oddball_arm::{ArmSim, Command, Vector2};
+use oddball_session::decision::Decision;
 use oddball_session::engine::{CalibrationReport, Session};
 use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::REPLAY_NOTE;
 use oddball_session::roles::EegStream;
-use oddball_session::task::{Pilot, ReplayPilot, Step};
+use oddball_session::tasks::{Pilot, ReplayPilot};
 use oddball_session::SessionError;
 use oddball_signal::Epochs;
 use serde::Serialize;
@@ -27,7 +28,7 @@ pub enum AnyPilot {
 }
 
 impl Pilot for AnyPilot {
-    fn decide(&mut self, intended: Command) -> Result<Option<Step>, SessionError> {
+    fn decide(&mut self, intended: Command) -> Result<Option<Decision>, SessionError> {
         match self {
             // A stop request or a source that ended: no more decisions (the run keeps what it
             // has; the reason is kept in `crate::stop::reason`).
@@ -155,7 +156,7 @@ impl Prepared {
 }
 
 /// The text of `decisions.csv`: one row per step (commas in an arm's refusal become `;`).
-pub fn decisions_csv(steps: &[Step]) -> String {
+pub fn decisions_csv(steps: &[Decision]) -> String {
     let mut csv =
         String::from("decision,intended,decided,abstained,rounds,confidence,seconds,arm_refusal\n");
     for (i, s) in steps.iter().enumerate() {

@@ -82,7 +82,7 @@ impl fmt::Display for SourceSpec {
 }
 
 /// How to open a source.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct OpenOptions {
     /// The simulated subject (`sim`); its channel names also name a NIC stream's channels
     /// when the stream carries as many.
@@ -151,6 +151,59 @@ impl AnySource {
             ratio: down as f64 / up as f64,
             pulled: 0,
         })))
+    }
+}
+
+/// How [`AnySource::at_rate`] brought a source to a model's rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RateChange {
+    pub from_sfreq: f64,
+    pub to_sfreq: f64,
+    /// A played-back file, resampled whole (else resampled as it streams).
+    pub whole_file: bool,
+}
+
+impl std::fmt::Display for RateChange {
+    /// `resampling the file from 512 Hz to the model's 256 Hz (polyphase)`, or for a stream
+    /// `… as it streams (polyphase)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.whole_file {
+            write!(
+                f,
+                "resampling the file from {} Hz to the model's {} Hz (polyphase)",
+                self.from_sfreq, self.to_sfreq
+            )
+        } else {
+            write!(
+                f,
+                "resampling the stream from {} Hz to the model's {} Hz as it streams (polyphase)",
+                self.from_sfreq, self.to_sfreq
+            )
+        }
+    }
+}
+
+impl AnySource {
+    /// This source at a model's rate `sfreq`: as it is when it has that rate; a played-back
+    /// file resampled whole ([`PlaybackSource::resampled`], as offline evaluation resamples
+    /// it); any other source resampled as it streams ([`AnySource::resampled`]). Says what it
+    /// changed.
+    pub fn at_rate(self, sfreq: f64) -> Result<(AnySource, Option<RateChange>), LiveError> {
+        let from_sfreq = self.sfreq();
+        if (from_sfreq - sfreq).abs() <= 1e-9 * sfreq {
+            return Ok((self, None));
+        }
+        let change = |whole_file| RateChange {
+            from_sfreq,
+            to_sfreq: sfreq,
+            whole_file,
+        };
+        Ok(match self {
+            AnySource::Playback(p) => {
+                (AnySource::Playback(p.resampled(sfreq)?), Some(change(true)))
+            }
+            s => (s.resampled(sfreq)?, Some(change(false))),
+        })
     }
 }
 

@@ -8,15 +8,16 @@ use oddball_live::live::{LiveSubject, SimSource};
 use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
 use oddball_live::LiveError;
+use oddball_session::decoder::Preset;
 use oddball_session::engine::{Session, SessionParams};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::EegStream;
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
 fn params() -> SessionParams {
-    let mut p = SessionParams::paper("lda");
+    let mut p = SessionParams::paper(Preset::Lda);
     p.calibration_per_bulb = 3;
-    p.seed = 5;
+    p.decoder.seed = 5;
     p
 }
 

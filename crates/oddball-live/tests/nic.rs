@@ -1,6 +1,7 @@
 //! A whole session over NIC's TCP protocol: a simulated Starstim serves the stream on loopback,
 //! the session reads it as it would read NIC, calibrates and draws the letter G.
 
+use oddball_session::decoder::Preset;
 use std::net::TcpListener;
 use std::thread;
 
@@ -54,8 +55,8 @@ fn nic_session(
     .with_panel_port(panel_addr)
     .unwrap();
     let subject = LiveSubject::new(source, FourBulbParams::paper(), clock);
-    let mut p = SessionParams::paper("lda");
-    p.seed = seed;
+    let mut p = SessionParams::paper(Preset::Lda);
+    p.decoder.seed = seed;
     let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
     (Session::new(p, subject, Some(arm)).unwrap(), server)
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::PlotError;
 use oddball_arm::ArmSim;
-use oddball_session::task::TrackReport;
+use oddball_session::tasks::TrackReport;
 use oddball_signal::Epochs;
 
 /// Target and non-target averages of the accepted calibration epochs: a report's `erp.png`.

@@ -63,7 +63,7 @@ fn an_unknown_extension_or_an_unwritable_file_is_an_error_naming_it() {
 #[test]
 fn the_drawn_pen_trace_reaches_the_end_of_every_out_and_back_stroke() {
     // The letter G of the stroke font: its top bar and its spur go out and come back.
-    let commands = oddball_session::task::text_commands("G").unwrap();
+    let commands = oddball_session::tasks::text_commands("G").unwrap();
     let start = ArmSim::from_config(&ArmConfig::default()).unwrap().pen();
     let arm = arm_after(&commands);
     let expected = planned_path(start, commands.iter().copied(), arm.settings().step_m);
@@ -96,12 +96,12 @@ fn the_drawn_pen_trace_reaches_the_end_of_every_out_and_back_stroke() {
 
 #[test]
 fn the_session_picture_draws_the_intended_and_executed_paths_and_marks_missed_decisions() {
-    use oddball_session::report::{executed_path, missed_decisions, DecisionRow};
+    use oddball_session::decision::Decision;
+    use oddball_session::report::{executed_path, missed_decisions};
     let start = ArmSim::from_config(&ArmConfig::default()).unwrap().pen();
     // Intended up, left, down; decided up, right (wrong), nothing (abstained).
-    let row = |index, intended, decided: Option<Command>| DecisionRow {
-        index,
-        intended: Some(intended),
+    let row = |intended, decided: Option<Command>| Decision {
+        intended,
         decided,
         abstained: decided.is_none(),
         rounds: 5,
@@ -111,9 +111,9 @@ fn the_session_picture_draws_the_intended_and_executed_paths_and_marks_missed_de
         pen_m: None,
     };
     let rows = [
-        row(1, Command::Up, Some(Command::Up)),
-        row(2, Command::Left, Some(Command::Right)),
-        row(3, Command::Down, None),
+        row(Command::Up, Some(Command::Up)),
+        row(Command::Left, Some(Command::Right)),
+        row(Command::Down, None),
     ];
     let arm = arm_after(&[Command::Up, Command::Right]);
     let h = arm.settings().step_m;

@@ -7,18 +7,19 @@ use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use ndarray::s;
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::decision::DecisionRule;
+use oddball_decode::preset::Preset;
 use oddball_session::engine::{Session, SessionParams};
 use oddball_session::online::{Marker, OnlineEpocher};
 use oddball_session::subject::{SubjectParams, SubjectPreset};
 
 fn latency(c: &mut Criterion) {
     let mut group = c.benchmark_group("decision_latency");
-    for preset in ["lda", "riemann"] {
+    for preset in [Preset::Lda, Preset::Riemann] {
         let subject = SubjectParams::preset(SubjectPreset::Typical)
             .build()
             .unwrap();
         let mut params = SessionParams::paper(preset);
-        params.rule = DecisionRule::Fixed { rounds: 5 };
+        params.decoder.rule = DecisionRule::Fixed { rounds: 5 };
         let mut session = Session::new(params.clone(), subject, None).unwrap();
         session.calibrate().unwrap();
         let model = session.model().unwrap().clone();
@@ -31,13 +32,13 @@ fn latency(c: &mut Criterion) {
         let onset = 4000u64;
         sim.flash(onset, true).unwrap();
         let data = sim.render(5000);
-        let (_, n_times) = params.preprocess.window(500.0);
+        let (_, n_times) = params.decoder.preprocess.window(500.0);
         let end = onset as usize + n_times; // exclusive: the chunk ending here completes it
         let rounds = vec![vec![Some(0.5), Some(-0.2), Some(-0.4), Some(0.1)]; 4];
-        group.bench_function(preset, |b| {
+        group.bench_function(preset.name(), |b| {
             b.iter_batched(
                 || {
-                    let mut ep = OnlineEpocher::new(&params.preprocess, 500.0, 8).unwrap();
+                    let mut ep = OnlineEpocher::new(&params.decoder.preprocess, 500.0, 8).unwrap();
                     ep.push_marker(Marker {
                         onset,
                         code: 1,

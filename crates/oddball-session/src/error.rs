@@ -25,6 +25,9 @@ pub enum SessionError {
     MarkerTooLate { onset: u64, oldest_kept: u64 },
     #[error("the session has no model yet: calibrate first or load a model")]
     NotCalibrated,
+    /// A session starts once ([`crate::engine::Session::start`]).
+    #[error("the session has started already: it starts once, before its first decision")]
+    AlreadyStarted,
     /// A model without the decision model a session decides with.
     #[error("model {pipeline}: {}", oddball_decode::model::NO_DECISION_MODEL)]
     NoDecisionModel { pipeline: String },
@@ -33,7 +36,7 @@ pub enum SessionError {
     #[error("the EEG arrives at {stream_sfreq} Hz and the model runs at {model_sfreq} Hz: resample the EEG to the model's rate before the session")]
     ModelRate { model_sfreq: f64, stream_sfreq: f64 },
     /// The EEG lacks channels the model needs (matched by name, case aside).
-    #[error("the EEG has no channel named {missing:?} that the model needs (its channels: {have:?}): name its channels in order with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc)")]
+    #[error("the EEG has no channel named {missing:?} that the model needs (its channels: {have:?}): name its channels in order with a montage (an EEGLAB .loc, e.g. eeg64.loc)")]
     ModelChannels {
         missing: Vec<String>,
         have: Vec<String>,

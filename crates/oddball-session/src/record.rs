@@ -31,7 +31,7 @@ use oddball_io::{
 use oddball_signal::{Event, Events, Raw};
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome, TrialRecord};
+use crate::decision::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome, TrialRecord};
 use crate::online::offline_epochs;
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;

@@ -27,60 +27,59 @@
 use oddball_arm::Command;
 use oddball_decode::decision::{DecisionModel, DecisionRule, Verdict};
 use oddball_decode::pipeline::{Model, Preprocess};
+use oddball_decode::preset::Preset;
 use oddball_io::Recording;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{fit_session_model_oof, CalibrationReport, TrialOutcome};
+use crate::decision::{CalibrationReport, Decision, TrialOutcome};
+use crate::decoder::DecoderParams;
+use crate::fit::fit_session_model_oof;
 use crate::online::{Marker, OnlineEpocher, ReadyEpoch};
 use crate::paradigm::FourBulbParams;
 use crate::SessionError;
-use oddball_decode::stopping::{Expected, StoppingSearch};
+use oddball_decode::stopping::Expected;
 
 /// Settings of a replayed session.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ReplayParams {
     pub paradigm: FourBulbParams,
-    pub preprocess: Preprocess,
-    pub pipeline: String,
-    pub rule: DecisionRule,
+    /// The pipeline, pre-processing, decision rule and folds, as a session has them (the seed
+    /// chooses the non-targets and the bulb assignment; with `stopping`, the rule is chosen
+    /// from the calibration recording for the most expected bits per minute at `paradigm`'s
+    /// timing, [`calibrate_for_bit_rate`]).
+    #[serde(flatten)]
+    pub decoder: DecoderParams,
     /// Speller sequences (rounds) available to one decision.
     pub rounds_per_decision: usize,
-    pub cv_folds: usize,
-    /// Samples per streamed chunk.
-    pub chunk: usize,
-    /// Seed of the non-target choice and the bulb assignment.
-    pub seed: u64,
-    /// Choose the stopping rule from the calibration recording for the most expected bits per
-    /// minute at `paradigm`'s timing ([`calibrate_for_bit_rate`]); `None` keeps `rule`.
-    #[serde(default)]
-    pub stopping: Option<StoppingSearch>,
 }
 
 impl ReplayParams {
     /// The paper's four-bulb timing and causal 1–15 Hz band-pass, without amplitude rejection:
     /// the BCI2000 sample files run large (median epoch peak-to-peak 110 µV on eeg3_1 after
     /// the band-pass), a 150 µV threshold would drop 15 % of their flashes, and the peer stack
-    /// rejects none either.
-    pub fn paper(pipeline: &str) -> Self {
+    /// rejects none either. 4 folds, 20-sample chunks.
+    pub fn paper(pipeline: Preset) -> Self {
         let paradigm = FourBulbParams::paper();
         Self {
             paradigm,
-            preprocess: Preprocess {
-                reject_peak_to_peak_uv: None,
-                ..Preprocess::online()
-            },
-            pipeline: pipeline.to_string(),
-            rule: DecisionRule::Fixed {
-                rounds: paradigm.n_rounds,
+            decoder: DecoderParams {
+                pipeline,
+                preprocess: Preprocess {
+                    reject_peak_to_peak_uv: None,
+                    ..Preprocess::online()
+                },
+                rule: DecisionRule::Fixed {
+                    rounds: paradigm.n_rounds,
+                },
+                cv_folds: 4,
+                chunk: 20,
+                seed: 0,
+                stopping: None,
             },
             rounds_per_decision: paradigm.n_rounds,
-            cv_folds: 4,
-            chunk: 20,
-            seed: 0,
-            stopping: None,
         }
     }
 }
@@ -222,21 +221,21 @@ pub fn calibrate(
 pub struct Calibrated {
     pub model: Model,
     pub report: CalibrationReport,
-    /// With [`ReplayParams::stopping`]: the stopping rule chosen and what it expects.
+    /// With [`DecoderParams::stopping`]: the stopping rule chosen and what it expects.
     pub expected: Option<Expected>,
     /// The accepted epochs it was fitted on, as the online epocher streams them (windows into
     /// each recording's band-passed copy, targets flagged): what a report's ERP plot shows.
     pub epochs: oddball_signal::Epochs,
 }
 
-/// [`calibrate`], and with [`ReplayParams::stopping`] the stopping rule chosen from the
+/// [`calibrate`], and with [`DecoderParams::stopping`] the stopping rule chosen from the
 /// cross-validated calibration scores (set in the model's decision model) with what it expects.
 pub fn calibrate_for_bit_rate(
     recs: &[Recording],
     params: &ReplayParams,
 ) -> Result<Calibrated, SessionError> {
     let t0 = std::time::Instant::now();
-    let accepted = accepted_windows(recs, &params.preprocess)?;
+    let accepted = accepted_windows(recs, &params.decoder.preprocess)?;
     let rec = &recs[0];
     let mut y = Vec::with_capacity(accepted.at.len());
     let mut groups = Vec::with_capacity(accepted.at.len());
@@ -265,10 +264,7 @@ pub fn calibrate_for_bit_rate(
     }
     let rejected = accepted.rejected;
     let (mut model, cv_auc, d_prime, oof) = fit_session_model_oof(
-        &params.pipeline,
-        params.preprocess,
-        params.rule,
-        params.cv_folds,
+        &params.decoder,
         rec.raw.sfreq(),
         rec.raw.ch_names(),
         (&accepted.epochs).into(),
@@ -276,14 +272,14 @@ pub fn calibrate_for_bit_rate(
         &groups,
     )?;
     let mut chosen = None;
-    if let (Some(search), Some(decision)) = (&params.stopping, &mut model.decision) {
+    if let (Some(search), Some(decision)) = (&params.decoder.stopping, &mut model.decision) {
         let e = crate::timing::choose_stopping(
             search,
             &decision.scores,
             &oof,
             &y,
             &params.paradigm,
-            &params.preprocess,
+            &params.decoder.preprocess,
         )?;
         decision.rule = e.rule;
         chosen = Some(e);
@@ -331,37 +327,16 @@ pub enum Dimension {
     Columns,
 }
 
-/// One replayed four-choice decision.
+/// Where a replayed decision's flashes come from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ReplayDecision {
+pub struct ReplayOrigin {
     /// Character (0-based) of the test recording the flashes come from.
     pub character: usize,
     pub dimension: Dimension,
     /// First speller sequence (0-based) used.
     pub first_sequence: usize,
-    pub intended: Command,
     /// The speller stimulus code shown as each bulb (bulb `k` = paradigm code `k + 1`).
     pub bulb_source_codes: [u32; 4],
-    pub outcome: TrialOutcome,
-    pub rounds: usize,
-    pub posterior: Vec<f64>,
-    pub p_none: f64,
-    /// Seconds the decision would take on the four-bulb panel.
-    pub seconds: f64,
-}
-
-impl ReplayDecision {
-    /// Confidence: the posterior of the decided (or, abstaining, the best) bulb.
-    pub fn confidence(&self) -> f64 {
-        self.outcome.confidence(&self.posterior)
-    }
-
-    pub fn decided(&self, paradigm: &FourBulbParams) -> Option<Command> {
-        match self.outcome {
-            TrialOutcome::Chosen { code } => paradigm.command_of(code),
-            _ => None,
-        }
-    }
 }
 
 /// Seconds a decision of `rounds` rounds takes on the four-bulb panel: countdown, the rounds,
@@ -409,7 +384,7 @@ fn slots_of(
     let chars = character_of_events(rec)?;
     // Each epoch scored as it is streamed (none kept).
     let mut scores: Vec<Option<Option<f64>>> = vec![None; events.len()];
-    stream_epochs_with(rec, &model.preprocess, params.chunk, &mut |e| {
+    stream_epochs_with(rec, &model.preprocess, params.decoder.chunk, &mut |e| {
         scores[e.marker.tag] = Some(if e.accepted {
             Some(model.pipeline.score_epoch(e.data.view())?)
         } else {
@@ -419,7 +394,9 @@ fn slots_of(
     })?;
     let per_seq = speller.n_rows() + speller.n_cols();
     let n_chars = chars.last().map_or(0, |c| c + 1);
-    let r = params.rounds_per_decision.max(params.rule.max_rounds());
+    let r = params
+        .rounds_per_decision
+        .max(params.decoder.rule.max_rounds());
     for ch in 0..n_chars {
         let idx: Vec<usize> = (0..events.len()).filter(|&i| chars[i] == ch).collect();
         let n_seq = idx.len() / per_seq;
@@ -492,10 +469,10 @@ impl ReplaySource {
         params: &ReplayParams,
     ) -> Result<Self, SessionError> {
         first_of(recs)?;
-        params.rule.validate()?;
+        params.decoder.rule.validate()?;
         let decision = DecisionModel {
             scores: model.decision.ok_or(SessionError::NotCalibrated)?.scores,
-            rule: params.rule,
+            rule: params.decoder.rule,
         };
         let mut slots = Vec::new();
         let mut first_char = 0;
@@ -509,7 +486,7 @@ impl ReplaySource {
             decision,
             paradigm: params.paradigm,
             preprocess: model.preprocess,
-            rng: ChaCha8Rng::seed_from_u64(params.seed),
+            rng: ChaCha8Rng::seed_from_u64(params.decoder.seed),
         })
     }
 
@@ -518,8 +495,9 @@ impl ReplaySource {
         self.slots.len() - self.next
     }
 
-    /// The next decision while the person intends `intended`; `None` when the recording is used up.
-    pub fn decide(&mut self, intended: Command) -> Option<ReplayDecision> {
+    /// The next decision while the person intends `intended` (no arm: nothing refused, no
+    /// pen), and where its flashes come from; `None` when the recording is used up.
+    pub fn decide(&mut self, intended: Command) -> Option<(Decision, ReplayOrigin)> {
         let slot = self.slots.get(self.next)?;
         self.next += 1;
         let mut others = slot.others.clone();
@@ -541,31 +519,38 @@ impl ReplaySource {
             .map(|m| source.iter().map(|c| m[c]).collect())
             .collect();
         let (verdict, used) = self.decision.decide(&rounds);
-        let (outcome, posterior, p_none) = match verdict {
+        let (outcome, posterior) = match verdict {
             Verdict::Choose { index, posterior } => (
                 TrialOutcome::Chosen {
                     code: index as u32 + 1,
                 },
                 posterior.p,
-                posterior.p_none,
             ),
-            Verdict::Abstain { posterior } => {
-                (TrialOutcome::Abstained, posterior.p, posterior.p_none)
-            }
-            Verdict::Continue => (TrialOutcome::Abstained, vec![0.25; 4], 0.0),
+            Verdict::Abstain { posterior } => (TrialOutcome::Abstained, posterior.p),
+            Verdict::Continue => (TrialOutcome::Abstained, vec![0.25; 4]),
         };
-        Some(ReplayDecision {
-            character: slot.character,
-            dimension: slot.dimension,
-            first_sequence: slot.first_sequence,
-            intended,
-            bulb_source_codes: source,
-            outcome,
-            rounds: used,
-            posterior,
-            p_none,
-            seconds: panel_seconds(&self.paradigm, &self.preprocess, used),
-        })
+        let decided = match outcome {
+            TrialOutcome::Chosen { code } => self.paradigm.command_of(code),
+            _ => None,
+        };
+        Some((
+            Decision {
+                intended,
+                decided,
+                abstained: outcome == TrialOutcome::Abstained,
+                rounds: used,
+                confidence: outcome.confidence(&posterior),
+                seconds: panel_seconds(&self.paradigm, &self.preprocess, used),
+                arm_refusal: None,
+                pen_m: None,
+            },
+            ReplayOrigin {
+                character: slot.character,
+                dimension: slot.dimension,
+                first_sequence: slot.first_sequence,
+                bulb_source_codes: source,
+            },
+        ))
     }
 }
 
@@ -576,7 +561,7 @@ pub fn replay(
     model: &Model,
     commands: &[Command],
     params: &ReplayParams,
-) -> Result<Vec<ReplayDecision>, SessionError> {
+) -> Result<Vec<(Decision, ReplayOrigin)>, SessionError> {
     if commands.is_empty() {
         return Err(SessionError::InvalidParameter {
             name: "commands",

@@ -12,57 +12,33 @@ use oddball_decode::decision::DecisionRule;
 use oddball_decode::metrics::Itr;
 use serde::Serialize;
 
-use crate::engine::{CalibrationReport, TrialOutcome};
-use crate::paradigm::FourBulbParams;
+use crate::decision::{CalibrationReport, Decision, TrialOutcome};
 use crate::record::Redecision;
-use crate::replay::ReplayDecision;
-use crate::task::{DrawReport, Step};
+use crate::tasks::DrawReport;
+pub use crate::timing::rule_name;
 
-/// One decision as reported.
+/// A decision as a report's row (`summary.json`'s `decisions`): its number (from 1), the
+/// decision, and where the pen was when it was made.
 #[derive(Debug, Clone, Serialize)]
-pub struct DecisionRow {
+pub struct Row<'a> {
     pub index: usize,
-    pub intended: Option<Command>,
-    pub decided: Option<Command>,
-    pub abstained: bool,
-    pub rounds: usize,
-    pub confidence: f64,
-    pub seconds: f64,
-    pub arm_refusal: Option<String>,
+    #[serde(flatten)]
+    pub decision: &'a Decision,
     /// Pen (x, z) in metres when the decision was made, before its command.
     pub pen_m: Option<[f64; 2]>,
 }
 
-impl DecisionRow {
-    /// The `index`-th (from 1) step of a task.
-    pub fn of(index: usize, s: &Step) -> Self {
-        Self {
-            index,
-            intended: Some(s.intended),
-            decided: s.decided,
-            abstained: s.abstained,
-            rounds: s.rounds,
-            confidence: s.confidence,
-            seconds: s.seconds,
-            arm_refusal: s.arm_refusal.clone(),
-            pen_m: s.pen_m,
-        }
-    }
-
-    /// The `index`-th (from 1) decision of a replayed recording (no arm: nothing refused, no pen).
-    pub fn of_replayed(index: usize, d: &ReplayDecision, paradigm: &FourBulbParams) -> Self {
-        Self {
-            index,
-            intended: Some(d.intended),
-            decided: d.decided(paradigm),
-            abstained: d.outcome == TrialOutcome::Abstained,
-            rounds: d.rounds,
-            confidence: d.confidence(),
-            seconds: d.seconds,
-            arm_refusal: None,
-            pen_m: None,
-        }
-    }
+/// `decisions` as a report's rows, numbered from 1.
+pub fn numbered(decisions: &[Decision]) -> Vec<Row<'_>> {
+    decisions
+        .iter()
+        .enumerate()
+        .map(|(i, d)| Row {
+            index: i + 1,
+            decision: d,
+            pen_m: d.pen_m,
+        })
+        .collect()
 }
 
 /// Accuracy, rounds and ITR of a list of decisions.
@@ -81,17 +57,14 @@ pub struct Scores {
 }
 
 /// Accuracy, mean rounds and ITR (Wolpaw, 4 choices) of `rows` under `rule`.
-pub fn scores(rows: &[DecisionRow], rule: &DecisionRule) -> Scores {
+pub fn scores(rows: &[Decision], rule: &DecisionRule) -> Scores {
     let n = rows.len().max(1) as f64;
-    let correct = rows
-        .iter()
-        .filter(|r| r.decided.is_some() && r.decided == r.intended)
-        .count();
+    let correct = rows.iter().filter(|r| r.correct()).count();
     let accuracy = correct as f64 / n;
     let seconds = rows.iter().map(|r| r.seconds).sum::<f64>() / n;
     let wrong = rows
         .iter()
-        .filter(|r| r.decided.is_some() && r.decided != r.intended)
+        .filter(|r| r.decided.is_some() && !r.correct())
         .count();
     let utility = oddball_decode::stopping::utility_bits(4, accuracy, wrong as f64 / n);
     Scores {
@@ -123,14 +96,11 @@ pub struct Stretch {
 
 /// Accuracy over time: `rows` cut into stretches of `size` decisions (1–10, 11–20, …; the last
 /// may be shorter). Shows how an uncalibrated session learns.
-pub fn accuracy_over_time(rows: &[DecisionRow], size: usize) -> Vec<Stretch> {
+pub fn accuracy_over_time(rows: &[Decision], size: usize) -> Vec<Stretch> {
     rows.chunks(size.max(1))
         .enumerate()
         .map(|(k, c)| {
-            let correct = c
-                .iter()
-                .filter(|r| r.decided.is_some() && r.decided == r.intended)
-                .count();
+            let correct = c.iter().filter(|r| r.correct()).count();
             Stretch {
                 first: k * size.max(1) + 1,
                 last: k * size.max(1) + c.len(),
@@ -161,18 +131,6 @@ pub fn accuracy_over_time_text(stretches: &[Stretch]) -> String {
         })
         .collect();
     format!("accuracy over time: {}", parts.join(", "))
-}
-
-/// The stopping rule in words (`fixed 10 rounds`, `dynamic stopping (p >= …, at most … rounds)`).
-pub fn rule_name(rule: &DecisionRule) -> String {
-    match rule {
-        DecisionRule::Fixed { rounds } => format!("fixed {rounds} rounds"),
-        DecisionRule::Dynamic {
-            threshold,
-            max_rounds,
-            ..
-        } => format!("dynamic stopping (p >= {threshold}, at most {max_rounds} rounds)"),
-    }
 }
 
 /// The pen's corners against the path of the commands the arm executed, and the path the
@@ -217,11 +175,7 @@ pub struct MissedDecision {
 }
 
 /// The path of the commands the arm executed, from `pen_start`, metres.
-pub fn executed_path(
-    pen_start: Vector2<f64>,
-    rows: &[DecisionRow],
-    step_m: f64,
-) -> Vec<Vector2<f64>> {
+pub fn executed_path(pen_start: Vector2<f64>, rows: &[Decision], step_m: f64) -> Vec<Vector2<f64>> {
     let executed = rows
         .iter()
         .filter_map(|r| r.decided.filter(|_| r.arm_refusal.is_none()));
@@ -232,12 +186,12 @@ pub fn executed_path(
 /// each where the commanded position was, starting from `pen_start`.
 pub fn missed_decisions(
     pen_start: Vector2<f64>,
-    rows: &[DecisionRow],
+    rows: &[Decision],
     step_m: f64,
 ) -> Vec<MissedDecision> {
     let mut at = pen_start;
     let mut out = Vec::new();
-    for r in rows {
+    for (i, r) in rows.iter().enumerate() {
         let from = at;
         if let Some(c) = r.decided.filter(|_| r.arm_refusal.is_none()) {
             at = c.apply(&at, step_m);
@@ -245,11 +199,11 @@ pub fn missed_decisions(
         let miss = match r.decided {
             None => Miss::Abstained,
             Some(_) if r.arm_refusal.is_some() => Miss::Refused,
-            Some(c) if Some(c) != r.intended => Miss::Wrong,
+            Some(c) if c != r.intended => Miss::Wrong,
             Some(_) => continue,
         };
         out.push(MissedDecision {
-            index: r.index,
+            index: i + 1,
             miss,
             from_m: [from[0], from[1]],
             to_m: [at[0], at[1]],
@@ -284,10 +238,10 @@ impl From<&CalibrationReport> for CalibrationSummary {
 
 /// Corners: the pen after each executed command (at the next decision, or at the end)
 /// against where the executed commands put the reference; the intended path beside it.
-pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[DecisionRow]) -> PenReport {
+pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[Decision]) -> PenReport {
     let step_m = arm.settings().step_m;
     let expected = executed_path(pen_start, rows, step_m);
-    let intended = planned_path(pen_start, rows.iter().filter_map(|r| r.intended), step_m);
+    let intended = planned_path(pen_start, rows.iter().map(|r| r.intended), step_m);
     let missed = missed_decisions(pen_start, rows, step_m);
     let end_pen = [arm.pen()[0], arm.pen()[1]];
     let mut measured = Vec::new();
@@ -313,23 +267,20 @@ pub fn pen_report(arm: &ArmSim, pen_start: Vector2<f64>, rows: &[DecisionRow]) -
     }
 }
 
-/// One decision as printed (`decision  1: intended up    decided up      ok    rounds …`).
-pub fn row_text(r: &DecisionRow) -> String {
+/// The `index`-th decision (from 1) as printed (`decision  1: intended up    decided up      ok
+/// rounds …`).
+pub fn row_text(index: usize, r: &Decision) -> String {
     let name = |c: Option<Command>| c.map_or("—".to_string(), |c| c.to_string());
     let decided = if r.abstained {
         "abstain".to_string()
     } else {
         name(r.decided)
     };
-    let mark = if r.decided.is_some() && r.decided == r.intended {
-        "ok"
-    } else {
-        "WRONG"
-    };
+    let mark = if r.correct() { "ok" } else { "WRONG" };
     let mut s = format!(
         "decision {:>2}: intended {:<5} decided {:<7} {:<5} rounds {}  confidence {:.3}  {:.2} s",
-        r.index,
-        name(r.intended),
+        index,
+        name(Some(r.intended)),
         decided,
         mark,
         r.rounds,
@@ -502,10 +453,9 @@ pub fn redecision_line(d: &Redecision, bulbs: &[Command]) -> String {
 mod tests {
     use super::*;
 
-    fn row(index: usize, intended: Command, decided: Option<Command>) -> DecisionRow {
-        DecisionRow {
-            index,
-            intended: Some(intended),
+    fn row(intended: Command, decided: Option<Command>) -> Decision {
+        Decision {
+            intended,
             decided,
             abstained: decided.is_none(),
             rounds: 4,
@@ -519,10 +469,10 @@ mod tests {
     #[test]
     fn scores_count_right_wrong_and_abstained_decisions() {
         let rows = [
-            row(1, Command::Up, Some(Command::Up)),
-            row(2, Command::Left, Some(Command::Right)),
-            row(3, Command::Down, None),
-            row(4, Command::Down, Some(Command::Down)),
+            row(Command::Up, Some(Command::Up)),
+            row(Command::Left, Some(Command::Right)),
+            row(Command::Down, None),
+            row(Command::Down, Some(Command::Down)),
         ];
         let s = scores(&rows, &DecisionRule::Fixed { rounds: 4 });
         assert_eq!(s.rule, "fixed 4 rounds");
@@ -537,14 +487,14 @@ mod tests {
     #[test]
     fn missed_decisions_are_placed_where_the_arm_stood() {
         let h = 0.02;
-        let mut refused = row(4, Command::Up, Some(Command::Up));
+        let mut refused = row(Command::Up, Some(Command::Up));
         refused.arm_refusal = Some("off the board".into());
         let rows = [
-            row(1, Command::Up, Some(Command::Up)),
-            row(2, Command::Left, Some(Command::Right)),
-            row(3, Command::Down, None),
+            row(Command::Up, Some(Command::Up)),
+            row(Command::Left, Some(Command::Right)),
+            row(Command::Down, None),
             refused,
-            row(5, Command::Down, Some(Command::Down)),
+            row(Command::Down, Some(Command::Down)),
         ];
         let start = Vector2::new(0.0, 0.0);
         let missed = missed_decisions(start, &rows, h);
@@ -564,12 +514,12 @@ mod tests {
 
     #[test]
     fn a_row_prints_its_mark_and_an_abstention() {
-        let ok = row_text(&row(1, Command::Up, Some(Command::Up)));
+        let ok = row_text(1, &row(Command::Up, Some(Command::Up)));
         assert_eq!(
             ok,
             "decision  1: intended up    decided up      ok    rounds 4  confidence 0.900  2.00 s"
         );
-        let abstained = row_text(&row(12, Command::Up, None));
+        let abstained = row_text(12, &row(Command::Up, None));
         assert!(abstained.starts_with("decision 12: intended up    decided abstain WRONG"));
     }
 }

@@ -17,7 +17,7 @@ use ndarray::Array2;
 use oddball_arm::ArmSim;
 use serde::{Deserialize, Serialize};
 
-use crate::engine::{Phase, TrialRecord};
+use crate::decision::{Phase, TrialRecord};
 use crate::online::ChannelFaults;
 use crate::SessionError;
 

@@ -5,13 +5,13 @@
 //! The seconds of a decision come from one place, [`FourBulbParams::time_split`]: the cue, the
 //! flashing up to one flash period after the last onset, and the wait for the last epoch.
 
-use oddball_decode::decision::ScoreModel;
+use oddball_decode::decision::{DecisionRule, ScoreModel};
 use oddball_decode::pipeline::Preprocess;
 use oddball_decode::stopping::{Expected, StoppingSearch};
 use serde::Serialize;
 
+use crate::decision::Decision;
 use crate::paradigm::{FourBulbParams, TimeSplit};
-use crate::report::DecisionRow;
 use crate::SessionError;
 
 /// The stopping rule that maximises `search`'s objective for a person whose cross-validated
@@ -43,7 +43,7 @@ pub fn choose_stopping(
 pub fn stopping_text(e: &Expected) -> String {
     format!(
         "stopping chosen from calibration: {}; expected accuracy {:.1} % ({:.1} % abstained), {:.2} rounds, {:.2} s/decision, {:.1} bits/min (Wolpaw), {:.1} bits/min (utility)",
-        crate::report::rule_name(&e.rule),
+        rule_name(&e.rule),
         100.0 * e.accuracy,
         100.0 * e.abstained,
         e.mean_rounds,
@@ -51,6 +51,18 @@ pub fn stopping_text(e: &Expected) -> String {
         e.wolpaw_bits_per_min,
         e.utility_bits_per_min
     )
+}
+
+/// The stopping rule in words (`fixed 10 rounds`, `dynamic stopping (p >= …, at most … rounds)`).
+pub fn rule_name(rule: &DecisionRule) -> String {
+    match rule {
+        DecisionRule::Fixed { rounds } => format!("fixed {rounds} rounds"),
+        DecisionRule::Dynamic {
+            threshold,
+            max_rounds,
+            ..
+        } => format!("dynamic stopping (p >= {threshold}, at most {max_rounds} rounds)"),
+    }
 }
 
 /// Where a session's decision time went, mean seconds per decision.
@@ -68,7 +80,7 @@ pub struct TimeReport {
 
 /// The mean split of `rows`' decisions: cue and flashing from the schedule of the rounds each
 /// used, decoding the measured remainder.
-pub fn time_report(rows: &[DecisionRow], paradigm: &FourBulbParams) -> TimeReport {
+pub fn time_report(rows: &[Decision], paradigm: &FourBulbParams) -> TimeReport {
     let n = rows.len().max(1) as f64;
     let mut r = TimeReport {
         cue_s: 0.0,
@@ -108,9 +120,8 @@ mod tests {
     #[test]
     fn the_split_adds_up_to_the_measured_time() {
         let p = FourBulbParams::fast();
-        let row = |rounds, seconds| DecisionRow {
-            index: 1,
-            intended: Some(Command::Up),
+        let row = |rounds, seconds| Decision {
+            intended: Command::Up,
             decided: Some(Command::Up),
             abstained: false,
             rounds,

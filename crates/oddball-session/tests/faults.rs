@@ -4,6 +4,7 @@
 
 use ndarray::Array2;
 use oddball_arm::{ArmConfig, ArmSim, Command};
+use oddball_decode::preset::Preset;
 use oddball_session::engine::{Session, SessionParams, TrialOutcome};
 use oddball_session::roles::{EegStream, Observer, Presenter};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
@@ -64,9 +65,9 @@ fn calibrated(fault: Fault, channel: usize) -> Session<Broken> {
         .with_seed(3)
         .build()
         .unwrap();
-    let mut p = SessionParams::paper("lda");
+    let mut p = SessionParams::paper(Preset::Lda);
     p.calibration_per_bulb = 3;
-    p.seed = 3;
+    p.decoder.seed = 3;
     let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
     let subject = Broken {
         sim,
@@ -202,9 +203,9 @@ fn stale_and_far_future_stamps_are_refused_and_counted_never_ending_the_session(
             .with_seed(5)
             .build()
             .unwrap();
-        let mut p = SessionParams::paper("lda");
+        let mut p = SessionParams::paper(Preset::Lda);
         p.calibration_per_bulb = 3;
-        p.seed = 5;
+        p.decoder.seed = 5;
         let subject = Stamped {
             sim,
             stamp,

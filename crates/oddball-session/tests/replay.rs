@@ -1,12 +1,13 @@
 //! The replay subject on the real BCI2000 speller files (skipped when ../shared/data is absent).
 
+use oddball_decode::preset::Preset;
 use std::path::PathBuf;
 
 use oddball_arm::Command;
 use oddball_decode::decision::DecisionRule;
-use oddball_session::engine::TrialOutcome;
+use oddball_session::decision::Decision;
 use oddball_session::replay::{
-    calibrate, calibrate_for_bit_rate, replay, stream_epochs, ReplayParams,
+    calibrate, calibrate_for_bit_rate, replay, stream_epochs, ReplayOrigin, ReplayParams,
 };
 
 fn data_file(name: &str) -> Option<PathBuf> {
@@ -23,7 +24,7 @@ fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_r
     };
     let cal = oddball_io::read(cal).unwrap();
     let test = oddball_io::read(test).unwrap();
-    for pipeline in ["lda", "riemann"] {
+    for pipeline in [Preset::Lda, Preset::Riemann] {
         let params = ReplayParams::paper(pipeline);
         let (model, report) = calibrate(std::slice::from_ref(&cal), &params).unwrap();
         let fixed = replay(
@@ -34,7 +35,7 @@ fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_r
         )
         .unwrap();
         let mut dyn_params = params.clone();
-        dyn_params.rule = DecisionRule::dynamic(5);
+        dyn_params.decoder.rule = DecisionRule::dynamic(5);
         let dynamic = replay(
             std::slice::from_ref(&test),
             &model,
@@ -42,18 +43,12 @@ fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_r
             &dyn_params,
         )
         .unwrap();
-        let acc = |d: &[oddball_session::replay::ReplayDecision]| {
-            d.iter()
-                .filter(|d| d.decided(&params.paradigm) == Some(d.intended))
-                .count() as f64
-                / d.len() as f64
+        let acc = |d: &[(Decision, ReplayOrigin)]| {
+            d.iter().filter(|(d, _)| d.correct()).count() as f64 / d.len() as f64
         };
         let mean_rounds =
-            dynamic.iter().map(|d| d.rounds as f64).sum::<f64>() / dynamic.len() as f64;
-        let abstained = dynamic
-            .iter()
-            .filter(|d| d.outcome == TrialOutcome::Abstained)
-            .count();
+            dynamic.iter().map(|(d, _)| d.rounds as f64).sum::<f64>() / dynamic.len() as f64;
+        let abstained = dynamic.iter().filter(|(d, _)| d.abstained).count();
         eprintln!(
             "{pipeline}: cv AUC {:.3}, d' {:.2}; {} decisions; fixed 5 rounds accuracy {:.3}; dynamic accuracy {:.3}, mean rounds {:.2}, abstained {}",
             report.cv_auc,
@@ -65,7 +60,7 @@ fn replayed_speller_decisions_are_well_above_chance_and_dynamic_stopping_saves_r
             abstained
         );
         assert_eq!(fixed.len(), 24, "4 characters × (rows, columns) × 3");
-        assert!(fixed.iter().all(|d| d.rounds == 5));
+        assert!(fixed.iter().all(|(d, _)| d.rounds == 5));
         assert!(
             acc(&fixed) >= 0.75,
             "{pipeline}: far above the 0.25 of chance"
@@ -94,7 +89,7 @@ fn several_speller_runs_calibrate_together_and_an_unlabelled_run_is_refused() {
     let Some(mut test) = iib("AAS012R03") else {
         return;
     };
-    let params = ReplayParams::paper("lda");
+    let params = ReplayParams::paper(Preset::Lda);
     let (model, report) = calibrate(&cal, &params).unwrap();
     assert_eq!(report.n_trials, 12, "3 characters in each of 4 runs");
     assert_eq!(report.n_epochs, 4 * 540);
@@ -124,10 +119,7 @@ fn several_speller_runs_calibrate_together_and_an_unlabelled_run_is_refused() {
         3 * 2 * 3,
         "3 characters × (rows, columns) × 3 slots"
     );
-    let right = d
-        .iter()
-        .filter(|d| d.decided(&params.paradigm) == Some(d.intended))
-        .count();
+    let right = d.iter().filter(|(d, _)| d.correct()).count();
     eprintln!(
         "HAM replayed: {right}/18 right (cv AUC {:.3})",
         report.cv_auc
@@ -140,7 +132,7 @@ fn several_speller_runs_calibrate_together_and_an_unlabelled_run_is_refused() {
     };
     let both = replay(&[a, b], &model, &Command::LETTER_G, &params).unwrap();
     assert_eq!(both.len(), 36);
-    assert_eq!(both.last().unwrap().character, 5);
+    assert_eq!(both.last().unwrap().1.character, 5);
 }
 
 /// A calibration's epochs (what it is fitted on, and what the report's ERP shows) are held as
@@ -153,8 +145,8 @@ fn calibration_windows_are_the_streamed_epochs() {
         return;
     };
     let recs = [a, b];
-    let params = ReplayParams::paper("lda");
-    let pre = params.preprocess;
+    let params = ReplayParams::paper(Preset::Lda);
+    let pre = params.decoder.preprocess;
     let windows = calibrate_for_bit_rate(&recs, &params).unwrap().epochs;
     assert!(!windows.is_preloaded());
     let mut streamed = Vec::new();

@@ -3,6 +3,7 @@
 
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::decision::DecisionRule;
+use oddball_decode::preset::Preset;
 use oddball_session::engine::{Session, SessionParams, TrialOutcome};
 use oddball_session::record::{read_session, reevaluate, save_session};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
@@ -12,9 +13,9 @@ fn session(preset: SubjectPreset, seed: u64, rule: DecisionRule) -> Session<Simu
         .with_seed(seed)
         .build()
         .unwrap();
-    let mut params = SessionParams::paper("lda");
-    params.seed = seed;
-    params.rule = rule;
+    let mut params = SessionParams::paper(Preset::Lda);
+    params.decoder.seed = seed;
+    params.decoder.rule = rule;
     let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
     Session::new(params, subject, Some(arm)).unwrap()
 }
@@ -153,8 +154,8 @@ fn a_sample_rate_two_percent_off_nominal_still_draws_the_g() {
     let mut params = SubjectParams::preset(SubjectPreset::Typical).with_seed(4);
     params.sfreq = 510.0;
     let subject = Fast(params.build().unwrap());
-    let mut p = SessionParams::paper("lda");
-    p.seed = 4;
+    let mut p = SessionParams::paper(Preset::Lda);
+    p.decoder.seed = 4;
     let mut s = Session::new(p, subject, None).unwrap();
     let cal = s.calibrate().unwrap();
     assert!(cal.cv_auc > 0.85, "{cal:?}");
@@ -267,9 +268,9 @@ fn a_pause_holds_the_session_between_trials_without_flashing() {
         onsets: Vec::new(),
         quality_reports: Vec::new(),
     };
-    let mut p = SessionParams::paper("lda");
+    let mut p = SessionParams::paper(Preset::Lda);
     p.calibration_per_bulb = 2;
-    p.seed = 2;
+    p.decoder.seed = 2;
     assert_eq!(p.calibration_trials(), 8);
     let mut s = Session::new(p, subject, None).unwrap();
     let cal = s.calibrate().unwrap();

@@ -2,6 +2,7 @@
 //! meaning were accepted; a `.info` of 50,000 trial lines took minutes to read (each line was
 //! looked up by scanning the whole `.info`, each trial's flashes by scanning every event).
 
+use oddball_decode::preset::Preset;
 use std::path::Path;
 use std::sync::mpsc;
 use std::time::Duration;
@@ -18,9 +19,9 @@ fn saved(dir: &Path) -> std::path::PathBuf {
         .with_seed(2)
         .build()
         .unwrap();
-    let mut p = SessionParams::paper("lda");
+    let mut p = SessionParams::paper(Preset::Lda);
     p.calibration_per_bulb = 3;
-    p.seed = 2;
+    p.decoder.seed = 2;
     let mut s = Session::new(p, sim, None).unwrap();
     s.calibrate().unwrap();
     s.decide(Some(Command::Up)).unwrap();

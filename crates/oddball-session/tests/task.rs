@@ -1,17 +1,18 @@
 //! Tracking and drawing with the typical simulated subject.
 
 use oddball_arm::{ArmConfig, ArmSim};
+use oddball_decode::preset::Preset;
 use oddball_session::engine::{Session, SessionParams};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
-use oddball_session::task::{run_drawing, run_tracking, TrackParams};
+use oddball_session::tasks::{run_drawing, run_tracking, TrackParams};
 
 fn calibrated(seed: u64) -> Session<SimulatedSubject> {
     let subject = SubjectParams::preset(SubjectPreset::Typical)
         .with_seed(seed)
         .build()
         .unwrap();
-    let mut params = SessionParams::paper("lda");
-    params.seed = seed;
+    let mut params = SessionParams::paper(Preset::Lda);
+    params.decoder.seed = seed;
     let arm = ArmSim::from_config(&ArmConfig::default()).unwrap();
     let mut s = Session::new(params, subject, Some(arm)).unwrap();
     s.calibrate().unwrap();

@@ -8,19 +8,23 @@ use std::str::FromStr;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use oddball_arm::{ArmConfig, ArmSim, Command, Vector2};
+use oddball_arm::{ArmSim, Command, Vector2};
 use oddball_decode::decision::DecisionRule;
 use oddball_decode::pipeline::Model;
+use oddball_decode::preset::Preset;
 use oddball_io::nic::{NicFormat, NicMode};
 use oddball_live::clock::Clock;
+use oddball_live::live::LiveSubject;
 use oddball_live::panel::{PanelConfig, PanelServer};
+use oddball_live::plan::{recording_arm, PlanError, SessionPlan};
+use oddball_live::source::AnySource;
 use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
-use oddball_session::engine::{
-    CalibrationReport, Session, SessionParams, Subject, UncalibratedParams,
-};
+use oddball_session::decision::{CalibrationProgress, CalibrationReport};
+use oddball_session::decoder::{AdaptParams, Start, UncalibratedParams};
+use oddball_session::engine::{Session, SessionParams};
 use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides};
-use oddball_session::replay::{self, ReplayParams};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
+use oddball_session::SessionError;
 
 /// An output file (`-o`, `--json`, `--csv`): checked when the arguments are parsed, before any
 /// work, so a mistyped folder fails at once instead of after training. Its folder must exist
@@ -95,7 +99,7 @@ pub const COMMANDS_HELP: &str = "Intended commands, comma-separated (up, down, l
 /// ([`STROKE_G`], [`PAPER_G`]).
 pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
     let c = match s.trim() {
-        STROKE_G => oddball_session::task::text_commands("G").map_err(|e| e.to_string())?,
+        STROKE_G => oddball_session::tasks::text_commands("G").map_err(|e| e.to_string())?,
         PAPER_G => Command::LETTER_G.to_vec(),
         list => oddball_arm::parse_commands(list).map_err(|e| e.to_string())?,
     };
@@ -149,6 +153,22 @@ impl FromStr for SubjectSpec {
             None => s.parse().map(Self::Preset).map_err(|e| e.to_string()),
         }
     }
+}
+
+/// `--subject` of `online`: a simulated preset only (a replayed speller recording is not a live
+/// source).
+pub fn simulated_subject(s: &str) -> Result<SubjectSpec, String> {
+    if s.starts_with("replay:") {
+        return Err("online runs a live or simulated subject; to play a recorded session back give --source replay:FILE (a speller recording is replayed by `oddball demo --subject replay:FILE`)".into());
+    }
+    s.parse()
+}
+
+/// `--pipeline`: one preset, checked as every command checks it.
+fn preset(name: &str) -> Result<Preset, String> {
+    crate::preset_arg::parse_preset(name)?
+        .parse()
+        .map_err(|e: oddball_decode::DecodeError| e.to_string())
 }
 
 /// Where the EEG comes from: shared by `demo`, `task` and `online`.
@@ -253,8 +273,8 @@ pub struct SessionOptions {
     pub max_rounds: usize,
     /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
     /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
-    #[arg(long, default_value = crate::preset_arg::DEFAULT_PIPELINE, value_parser = crate::preset_arg::parse_preset)]
-    pub pipeline: String,
+    #[arg(long, default_value = crate::preset_arg::DEFAULT_PIPELINE, value_parser = preset)]
+    pub pipeline: Preset,
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]
     pub calibration_per_bulb: usize,
@@ -389,60 +409,17 @@ impl SessionOptions {
             .context("building the simulated subject")
     }
 
-    /// The replayed files and their calibration files, for `replay:FILE` subjects.
-    pub fn replay_files(&self) -> Result<Option<ReplayFiles>> {
-        let SubjectSpec::Replay(test) = &self.subject else {
-            return Ok(None);
-        };
-        // Options before files.
-        if self.calibration == CalibrationSpec::None {
-            bail!(
-                "--calibration none runs a live or simulated session; a replayed subject \
-                 (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
-                 --unsupervised` to replay a recording without labels)"
-            );
-        }
-        // The replayed files first: a missing one is not its calibration file's fault.
-        for file in test {
-            oddball_io::check_file(file).context("--subject replay:FILE")?;
-        }
-        if !self.test_text.is_empty() && self.test_text.len() != test.len() {
-            bail!(
-                "--test-text gives {} texts for {} replayed files (one per file)",
-                self.test_text.len(),
-                test.len()
-            );
-        }
-        // Labelled (None is refused above): the replayed file's sibling.
-        let calibration = match &self.calibration {
-            CalibrationSpec::Files(c) => c.clone(),
-            _ => vec![sibling_calibration(&test[0])?],
-        };
-        for c in &calibration {
-            oddball_io::check_file(c).context("the calibration recording")?;
-            if test.contains(c) {
-                bail!(
-                    "{} is both replayed and calibrated on: calibrate on other recordings",
-                    c.display()
-                );
-            }
-        }
-        Ok(Some(ReplayFiles {
-            test: test.clone(),
-            calibration,
-        }))
-    }
-
     /// The session's settings under `rule`.
     pub fn params(&self, rule: DecisionRule) -> SessionParams {
-        let mut params = SessionParams::paper(&self.pipeline);
+        let mut params = SessionParams::paper(self.pipeline);
         params.paradigm = self.paradigm();
-        params.seed = self.seed;
-        params.rule = rule;
+        params.decoder.seed = self.seed;
+        params.decoder.rule = rule;
         params.calibration_per_bulb = self.calibration_per_bulb;
         // Only for the rule in effect (a fixed-rounds comparison keeps its rounds).
-        params.stopping = (self.optimise_stopping && !matches!(rule, DecisionRule::Fixed { .. }))
-            .then(|| self.stopping_search());
+        params.decoder.stopping = (self.optimise_stopping
+            && !matches!(rule, DecisionRule::Fixed { .. }))
+        .then(|| self.stopping_search());
         params
     }
 
@@ -456,82 +433,148 @@ impl SessionOptions {
         }
     }
 
-    /// A session with any subject, driving a recording arm, calibrated; the pen's start.
-    pub fn calibrated<S: Subject>(
+    /// The session's plan over `source` under `rule` (paced by the wall clock when `paced`),
+    /// starting with `model` (`--model`, read by [`Self::session_model`]) when given.
+    pub fn plan(
         &self,
-        subject: S,
+        source: &SourceArgs,
         rule: DecisionRule,
-        verbose: bool,
-    ) -> Result<(Session<S>, CalibrationReport, Vector2<f64>)> {
-        let arm = self.arm()?;
-        let pen_start = arm.pen();
-        let mut session = Session::new(self.params(rule), subject, Some(arm))
-            .context("setting up the session")?;
-        self.name_channels(&mut session)?;
-        if self.calibration == CalibrationSpec::None {
-            let params = UncalibratedParams::for_sfreq(session.sfreq())
-                .context("setting up the uncalibrated decoder")?;
-            self.start_uncalibrated(&mut session, params)?;
-            if verbose {
-                println!(
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
-                    params.abstain_below
-                );
-            }
-            return Ok((session, CalibrationReport::none(), pen_start));
-        }
-        if let Some(model) = self.session_model(rule)? {
-            if verbose {
-                println!("{}", model_line(&model, self.model.as_deref()));
-            }
-            session.set_model(model).context("using --model")?;
-            return Ok((session, CalibrationReport::none(), pen_start));
-        }
-        let calibration = if verbose {
-            session.calibrate_with(&mut calibration_progress())
-        } else {
-            session.calibrate()
-        }
-        .context("calibrating")?;
-        if self.adapt {
-            session
-                .start_adaptation(0.8, 0.9)
-                .context("starting online adaptation")?;
-        }
-        if verbose {
-            println!(
-                "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
-                calibration.n_trials,
-                calibration.n_epochs,
-                calibration.n_targets,
-                calibration.n_rejected,
-                session.time_s(),
-                calibration.cv_auc,
-                calibration.d_prime
-            );
-        }
-        Ok((session, calibration, pen_start))
+        paced: bool,
+        model: Option<Model>,
+    ) -> Result<SessionPlan> {
+        let montage = match &self.montage {
+            Some(path) => Some(oddball_io::montage::read_montage(path)?),
+            None => None,
+        };
+        Ok(SessionPlan {
+            source: source.source.clone(),
+            open: source.open_options(self.simulated()?, paced)?,
+            params: self.params(rule),
+            start: self.start(model)?,
+            montage,
+            step_m: self.step,
+        })
     }
 
-    /// Starts `session` without calibration, from the `--transfer` model if given.
-    pub fn start_uncalibrated<S: Subject>(
+    /// Opens `plan`'s live session and starts it, printing what it did when `verbose`: the
+    /// session, what calibration measured, the pen's start.
+    pub fn open(
         &self,
-        session: &mut Session<S>,
-        params: UncalibratedParams,
-    ) -> Result<()> {
-        match &self.transfer {
-            Some(path) => {
-                let model = crate::load::load_model(path)?;
-                session
-                    .start_transfer(params, model)
-                    .with_context(|| format!("starting from --transfer {}", path.display()))?;
-                println!("transfer: starting from {}", path.display());
-            }
-            None => session
-                .start_uncalibrated(params)
-                .context("setting up the uncalibrated decoder")?,
+        plan: &SessionPlan,
+        clock: Clock,
+        verbose: bool,
+    ) -> Result<(
+        Session<LiveSubject<AnySource>>,
+        CalibrationReport,
+        Vector2<f64>,
+    )> {
+        let pen_start = self.arm()?.pen();
+        let opened = if verbose {
+            plan.open(clock, &mut calibration_progress())
+        } else {
+            plan.open(clock, &mut |_| {})
         }
-        Ok(())
+        .map_err(|e| self.plan_error(e, plan))?;
+        let session = opened.session;
+        if let Some(c) = opened.rate_change {
+            println!("{c}");
+        }
+        if matches!(plan.start, Start::Uncalibrated { .. }) {
+            self.print_transfer();
+        }
+        if !verbose {
+            let calibration = opened.calibration.unwrap_or_else(CalibrationReport::none);
+            return Ok((session, calibration, pen_start));
+        }
+        match (&plan.start, opened.calibration) {
+            (Start::Model(model), _) => println!("{}", model_line(model, self.model.as_deref())),
+            (Start::Uncalibrated { .. }, _) => {
+                println!(
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
+                    UncalibratedParams::for_sfreq(session.sfreq())?.abstain_below
+                );
+            }
+            (Start::Calibrate { .. }, Some(calibration)) => {
+                println!(
+                    "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
+                    calibration.n_trials,
+                    calibration.n_epochs,
+                    calibration.n_targets,
+                    calibration.n_rejected,
+                    session.time_s(),
+                    calibration.cv_auc,
+                    calibration.d_prime
+                );
+                return Ok((session, calibration, pen_start));
+            }
+            (Start::Calibrate { .. }, None) => {}
+        }
+        Ok((session, CalibrationReport::none(), pen_start))
+    }
+
+    /// `transfer: starting from FILE` for a session started from `--transfer`.
+    pub fn print_transfer(&self) {
+        if let (CalibrationSpec::None, Some(path)) = (&self.calibration, &self.transfer) {
+            println!("transfer: starting from {}", path.display());
+        }
+    }
+
+    /// A plan's error as the option at fault.
+    pub fn plan_error(&self, e: PlanError, plan: &SessionPlan) -> anyhow::Error {
+        let path =
+            |p: &Option<PathBuf>| p.as_deref().unwrap_or(Path::new("")).display().to_string();
+        match e {
+            PlanError::Invalid(why) => anyhow::anyhow!("{why}"),
+            PlanError::Arm(e) => anyhow::Error::new(e).context("checking --step"),
+            PlanError::Open(e) => {
+                anyhow::Error::new(e).context(format!("--source {}", plan.source))
+            }
+            PlanError::Rate(e) => {
+                anyhow::Error::new(e).context("resampling the EEG to the model's rate")
+            }
+            PlanError::Session(e) => anyhow::Error::new(e).context("setting up the session"),
+            PlanError::Montage(e) => anyhow::Error::new(e).context(format!(
+                "naming the channels with --montage {}",
+                path(&self.montage)
+            )),
+            PlanError::Start(e) => {
+                let channels = matches!(e, SessionError::ModelChannels { .. });
+                let e = anyhow::Error::new(e);
+                match &plan.start {
+                    Start::Calibrate { .. } => e.context("calibrating"),
+                    Start::Model(_) if channels => e.context(
+                        "using --model: name the EEG's channels in order with --montage FILE",
+                    ),
+                    Start::Model(_) => e.context("using --model"),
+                    Start::Uncalibrated {
+                        transfer: Some(_), ..
+                    } => e.context(format!("starting from --transfer {}", path(&self.transfer))),
+                    Start::Uncalibrated { .. } => e.context("setting up the uncalibrated decoder"),
+                }
+            }
+        }
+    }
+
+    /// How the session starts: without calibration (`--calibration none`, from the
+    /// `--transfer` model if given), with `model` (`--model`, read by [`Self::session_model`]),
+    /// or calibrating (and with `--adapt` adapting).
+    pub fn start(&self, model: Option<Model>) -> Result<Start> {
+        if self.calibration == CalibrationSpec::None {
+            let transfer = match &self.transfer {
+                Some(path) => Some(crate::load::load_model(path)?),
+                None => None,
+            };
+            return Ok(Start::Uncalibrated {
+                params: None,
+                transfer,
+            });
+        }
+        Ok(match model {
+            Some(model) => Start::Model(model),
+            None => Start::Calibrate {
+                adapt: self.adapt.then(AdaptParams::default),
+            },
+        })
     }
 
     /// The `--model` to decide with instead of calibrating (read and checked), its decision
@@ -553,25 +596,14 @@ impl SessionOptions {
         Ok(Some(model))
     }
 
-    /// Names the session's channels from `--montage`, if given.
-    pub fn name_channels<S: Subject>(&self, session: &mut Session<S>) -> Result<()> {
-        if let Some(path) = &self.montage {
-            let names = oddball_io::montage::read_montage(path)?;
-            session.name_channels(names).with_context(|| {
-                format!("naming the channels with --montage {}", path.display())
-            })?;
-        }
-        Ok(())
-    }
-
     /// The arm the session drives (recording its trace), with `--step`.
     pub fn arm(&self) -> Result<ArmSim> {
-        recording_arm(self.step)
+        recording_arm(self.step).context("checking --step")
     }
 
     /// Checks, before any EEG work, that the intended commands keep the pen on the board.
     pub fn check_commands(&self, commands: &[Command]) -> Result<()> {
-        oddball_session::task::check_path(&self.arm()?, commands, "the commands")
+        oddball_session::tasks::check_path(&self.arm()?, commands, "the commands")
             .map(|_| ())
             .map_err(|e| off_board(e, "--commands", "fewer commands"))
     }
@@ -608,68 +640,10 @@ impl SessionOptions {
         if !self.test_text.is_empty() && self.preset().is_some() {
             bail!("--test-text labels replayed files: it needs --subject replay:FILE");
         }
-        if self.adapt && self.pipeline != "lda" {
+        if self.adapt && self.pipeline != Preset::Lda {
             bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
         }
         Ok(())
-    }
-
-    /// Reads a replayed subject's files (the replayed ones labelled by --test-text when given)
-    /// and calibrates on the calibration files; prints the calibration.
-    pub fn calibrated_replay(&self, files: &ReplayFiles, rule: DecisionRule) -> Result<Replayed> {
-        let read = |p: &PathBuf, text: Option<&String>| {
-            let how = oddball_eval::dataset::Labelling {
-                text: text.map(String::as_str),
-                ..Default::default()
-            };
-            oddball_eval::dataset::read_labelled(p, how)
-        };
-        let cal = files
-            .calibration
-            .iter()
-            .map(|p| read(p, None))
-            .collect::<Result<Vec<_>, _>>()?;
-        let test = files
-            .test
-            .iter()
-            .enumerate()
-            .map(|(i, p)| read(p, self.test_text.get(i)))
-            .collect::<Result<Vec<_>, _>>()?;
-        let cal_names = files.calibration_names();
-        let mut params = ReplayParams::paper(&self.pipeline);
-        params.paradigm = self.paradigm();
-        params.seed = self.seed;
-        params.rule = rule;
-        params.rounds_per_decision = rule.max_rounds().max(params.paradigm.n_rounds);
-        params.stopping = self.optimise_stopping.then(|| self.stopping_search());
-        let replay::Calibrated {
-            model,
-            report: calibration,
-            expected: chosen,
-            epochs: calibration_epochs,
-        } = replay::calibrate_for_bit_rate(&cal, &params)
-            .with_context(|| format!("calibrating on {cal_names}"))?;
-        println!(
-            "calibration: {} characters, {} epochs ({} targets, {} rejected) of {}; cross-validated AUC {:.3}, d' {:.2}",
-            calibration.n_trials,
-            calibration.n_epochs,
-            calibration.n_targets,
-            calibration.n_rejected,
-            cal_names,
-            calibration.cv_auc,
-            calibration.d_prime
-        );
-        if let Some(e) = &chosen {
-            params.rule = e.rule;
-            println!("{}", oddball_session::timing::stopping_text(e));
-        }
-        Ok(Replayed {
-            calibration_epochs,
-            test,
-            model,
-            calibration,
-            params,
-        })
     }
 }
 
@@ -692,22 +666,11 @@ pub fn model_line(model: &Model, path: Option<&Path>) -> String {
     )
 }
 
-/// The arm every session drives, recording its trace.
-fn recording_arm(step_m: Option<f64>) -> Result<ArmSim> {
-    let mut config = ArmConfig::default();
-    if let Some(step) = step_m {
-        config.reference.step_m = step;
-    }
-    let mut arm = ArmSim::from_config(&config).context("checking --step")?;
-    arm.set_recording(true);
-    Ok(arm)
-}
-
 /// Prints a calibration's progress ("calibration decision 3 of 40 …") when it is slow enough
 /// to need it: a line after each trial once two seconds of wall time have passed since the
 /// start or the last line (a live or real-time calibration prints every trial; an unpaced
 /// simulation, over in a second, prints nothing).
-pub fn calibration_progress() -> impl FnMut(oddball_session::engine::CalibrationProgress) {
+pub fn calibration_progress() -> impl FnMut(CalibrationProgress) {
     let mut last = std::time::Instant::now();
     let mut printed = false;
     move |p| {
@@ -757,62 +720,11 @@ pub fn off_board(e: oddball_session::SessionError, option: &str, less: &str) -> 
     anyhow::Error::new(e).context(format!("checking {option}: it leaves the board; {hint}"))
 }
 
-/// A replayed subject's files: those played back and those calibrated on, each in order.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReplayFiles {
-    pub test: Vec<PathBuf>,
-    pub calibration: Vec<PathBuf>,
-}
-
-impl ReplayFiles {
-    /// The replayed files, comma-separated, as --subject replay: names them.
-    pub fn test_names(&self) -> String {
-        join_paths(&self.test)
-    }
-
-    /// The calibration files, comma-separated.
-    pub fn calibration_names(&self) -> String {
-        join_paths(&self.calibration)
-    }
-}
-
-fn join_paths(p: &[PathBuf]) -> String {
+pub fn join_paths(p: &[PathBuf]) -> String {
     p.iter()
         .map(|p| p.display().to_string())
         .collect::<Vec<_>>()
         .join(",")
-}
-
-/// A replayed subject: the calibration's accepted epochs (what it was trained on), the test
-/// recordings read.
-#[derive(Debug)]
-pub struct Replayed {
-    pub calibration_epochs: oddball_signal::Epochs,
-    pub test: Vec<oddball_io::Recording>,
-    pub model: oddball_decode::pipeline::Model,
-    pub calibration: CalibrationReport,
-    pub params: ReplayParams,
-}
-
-/// `eeg3_2.dat` → `eeg3_1.dat` in the same folder, if it exists and differs.
-fn sibling_calibration(file: &Path) -> Result<PathBuf> {
-    let stem = file
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or_default();
-    let ext = file.extension().and_then(|s| s.to_str()).unwrap_or("dat");
-    if let Some((base, n)) = stem.rsplit_once('_') {
-        if n.chars().all(|c| c.is_ascii_digit()) && n != "1" {
-            let cand = file.with_file_name(format!("{base}_1.{ext}"));
-            if cand.exists() {
-                return Ok(cand);
-            }
-        }
-    }
-    bail!(
-        "no calibration recording for {}: give one with --calibration FILE",
-        file.display()
-    )
 }
 
 /// The longest --wait-page, seconds (a day).

@@ -23,15 +23,15 @@ use oddball_live::source::SourceSpec;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
-    accuracy_over_time, accuracy_over_time_text, pen_report, report_text, row_text, rule_name,
-    scores, CalibrationSummary, DecisionRow, PenReport, Scores, Stretch,
+    accuracy_over_time, accuracy_over_time_text, numbered, pen_report, report_text, row_text,
+    rule_name, scores, CalibrationSummary, PenReport, Row, Scores, Stretch,
 };
-use oddball_session::task::{run_copy, Pilot};
+use oddball_session::tasks::{run_copy, Pilot};
 use oddball_session::timing::{stopping_text, time_report, time_text, TimeReport};
 use serde::Serialize;
 
 use crate::args::{commands_arg, SessionOptions, SourceArgs, COMMANDS_HELP, STROKE_G};
-use crate::pilot::{live_subject, prepare, write_decisions_csv, AnyPilot};
+use crate::pilot::{prepare, write_decisions_csv, AnyPilot};
 
 /// Options of `oddball demo`.
 #[derive(Debug, clap::Args)]
@@ -59,7 +59,7 @@ struct Summary<'a> {
     fixed_rounds_for_comparison: Option<&'a Scores>,
     simulated_seconds: f64,
     pen: PenReport,
-    decisions: &'a [DecisionRow],
+    decisions: Vec<Row<'a>>,
     /// Accuracy of decisions 1–10, 11–20, …
     accuracy_over_time: Vec<Stretch>,
     /// Without calibration: [right, decisions] when the last fit re-decides every decision.
@@ -80,7 +80,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let (fixed, rule) = args.session.rules()?;
     args.session.check_commands(&args.commands)?;
     let opts = &args.session;
-    let replay_files = opts.replay_files()?;
+    let replay_files = crate::pilot::replay_files(opts)?;
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
 
     let mut comparison = None;
@@ -129,37 +129,30 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 && args.source.source == SourceSpec::Sim
             {
                 // The same subject and calibration (same seed), online with fixed rounds.
-                let subject = live_subject(opts, &args.source, false, Clock::new())?;
-                let (mut quiet, _, _) = opts.calibrated(subject, fixed, false)?;
+                let plan = opts.plan(&args.source, fixed, false, opts.session_model(fixed)?)?;
+                let (mut quiet, _, _) = opts.open(&plan, Clock::new(), false)?;
                 let steps = run_copy(&mut quiet, commands, false, 1.5, |_| false, |_, _| {})?.steps;
-                let rows: Vec<DecisionRow> = steps
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| DecisionRow::of(i + 1, s))
-                    .collect();
-                comparison = Some(scores(&rows, &fixed));
+                comparison = Some(scores(&steps, &fixed));
             }
         }
     }
     let mut replay_rule = None;
     let mut prep = prepare(opts, &args.source, rule, opts.realtime, |r, _| {
-        replay_rule = Some(r.params.rule);
+        replay_rule = Some(r.params.decoder.rule);
         if rule != fixed {
             let mut p = r.params.clone();
-            p.rule = fixed;
-            let d = replay::replay(&r.test, &r.model, commands, &p)?;
-            let rows: Vec<DecisionRow> = d
-                .iter()
-                .enumerate()
-                .map(|(i, d)| DecisionRow::of_replayed(i + 1, d, &p.paradigm))
+            p.decoder.rule = fixed;
+            let d: Vec<_> = replay::replay(&r.test, &r.model, commands, &p)?
+                .into_iter()
+                .map(|(d, _)| d)
                 .collect();
-            comparison = Some(scores(&rows, &fixed));
+            comparison = Some(scores(&d, &fixed));
         }
         Ok(())
     })?;
     // The rule calibration chose (--optimise-stopping), else the one given.
     let (rule, stopping) = match &prep.pilot {
-        AnyPilot::Live(s) => (s.params().rule, s.stopping().copied()),
+        AnyPilot::Live(s) => (s.params().decoder.rule, s.stopping().copied()),
         AnyPilot::Replay(_) => (replay_rule.unwrap_or(rule), None),
     };
     let paradigm = opts.paradigm();
@@ -176,7 +169,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         1.5,
         |_| false,
         |i, s| {
-            println!("{}", row_text(&DecisionRow::of(i + 1, s)));
+            println!("{}", row_text(i + 1, s));
         },
     )?
     .steps;
@@ -188,20 +181,16 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             None => format!("stopped early: {end}"),
         });
     }
-    let rows: Vec<DecisionRow> = steps
-        .iter()
-        .enumerate()
-        .map(|(i, s)| DecisionRow::of(i + 1, s))
-        .collect();
+    let rows = &steps;
     if let Some(h) = prep.stream_health() {
         println!("stream: {h}");
     }
     let simulated_seconds = prep.pilot.time_s();
-    let result = scores(&rows, &rule);
-    let time = time_report(&rows, &paradigm);
+    let result = scores(rows, &rule);
+    let time = time_report(rows, &paradigm);
     let arm = prep.pilot.arm().clone();
-    let pen = pen_report(&arm, prep.pen_start, &rows);
-    let over_time = accuracy_over_time(&rows, 10);
+    let pen = pen_report(&arm, prep.pen_start, rows);
+    let over_time = accuracy_over_time(rows, 10);
     let posthoc = crate::pilot::posthoc(&prep);
     let adaptation = crate::pilot::adaptation(&prep);
     write_decisions_csv(&args.out.join("decisions.csv"), &steps)?;
@@ -247,7 +236,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     let summary = Summary {
         subject: &subject_label,
-        pipeline: &opts.pipeline,
+        pipeline: opts.pipeline.name(),
         seed: opts.seed,
         commands: commands.clone(),
         calibration,
@@ -255,7 +244,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         fixed_rounds_for_comparison: comparison.as_ref(),
         simulated_seconds,
         pen: pen.clone(),
-        decisions: &rows,
+        decisions: numbered(rows),
         accuracy_over_time: over_time.clone(),
         posthoc_correct: posthoc.map(|(r, n)| [r, n]),
         files,

@@ -18,18 +18,29 @@ use oddball_live::online::{
     stop_reason, OnlineSummary,
 };
 use oddball_live::panel::PanelConfig;
+use oddball_live::plan::{PlanError, SessionPlan};
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
-use oddball_session::engine::{Session, UncalibratedParams};
+use oddball_session::decoder::Start;
 use oddball_session::roles::EegStream;
-use oddball_session::task::run_copy;
+use oddball_session::tasks::run_copy;
 
 use crate::args::{
-    commands_arg, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs, LETTER_G,
+    commands_arg, CalibrationSpec, PanelOptions, SessionOptions, SourceArgs, COMMANDS_HELP,
+    STROKE_G,
 };
 
-/// Options of `oddball online`.
+/// Options of `oddball online`: a live session's subject is simulated or real, never a replayed
+/// speller recording (`--source replay:FILE` plays a recorded session back), so `--subject`
+/// takes a preset only and `--test-text` is not offered.
 #[derive(Debug, clap::Args)]
+#[command(
+    mut_arg("subject", |a| a
+        .help("The simulated subject of --source sim (and the montage of a NIC stream): easy, typical or hard")
+        .value_parser(crate::args::simulated_subject)),
+    mut_arg("test_text", |a| a.hide(true)),
+    mut_arg("realtime", |a| a.hide(true))
+)]
 pub struct OnlineArgs {
     #[command(flatten)]
     pub source: SourceArgs,
@@ -39,9 +50,8 @@ pub struct OnlineArgs {
     pub calibrate: bool,
     #[command(flatten)]
     pub panel: PanelOptions,
-    /// Comma-separated intended commands (a copy task: the panel cues each); the letter G by
-    /// default.
-    #[arg(long, default_value = LETTER_G, value_parser = commands_arg)]
+    /// Intended commands (a copy task: the panel cues each).
+    #[arg(long, default_value = STROKE_G, value_parser = commands_arg, help = COMMANDS_HELP)]
     pub commands: std::vec::Vec<Command>,
     /// With --source replay:FILE, play the file back as fast as it is processed instead of in
     /// real time (re-running a recorded session with another model, say); not with --serve.
@@ -62,19 +72,24 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
     if (args.session.model.is_none(), args.calibrate, uncalibrated) == (true, false, false) {
         bail!("give --model FILE, --calibrate (labelled calibration first) or --calibration none");
     }
+    if args.session.realtime {
+        bail!("--realtime paces a simulated demo or task: online runs in real time already (--fast plays a file back as fast as it goes)");
+    }
     let is_replay = matches!(args.source.source, SourceSpec::Replay(_));
     if args.fast && !is_replay {
         bail!("--fast plays back a file: it needs --source replay:FILE");
     }
-    // The model read and checked before any EEG work.
-    let model = args.session.session_model(rule)?;
+    // The model (and montage, transfer model) read and checked before any EEG work.
+    let plan = args.session.plan(
+        &args.source,
+        rule,
+        !args.fast,
+        args.session.session_model(rule)?,
+    )?;
     let clock = Clock::new();
-    let sim = args.session.simulated()?;
-    let (source, markers) = args
-        .source
-        .source
-        .open(args.source.open_options(sim, !args.fast)?, clock)
-        .with_context(|| format!("--source {}", args.source.source))?;
+    let (source, markers) = plan
+        .open_source(clock)
+        .map_err(|e| args.session.plan_error(e, &plan))?;
     match &source {
         AnySource::Playback(p) => println!(
             "replaying {}: {} channels, {} Hz, {:.1} s, {} events",
@@ -87,46 +102,26 @@ pub fn run(args: &OnlineArgs) -> Result<()> {
         _ if markers.is_some() => println!("marker outlet: {}", args.source.markers),
         _ => {}
     }
-    // A file at another rate than the model's is resampled to it (polyphase).
-    let source = match (source, &model) {
-        (AnySource::Playback(p), Some(m)) if (p.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
-            println!(
-                "resampling the file from {} Hz to the model's {} Hz (polyphase)",
-                p.sfreq(),
-                m.sfreq
-            );
-            AnySource::Playback(
-                p.resampled(m.sfreq)
-                    .context("resampling the replayed file")?,
-            )
-        }
-        // A live stream is resampled as it streams.
-        (s, Some(m)) if (s.sfreq() - m.sfreq).abs() > 1e-9 * m.sfreq => {
-            println!(
-                "resampling the stream from {} Hz to the model's {} Hz as it streams (polyphase)",
-                s.sfreq(),
-                m.sfreq
-            );
-            s.resampled(m.sfreq).context("resampling the stream")?
-        }
-        (s, _) => s,
-    };
-    run_with(args, source, markers, clock, (rule, model), &args.commands)
+    // A source at another rate than the model's is resampled to it (polyphase).
+    let (source, change) = plan
+        .at_model_rate(source)
+        .map_err(|e| args.session.plan_error(e, &plan))?;
+    if let Some(c) = change {
+        println!("{c}");
+    }
+    run_with(args, &plan, source, markers, clock, &args.commands)
 }
 
 fn run_with(
     args: &OnlineArgs,
+    plan: &SessionPlan,
     source: AnySource,
     markers: Option<Box<dyn oddball_live::live::MarkerSink>>,
     clock: Clock,
-    (rule, model): (
-        oddball_decode::decision::DecisionRule,
-        Option<oddball_decode::pipeline::Model>,
-    ),
     commands: &[Command],
 ) -> Result<()> {
     fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    let paradigm = args.session.paradigm();
+    let paradigm = plan.params.paradigm;
     let arm = args.session.arm()?;
     let record_path = free_recording_path(&args.out);
     let recorder = Recorder::create(
@@ -139,10 +134,10 @@ fn run_with(
     let title = format!(
         "{} · {} · {}",
         args.source.source,
-        model.as_ref().map_or(args.session.pipeline.clone(), |m| m
-            .pipeline
-            .name()
-            .to_string()),
+        match &plan.start {
+            Start::Model(m) => m.pipeline.name(),
+            _ => plan.params.decoder.pipeline.name(),
+        },
         if args.session.calibration == CalibrationSpec::None {
             "no calibration"
         } else if args.calibrate {
@@ -174,11 +169,11 @@ fn run_with(
         record_path.display()
     );
     subject.source_mut().start_now();
-    let mut session = Session::new(args.session.params(rule), subject, Some(arm))
-        .context("setting up the session")?;
-    args.session.name_channels(&mut session)?;
+    let mut session = plan
+        .session(subject)
+        .map_err(|e| args.session.plan_error(e, plan))?;
     // The operator view's progress: "calibration decision 3 of 40", "decision 2 of 6".
-    let calibrating = model.is_none() && args.session.calibration != CalibrationSpec::None;
+    let calibrating = matches!(plan.start, Start::Calibrate { .. });
     let n_calibration = calibrating.then(|| session.params().calibration_trials());
     session
         .subject_mut()
@@ -186,13 +181,22 @@ fn run_with(
     // A stop request or a source that ends during calibration still closes the recording and
     // writes the summary (with no decisions).
     let mut ended = None;
-    match model {
-        Some(m) => {
-            println!(
-                "{}",
-                crate::args::model_line(&m, args.session.model.as_deref())
-            );
-            session.set_model(m).context("using --model")?;
+    if let Start::Model(m) = &plan.start {
+        println!(
+            "{}",
+            crate::args::model_line(m, args.session.model.as_deref())
+        );
+    }
+    match plan.start(&mut session, &mut crate::args::calibration_progress()) {
+        Ok(Some(c)) => println!(
+            "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
+            c.n_trials, c.n_epochs, c.cv_auc
+        ),
+        Ok(None) if args.session.calibration == CalibrationSpec::None => {
+            args.session.print_transfer();
+            println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
+        }
+        Ok(None) => {
             // A replayed recording's calibration is passed over, not played as commands.
             let recorded = match session.subject().source() {
                 AnySource::Playback(p) => p.calibration(),
@@ -208,38 +212,16 @@ fn run_with(
                     .pass_calibration(c.n_trials, c.end)
                     .context("passing over the recorded calibration")?;
             }
-            if let Some(m) = session.model() {
-                oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
-            }
         }
-        None if args.session.calibration == CalibrationSpec::None => {
-            let p = UncalibratedParams::for_sfreq(session.sfreq())
-                .context("setting up the uncalibrated decoder")?;
-            args.session.start_uncalibrated(&mut session, p)?;
-            println!("calibration: none: the decoder learns from the session (EM after every decision, no labels)");
+        Err(PlanError::Start(e)) if calibrating && is_recording_end(&e) => {
+            let end = stop_reason(&e);
+            println!("calibration: {end}");
+            ended = Some(end);
         }
-        None => match session.calibrate_with(&mut crate::args::calibration_progress()) {
-            Ok(c) => {
-                if args.session.adapt {
-                    session
-                        .start_adaptation(0.8, 0.9)
-                        .context("starting online adaptation")?;
-                }
-                println!(
-                    "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
-                    c.n_trials, c.n_epochs, c.cv_auc
-                );
-                if let Some(m) = session.model() {
-                    oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
-                }
-            }
-            Err(e) if is_recording_end(&e) => {
-                let end = stop_reason(&e);
-                println!("calibration: {end}");
-                ended = Some(end);
-            }
-            Err(e) => return Err(e).context("calibrating"),
-        },
+        Err(e) => return Err(args.session.plan_error(e, plan)),
+    }
+    if let Some(m) = session.model() {
+        oddball_io::write_atomic(args.out.join("model.json"), m.to_json())?;
     }
     let mut steps = Vec::new();
     if ended.is_none() {

@@ -15,12 +15,12 @@ use anyhow::{Context, Result};
 use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
+use oddball_session::decision::Decision;
 use oddball_session::report::{
     accuracy_over_time, accuracy_over_time_text, draw_text, executed_path, missed_decisions,
-    DecisionRow,
 };
-use oddball_session::task::{
-    check_drawing, drawing_path, run_drawing, run_tracking, task_targets, Pilot, Step, TrackParams,
+use oddball_session::tasks::{
+    check_drawing, drawing_path, run_drawing, run_tracking, task_targets, Pilot, TrackParams,
 };
 use serde::Serialize;
 
@@ -96,7 +96,7 @@ fn prepare_task(
     view: impl Fn(&ArmSim) -> Result<TaskView>,
 ) -> Result<Prepared> {
     let (_, rule) = opts.rules()?;
-    match (opts.replay_files()?, opts.preset()) {
+    match (crate::pilot::replay_files(opts)?, opts.preset()) {
         (Some(files), _) => {
             if panel.serve.is_some() {
                 anyhow::bail!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed");
@@ -115,7 +115,7 @@ fn prepare_task(
             opts.pipeline
         ),
     }
-    let mut prep = prepare(opts, source, rule, false, |_, replay| {
+    let mut prep = prepare(opts, source, rule, opts.realtime, |_, replay| {
         println!(
             "{} decisions available in the recording",
             replay.remaining()
@@ -211,7 +211,7 @@ fn run_track(args: &TrackArgs) -> Result<()> {
         .map(|t| Vector2::new(t.target_m[0], t.target_m[1]))
         .collect();
     let step_m = prep.pilot.arm().settings().step_m;
-    let intended = oddball_session::task::intended_track_path(prep.pen_start, &targets, step_m);
+    let intended = oddball_session::tasks::intended_track_path(prep.pen_start, &targets, step_m);
     write_common(&args.out, &prep, &report.steps, &intended, None)?;
     oddball_plot::task::draw_track(&args.out.join("task.png"), prep.pilot.arm(), &report)
         .context("drawing task.png")?;
@@ -267,22 +267,15 @@ fn run_draw(args: &DrawArgs) -> Result<()> {
 fn write_common(
     out: &Path,
     prep: &Prepared,
-    steps: &[Step],
+    steps: &[Decision],
     intended: &[Vector2<f64>],
     task_title: Option<&str>,
 ) -> Result<()> {
     write_decisions_csv(&out.join("decisions.csv"), steps)?;
     oddball_io::write_atomic(out.join("model.json"), crate::pilot::model_json(prep)?)
         .context("writing model.json")?;
-    let rows: Vec<DecisionRow> = steps
-        .iter()
-        .enumerate()
-        .map(|(i, s)| DecisionRow::of(i + 1, s))
-        .collect();
-    println!(
-        "{}",
-        accuracy_over_time_text(&accuracy_over_time(&rows, 10))
-    );
+    let rows = steps;
+    println!("{}", accuracy_over_time_text(&accuracy_over_time(rows, 10)));
     // An uncalibrated session has no labelled epochs to draw.
     if prep.erp.n_epochs() > 0 {
         let erp_png = out.join("erp.png");
@@ -291,8 +284,8 @@ fn write_common(
     }
     let arm = prep.pilot.arm();
     let step_m = arm.settings().step_m;
-    let executed = executed_path(prep.pen_start, &rows, step_m);
-    let missed = missed_decisions(prep.pen_start, &rows, step_m);
+    let executed = executed_path(prep.pen_start, rows, step_m);
+    let missed = missed_decisions(prep.pen_start, rows, step_m);
     let paths = oddball_plot::arm::SessionPaths {
         intended,
         executed: &executed,
@@ -318,7 +311,7 @@ fn write_summary<T: Serialize>(
     prep: &Prepared,
     report: &T,
 ) -> Result<()> {
-    let summary = prep.task_summary(task, &opts.pipeline, opts.seed, report);
+    let summary = prep.task_summary(task, opts.pipeline.name(), opts.seed, report);
     let json = serde_json::to_string_pretty(&summary)?;
     oddball_io::write_atomic(out.join("summary.json"), json + "\n").context("writing summary.json")
 }

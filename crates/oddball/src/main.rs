@@ -58,7 +58,7 @@ enum Command {
     Task(cmd_task::TaskArgs),
     /// A live session: EEG from a live stream, the stimulus panel in a browser, recorded as it runs.
     #[command(after_help = "Examples:
-  oddball online --source sim --calibrate --serve 127.0.0.1:8080 --realtime
+  oddball online --source sim --calibrate --serve 127.0.0.1:8080
   oddball online --source lsl:type=EEG --calibrate --serve 127.0.0.1:8080   # needs --features lsl
   oddball online --source nic:127.0.0.1:1234 --model out/demo/model.json")]
     Online(Box<cmd_online::OnlineArgs>),

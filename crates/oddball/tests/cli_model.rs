@@ -326,7 +326,7 @@ fn a_model_at_another_rate_runs_on_a_stream_resampled_as_it_streams() {
         b.to_str().unwrap(),
     ]);
     assert!(
-        out.contains("resampling the EEG from 500 Hz to the model's 256 Hz as it streams"),
+        out.contains("resampling the stream from 500 Hz to the model's 256 Hz as it streams"),
         "{out}"
     );
     assert!(mostly_right(&b), "{out}");

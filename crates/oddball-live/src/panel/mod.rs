@@ -21,22 +21,13 @@
 //! collects stamps. It binds loopback unless told otherwise, rejects malformed and oversized
 //! client messages (counted in [`PanelStats`]), and outlives any client that disconnects.
 
+mod assets;
 pub mod protocol;
 mod server;
 
+pub use assets::{COMMON_JS, INDEX_HTML, OPERATOR_HTML, OPERATOR_JS, PANEL_JS};
 pub use protocol::{
     ChannelQuality, ClientMsg, Control, PanelConfig, ProtocolError, Role, ServerMsg,
     MAX_CLIENT_MESSAGE,
 };
 pub use server::{DrawnReport, PanelServer, PanelStats};
-
-/// The subject view, embedded in the binary.
-pub const INDEX_HTML: &str = include_str!("../../assets/index.html");
-/// Its script.
-pub const PANEL_JS: &str = include_str!("../../assets/panel.js");
-/// The operator view.
-pub const OPERATOR_HTML: &str = include_str!("../../assets/operator.html");
-/// Its script.
-pub const OPERATOR_JS: &str = include_str!("../../assets/operator.js");
-/// What both scripts share: the WebSocket connection and the bulbs' labels.
-pub const COMMON_JS: &str = include_str!("../../assets/common.js");

@@ -14,11 +14,11 @@ use axum::routing::get;
 use axum::Router;
 use tokio::sync::{broadcast, watch};
 
+use super::assets::{COMMON_JS, INDEX_HTML, OPERATOR_HTML, OPERATOR_JS, PANEL_JS};
 use super::protocol::{
     parse_client, ClientMsg, Control, PanelConfig, Role, ServerMsg, MAX_CLIENT_MESSAGE,
     OPERATOR_PAGE, OPERATOR_WS, SUBJECT_PAGE, SUBJECT_WS,
 };
-use super::{COMMON_JS, INDEX_HTML, OPERATOR_HTML, OPERATOR_JS, PANEL_JS};
 use crate::clock::Clock;
 use crate::LiveError;
 

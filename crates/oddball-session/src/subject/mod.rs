@@ -130,6 +130,14 @@ pub struct SimulatedSubject {
     scratch: [Vec<f64>; 3],
 }
 
+impl SubjectParams {
+    /// A subject at sample 0.
+    pub fn build(&self) -> Result<SimulatedSubject, SessionError> {
+        self.validate()?;
+        Ok(SimulatedSubject::new(self.clone()))
+    }
+}
+
 impl SimulatedSubject {
     fn new(params: SubjectParams) -> Self {
         let n = params.n_channels();

@@ -5,9 +5,10 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-use super::processes::TAIL_SDS;
-use super::SimulatedSubject;
 use crate::SessionError;
+
+/// Gaussians are cut this many sds after their peak.
+pub(super) const TAIL_SDS: f64 = 5.0;
 
 /// The default montage: eight channels of a Neuroelectrics Starstim-like cap.
 pub const STARSTIM_CHANNELS: [&str; 8] = ["Fz", "Cz", "P3", "Pz", "P4", "PO7", "Oz", "PO8"];
@@ -350,11 +351,5 @@ impl SubjectParams {
             );
         }
         Ok(())
-    }
-
-    /// A subject at sample 0.
-    pub fn build(&self) -> Result<SimulatedSubject, SessionError> {
-        self.validate()?;
-        Ok(SimulatedSubject::new(self.clone()))
     }
 }

@@ -7,7 +7,7 @@ use std::f64::consts::{PI, TAU};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::SubjectParams;
+use super::params::{SubjectParams, TAIL_SDS};
 
 /// Lowest pole of the 1/f background's filter, Hz.
 pub(super) const PINK_LOWEST_HZ: f64 = 0.5;
@@ -30,8 +30,6 @@ pub(super) const VEP_P2: (f64, f64) = (0.24, 0.04);
 pub(super) const VEP_P2_GAIN: f64 = 0.8;
 /// Amplitude variability (sd of the factor) of the visual evoked response.
 pub(super) const VEP_VARIABILITY: f64 = 0.25;
-/// Gaussians are cut this many sds after their peak.
-pub(super) const TAIL_SDS: f64 = 5.0;
 
 /// ChaCha streams of the processes.
 pub(super) const STREAM_PINK: u64 = 1;

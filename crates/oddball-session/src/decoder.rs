@@ -1,0 +1,437 @@
+//! How a session decides online, and how it starts deciding.
+//!
+//! A session starts once, one of three ways ([`Start`]): it calibrates (and may then adapt its
+//! `lda` online, [`AdaptParams`]), it decides with a model trained elsewhere, or it starts
+//! without calibration (the unsupervised decoder, optionally from a transferred model). Each
+//! start leaves the engine one [`OnlineDecoder`]; the engine asks it to score each online epoch,
+//! to decide a trial without labels, and to adapt after a decision.
+
+use ndarray::{ArrayView2, Axis};
+use oddball_decode::adaptive::{AdaptiveLda, Update};
+use oddball_decode::classifiers::Classifier;
+use oddball_decode::decision::{DecisionModel, DecisionRule, Posterior, Verdict};
+use oddball_decode::pipeline::{Model, Preprocess};
+pub use oddball_decode::preset::Preset;
+use oddball_decode::stopping::StoppingSearch;
+use oddball_decode::unsupervised::{
+    Constraint, MatchedTemplate, P300Template, Unsupervised, UnsupervisedError, UnsupervisedParams,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::decision::TrialRecord;
+use crate::SessionError;
+
+/// The decoder settings a session ([`crate::engine::SessionParams`]) and a replay
+/// ([`crate::replay::ReplayParams`]) share: the pipeline fitted, its pre-processing, the
+/// decision rule, the folds of its score model, the stream's chunks and the seed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DecoderParams {
+    /// The pipeline preset.
+    #[serde(with = "preset_name")]
+    pub pipeline: Preset,
+    pub preprocess: Preprocess,
+    /// The online decision rule (fixed rounds, or dynamic stopping).
+    pub rule: DecisionRule,
+    /// Cross-validation folds for the score model.
+    pub cv_folds: usize,
+    /// Samples per streamed chunk.
+    pub chunk: usize,
+    /// Seed of the flash orders and the calibration order (a session), of the non-target
+    /// choice and the bulb assignment (a replay).
+    pub seed: u64,
+    /// Choose the stopping rule from the calibration to maximise the expected bit rate
+    /// (replacing `rule`); `None` keeps `rule`.
+    #[serde(default)]
+    pub stopping: Option<StoppingSearch>,
+}
+
+/// A [`Preset`] as its name.
+mod preset_name {
+    use oddball_decode::preset::Preset;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(p: &Preset, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(p.name())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Preset, D::Error> {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// How a session starts deciding ([`crate::engine::Session::start`]); a session starts once.
+#[derive(Debug, Clone)]
+pub enum Start {
+    /// Labelled calibration decisions, a model fitted on them; with `adapt`, the calibrated
+    /// `lda` then adapts online.
+    Calibrate { adapt: Option<AdaptParams> },
+    /// A model trained elsewhere (see [`crate::engine::Session::start`] for how it is matched).
+    Model(Model),
+    /// No calibration: the unsupervised decoder learns from the session itself, its EM started
+    /// from `transfer`'s scores when a model of other recordings is given. `params: None`
+    /// takes [`UncalibratedParams::for_sfreq`] at the session's rate.
+    Uncalibrated {
+        params: Option<UncalibratedParams>,
+        transfer: Option<Model>,
+    },
+}
+
+/// Online adaptation of a calibrated `lda`: after each decision its class means take in the
+/// decision's epochs, labelled by the decision (the person corrects nothing), through
+/// incremental statistics ([`AdaptiveLda`]); an update that turns the weights below a cosine of
+/// `min_cosine` with the calibrated ones is undone. Only decisions whose posterior reaches
+/// `min_confidence` are taken in (an unsure decision is more often wrong, and a wrong label
+/// pulls the means the wrong way).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AdaptParams {
+    pub min_cosine: f64,
+    pub min_confidence: f64,
+}
+
+impl Default for AdaptParams {
+    /// Cosine 0.8, posterior 0.9.
+    fn default() -> Self {
+        Self {
+            min_cosine: 0.8,
+            min_confidence: 0.9,
+        }
+    }
+}
+
+/// What online adaptation did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct AdaptationReport {
+    /// Decisions whose epochs the model took in.
+    pub accepted: usize,
+    /// Updates the drift guard undid.
+    pub rejected: usize,
+    /// Decisions left out as too unsure.
+    pub unsure: usize,
+}
+
+/// Settings of a session without calibration: the unsupervised decoder, refitted after every
+/// decision on every epoch so far, and how sure it must be to move the arm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct UncalibratedParams {
+    pub decoder: UnsupervisedParams,
+    /// A decision whose best bulb has a smaller posterior abstains (the arm stays still).
+    pub abstain_below: f64,
+}
+
+impl UncalibratedParams {
+    /// The `lda` preset's features at `sfreq`, abstaining below a posterior of 0.9.
+    pub fn for_sfreq(sfreq: f64) -> Result<Self, SessionError> {
+        Ok(Self {
+            decoder: UnsupervisedParams::for_sfreq(sfreq)?,
+            abstain_below: 0.9,
+        })
+    }
+
+    fn check(&self) -> Result<(), SessionError> {
+        if !(self.abstain_below > 0.0 && self.abstain_below <= 1.0) {
+            return Err(SessionError::InvalidParameter {
+                name: "abstain_below",
+                value: self.abstain_below.to_string(),
+                reason: "a probability in (0, 1]".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The decoder a session decides with once started.
+#[derive(Debug)]
+pub(crate) enum OnlineDecoder {
+    /// Not started: nothing decides (a calibration may be running).
+    Unstarted,
+    /// A model calibrated in this session or trained elsewhere.
+    Fixed(Model),
+    /// A calibrated `lda` adapting online.
+    Adaptive {
+        model: Model,
+        adaptation: Box<Adaptation>,
+    },
+    /// No calibration: the unsupervised decoder.
+    Unlabelled(Box<Unlabelled>),
+}
+
+/// A calibrated LDA adapting to the session: the feature rows of the current trial's epochs.
+#[derive(Debug)]
+pub(crate) struct Adaptation {
+    model: AdaptiveLda,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    min_confidence: f64,
+    report: AdaptationReport,
+}
+
+/// What an uncalibrated session has seen: the feature row, code and trial of every accepted
+/// online epoch, and the latest EM fit.
+#[derive(Debug)]
+pub(crate) struct Unlabelled {
+    params: UncalibratedParams,
+    constraint: Constraint,
+    rows: Vec<f64>,
+    codes: Vec<u32>,
+    trials: Vec<usize>,
+    model: Option<Unsupervised>,
+    /// A model from other recordings and its score of every epoch.
+    transfer: Option<Model>,
+    /// Each epoch's score by `transfer`, or (without one) by the [`P300Template`] as this
+    /// session's band-pass shows it: where every refit's EM starts.
+    start_scores: Vec<f64>,
+    template: MatchedTemplate,
+}
+
+impl Unlabelled {
+    /// Controls without calibration: the first decision comes from the first trial's epochs,
+    /// and after every decision the unsupervised decoder is refitted (EM over "one bulb per
+    /// trial", started from the [`P300Template`]'s score of every epoch, the last fit and, once
+    /// there are as many epochs as features, random starts) on all online epochs so far — no
+    /// label is used.
+    ///
+    /// With `transfer`, a model fitted on other recordings (other people, other sessions): its
+    /// scores of the session's epochs start the EM, which from then on follows its own last fit
+    /// only (no random initialisations), so the session adapts the transferred model instead of
+    /// searching from scratch.
+    pub(crate) fn new(
+        params: UncalibratedParams,
+        transfer: Option<Model>,
+        n_bulbs: usize,
+        preprocess: &Preprocess,
+        sfreq: f64,
+    ) -> Result<Self, SessionError> {
+        params.check()?;
+        let codes: Vec<u32> = (1..=n_bulbs as u32).collect();
+        Ok(Self {
+            params,
+            constraint: Constraint::one_of(&codes)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            model: None,
+            transfer,
+            start_scores: Vec::new(),
+            template: P300Template::default().matched(preprocess, sfreq)?,
+        })
+    }
+}
+
+impl Adaptation {
+    /// Adaptation of `model` (the `lda` pipeline calibrated in this session on labels `y`).
+    pub(crate) fn new(model: &Model, y: &[bool], p: AdaptParams) -> Result<Self, SessionError> {
+        let not_lda = || SessionError::InvalidParameter {
+            name: "adaptation",
+            value: model.pipeline.name().to_string(),
+            reason: "online adaptation needs the lda pipeline, calibrated in this session".into(),
+        };
+        let Classifier::Lda(lda) = model.pipeline.classifier() else {
+            return Err(not_lda());
+        };
+        if !model.pipeline.fused().is_empty() || model.pipeline.pca().is_some() || y.is_empty() {
+            return Err(not_lda());
+        }
+        Ok(Self {
+            model: AdaptiveLda::from_lda(lda, y, p.min_cosine)?,
+            rows: Vec::new(),
+            codes: Vec::new(),
+            trials: Vec::new(),
+            min_confidence: p.min_confidence,
+            report: AdaptationReport::default(),
+        })
+    }
+
+    /// Features per row.
+    fn model_features(&self) -> usize {
+        self.rows.len() / self.codes.len().max(1)
+    }
+}
+
+impl OnlineDecoder {
+    /// The model deciding (calibrated or given; `None` before the start and without
+    /// calibration).
+    pub(crate) fn model(&self) -> Option<&Model> {
+        match self {
+            Self::Fixed(model) | Self::Adaptive { model, .. } => Some(model),
+            Self::Unstarted | Self::Unlabelled(_) => None,
+        }
+    }
+
+    pub(crate) fn into_model(self) -> Option<Model> {
+        match self {
+            Self::Fixed(model) | Self::Adaptive { model, .. } => Some(model),
+            Self::Unstarted | Self::Unlabelled(_) => None,
+        }
+    }
+
+    pub(crate) fn is_started(&self) -> bool {
+        !matches!(self, Self::Unstarted)
+    }
+
+    pub(crate) fn is_unlabelled(&self) -> bool {
+        matches!(self, Self::Unlabelled(_))
+    }
+
+    /// The decision model of a labelled decoder.
+    pub(crate) fn decision(&self) -> Result<DecisionModel, SessionError> {
+        self.model()
+            .and_then(|m| m.decision)
+            .ok_or(SessionError::NotCalibrated)
+    }
+
+    pub(crate) fn adaptation(&self) -> Option<AdaptationReport> {
+        match self {
+            Self::Adaptive { adaptation, .. } => Some(adaptation.report),
+            _ => None,
+        }
+    }
+
+    pub(crate) fn unsupervised(&self) -> Option<&Unsupervised> {
+        match self {
+            Self::Unlabelled(u) => u.model.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// Scores an accepted online epoch (`data`, of flash `code` in `trial`); `None` when the
+    /// decoder has no score for it yet (an unsupervised one before its first fit).
+    pub(crate) fn score(
+        &mut self,
+        data: ArrayView2<'_, f64>,
+        code: u32,
+        trial: usize,
+    ) -> Result<Option<f64>, SessionError> {
+        match self {
+            Self::Unlabelled(u) => {
+                let mut score = None;
+                let row = u
+                    .params
+                    .decoder
+                    .features
+                    .transform(data.insert_axis(Axis(0)))?;
+                if let Some(t) = &u.transfer {
+                    let s = t.pipeline.score_epoch(data)?;
+                    u.start_scores.push(s);
+                    score = Some(s);
+                } else {
+                    u.start_scores.push(u.template.score(data)?);
+                }
+                if let Some(m) = &u.model {
+                    score = Some(m.decision_function_features(row.view())?[0]);
+                }
+                u.rows.extend(row.iter());
+                u.codes.push(code);
+                u.trials.push(trial);
+                Ok(score)
+            }
+            Self::Adaptive { model, adaptation } => {
+                let row = model
+                    .pipeline
+                    .features(data.insert_axis(Axis(0)))?
+                    .into_rows("adaptive LDA")?;
+                let score = adaptation.model.decision_function(row.view())?[0];
+                adaptation.rows.extend(row.iter());
+                adaptation.codes.push(code);
+                adaptation.trials.push(trial);
+                Ok(Some(score))
+            }
+            Self::Fixed(model) => Ok(Some(model.pipeline.score_epoch(data)?)),
+            Self::Unstarted => Err(SessionError::NotCalibrated),
+        }
+    }
+
+    /// Takes a decided trial's epochs into an adapting model, labelled by the decision.
+    pub(crate) fn adapt(&mut self, trial: usize, t: &TrialRecord) -> Result<(), SessionError> {
+        let Self::Adaptive { adaptation: a, .. } = self else {
+            return Ok(());
+        };
+        let decided = t.decided();
+        let sure = t.confidence() >= a.min_confidence;
+        let keep: Vec<usize> = (0..a.trials.len())
+            .filter(|&i| a.trials[i] == trial)
+            .collect();
+        if decided.is_some() && !keep.is_empty() && !sure {
+            a.report.unsure += 1;
+        }
+        if let (Some(code), false, true) = (decided, keep.is_empty(), sure) {
+            let p = a.model_features();
+            let x =
+                ndarray::Array2::from_shape_fn((keep.len(), p), |(r, j)| a.rows[keep[r] * p + j]);
+            let y: Vec<bool> = keep.iter().map(|&i| a.codes[i] == code).collect();
+            match a.model.update(x.view(), &y)? {
+                Update::Accepted { .. } => a.report.accepted += 1,
+                Update::Rejected { .. } => a.report.rejected += 1,
+            }
+        }
+        a.rows.clear();
+        a.codes.clear();
+        a.trials.clear();
+        Ok(())
+    }
+
+    /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it.
+    pub(crate) fn decide_unlabelled(&mut self, trial: usize) -> Result<Verdict, SessionError> {
+        let Self::Unlabelled(u) = self else {
+            return Err(SessionError::NotCalibrated);
+        };
+        let n_stimuli = u.constraint.sets()[0].len();
+        let none = |p: Vec<f64>| Verdict::Abstain {
+            posterior: Posterior { p, p_none: 0.0 },
+        };
+        let uniform = vec![1.0 / n_stimuli as f64; n_stimuli];
+        // Two epochs at least, and some from this trial, or there is nothing to decide from.
+        if u.codes.len() < 2 || u.trials.last() != Some(&trial) {
+            return Ok(none(uniform));
+        }
+        let n = u.codes.len();
+        let x = ArrayView2::from_shape((n, u.rows.len() / n), &u.rows).map_err(|e| {
+            SessionError::InvalidParameter {
+                name: "feature rows",
+                value: u.rows.len().to_string(),
+                reason: e.to_string(),
+            }
+        })?;
+        // EM from a transferred model's scores of every epoch so far; or from the P300
+        // template's, the last fit and (once there are as many epochs as features) random
+        // starts, the likeliest kept.
+        let fit = match (&u.transfer, &u.model) {
+            (Some(_), _) => u.params.decoder.fit_from_scores(
+                x,
+                &u.codes,
+                &u.trials,
+                &u.constraint,
+                &u.start_scores,
+            ),
+            (None, warm) => u.params.decoder.fit_features_from(
+                x,
+                &u.codes,
+                &u.trials,
+                &u.constraint,
+                warm.as_ref(),
+                Some(&u.start_scores),
+            ),
+        };
+        let fitted = match fit {
+            Ok(m) => m,
+            // Too little data to separate anything yet: keep the arm still.
+            Err(UnsupervisedError::Degenerate { .. })
+            | Err(UnsupervisedError::NotPositiveDefinite { .. }) => return Ok(none(uniform)),
+            Err(e) => return Err(e.into()),
+        };
+        let p = fitted
+            .averaged_trials()
+            .iter()
+            .find(|t| t.trial == trial)
+            .map_or(uniform, |t| t.sets[0].clone());
+        u.model = Some(fitted);
+        let posterior = Posterior { p, p_none: 0.0 };
+        let (index, best) = posterior.best();
+        Ok(if best >= u.params.abstain_below {
+            Verdict::Choose { index, posterior }
+        } else {
+            Verdict::Abstain { posterior }
+        })
+    }
+}
