@@ -407,7 +407,7 @@ fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
 /// The legend of [`print_row`]'s columns.
 fn print_header() {
     println!(
-        "pipeline   epoch AUC   mean fit time  scoring speed     [speller test files: characters \
+        "pipeline   epoch ROC-AUC, mean fit time, scoring speed  [speller test files: characters \
          right by repetitions, picks, best Wolpaw ITR]"
     );
 }
