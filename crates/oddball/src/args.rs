@@ -164,13 +164,6 @@ pub fn simulated_subject(s: &str) -> Result<SubjectSpec, String> {
     s.parse()
 }
 
-/// `--pipeline`: one preset, checked as every command checks it.
-fn preset(name: &str) -> Result<Preset, String> {
-    crate::preset_arg::parse_preset(name)?
-        .parse()
-        .map_err(|e: oddball_decode::DecodeError| e.to_string())
-}
-
 /// Where the EEG comes from: shared by `demo`, `task` and `online`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SourceArgs {
@@ -271,9 +264,7 @@ pub struct SessionOptions {
     /// Most rounds per decision with dynamic stopping.
     #[arg(long, default_value_t = 5, requires = "dynamic_stopping")]
     pub max_rounds: usize,
-    /// Pipeline preset: lda, toeplitz-lda, riemann, lda+riemann (score fusion), stack
-    /// (toeplitz-lda + riemann + mdm, stacked), mdm, paper, paper-svm, paper-knn.
-    #[arg(long, default_value = crate::preset_arg::DEFAULT_PIPELINE, value_parser = preset)]
+    #[arg(long, default_value = crate::preset_arg::DEFAULT_PIPELINE, value_parser = crate::preset_arg::preset, help = crate::preset_arg::one_help())]
     pub pipeline: Preset,
     /// Calibration decisions per bulb (simulated subjects).
     #[arg(long, default_value_t = 10)]

@@ -14,11 +14,6 @@ pub fn preset(name: &str) -> Result<Preset, String> {
         .map_err(|_| format!("unknown pipeline {name:?}; known: {}", Preset::names()))
 }
 
-/// One preset's name, checked as [`preset`] does (for settings that still hold the name).
-pub fn parse_preset(name: &str) -> Result<String, String> {
-    preset(name).map(|p| p.name().to_string())
-}
-
 /// The help of a `--pipeline` taking one preset.
 pub fn one_help() -> String {
     format!("Pipeline preset: {}", Preset::names())
@@ -69,7 +64,7 @@ mod tests {
         let err = "lda,nope".parse::<PipelineList>().unwrap_err();
         assert!(err.contains("\"nope\"") && err.contains("stack"), "{err}");
         assert_eq!(preset(DEFAULT_PIPELINE), Ok(Preset::Lda));
-        assert_eq!(parse_preset("mdm").as_deref(), Ok("mdm"));
+        assert_eq!(preset("mdm"), Ok(Preset::Mdm));
         assert!(one_help().contains("paper-knn") && list_help().contains("lda+riemann"));
     }
 }
