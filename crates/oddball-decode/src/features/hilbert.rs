@@ -14,7 +14,7 @@
 //!
 //! [`HhtFeatures`] is the peer's HHT block: per channel, the first IMF ([`crate::features::emd`]), its
 //! instantaneous amplitude and frequency, each averaged in bins of `bin` samples
-//! ([`crate::features::amplitude::bin_mean_into`]); all amplitude bins (channel-major) come before all frequency
+//! ([`crate::features::bins::bin_mean_into`]); all amplitude bins (channel-major) come before all frequency
 //! bins.
 //!
 //! Two shortcuts make the features cheaper than their definition, and both are checked against it
@@ -39,7 +39,7 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 use serde::{Deserialize, Serialize};
 
-use crate::features::amplitude::{bin_mean_into, vec_bin};
+use crate::features::bins::{bin_mean_into, vec_bin};
 use crate::features::emd::{Emd, EmdParams};
 use crate::DecodeError;
 

@@ -9,6 +9,7 @@
 //! The tags are the variant names, as saved by every model format so far.
 
 pub mod amplitude;
+pub mod bins;
 pub mod channel_select;
 pub mod emd;
 pub mod hilbert;

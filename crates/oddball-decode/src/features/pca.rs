@@ -28,7 +28,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::features::scaler::{check_finite, check_n_features, dot_transposed};
+use crate::features::scaler::{check_finite, check_n_features};
+use crate::linalg::dot_transposed;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;

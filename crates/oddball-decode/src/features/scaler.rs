@@ -124,22 +124,6 @@ impl StandardScaler {
 
 // ---------------------------------------------------------------- checks shared by the paper modules
 
-/// `x · mᵀ` for `x` `(n, p)` and `m` `(k, p)`. A matrix product packs `m` on every call, which
-/// dominates for a few rows (one epoch scored online), so up to 16 rows go through one
-/// matrix–vector product per row instead.
-pub(crate) fn dot_transposed(x: ArrayView2<f64>, m: ArrayView2<f64>) -> Array2<f64> {
-    if x.nrows() > 16 {
-        return x.dot(&m.t());
-    }
-    let mut out = Array2::zeros((x.nrows(), m.nrows()));
-    let mut copy = Vec::new();
-    for (mut o, row) in out.outer_iter_mut().zip(x.outer_iter()) {
-        let o = o.as_slice_mut().expect("a new array's rows are contiguous");
-        crate::linalg::mat_vec_into(m, crate::linalg::contiguous(row, &mut copy), o);
-    }
-    out
-}
-
 /// Every value of `x` is finite.
 pub(crate) fn check_finite(x: ArrayView2<f64>, what: &str) -> Result<()> {
     if x.iter().all(|v| v.is_finite()) {

@@ -105,7 +105,7 @@ pub(crate) fn sq_distances(
     rows: ndarray::ArrayView2<f64>,
     rows_sq: &ndarray::Array1<f64>,
 ) -> ndarray::Array2<f64> {
-    let mut d = crate::features::scaler::dot_transposed(q, rows);
+    let mut d = dot_transposed(q, rows);
     for (mut row, qr) in d.outer_iter_mut().zip(q.outer_iter()) {
         let q_sq = qr.dot(&qr);
         for (v, s) in row.iter_mut().zip(rows_sq) {
@@ -123,4 +123,23 @@ pub(crate) fn row_sq_norms(m: ndarray::ArrayView2<f64>) -> ndarray::Array1<f64> 
             None => r.dot(&r),
         })
         .collect()
+}
+
+/// `x · mᵀ` for `x` `(n, p)` and `m` `(k, p)`. A matrix product packs `m` on every call, which
+/// dominates for a few rows (one epoch scored online), so up to 16 rows go through one
+/// matrix–vector product per row instead.
+pub(crate) fn dot_transposed(
+    x: ndarray::ArrayView2<f64>,
+    m: ndarray::ArrayView2<f64>,
+) -> ndarray::Array2<f64> {
+    if x.nrows() > 16 {
+        return x.dot(&m.t());
+    }
+    let mut out = ndarray::Array2::zeros((x.nrows(), m.nrows()));
+    let mut copy = Vec::new();
+    for (mut o, row) in out.outer_iter_mut().zip(x.outer_iter()) {
+        let o = o.as_slice_mut().expect("a new array's rows are contiguous");
+        mat_vec_into(m, contiguous(row, &mut copy), o);
+    }
+    out
 }
