@@ -25,7 +25,7 @@ impl Command {
 
     /// The paper's letter G as its six commands: up, left, down, right, up, left. The paper's
     /// strokes differ in length; on equal steps these trace a square one and a half times
-    /// (`oddball_session::task::text_commands("G")` draws a G on the step grid).
+    /// (`oddball_session::tasks::text_commands("G")` draws a G on the step grid).
     pub const LETTER_G: [Command; 6] = [
         Command::Up,
         Command::Left,

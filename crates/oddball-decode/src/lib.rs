@@ -16,10 +16,10 @@
 //! LDA, block-Toeplitz LDA, logistic regression), [`riemann`] (covariances, xDAWN, Riemannian
 //! mean, tangent space, MDM), [`model_selection`] (folds, tuning); [`pipeline`] chains them,
 //! [`preset`] names them, [`model`] saves them, [`decision`] turns scores into choices and
-//! [`metrics`] measures them, [`stopping`] picks the stopping rule that maximises the bit rate;
-//! [`dataset`] turns recordings into labelled epochs, [`evaluate`] scores presets on them,
-//! [`benchmark`] runs presets over data sets and subjects, and [`unsupervised`] decodes without
-//! labels (EM over the paradigm's constraint). Every module is named by its one path
+//! [`metrics`] measures them, [`stopping`] picks the stopping rule that maximises the bit rate,
+//! [`adaptive`] follows a session online and [`unsupervised`] decodes without labels (EM over
+//! the paradigm's constraint). Reading files, scoring presets on recordings and benchmarks over
+//! data sets are the evaluation harness's (`oddball-eval`), as MOABB's are beside scikit-learn. Every module is named by its one path
 //! (`oddball_decode::classifiers::svm`, `oddball_decode::model_selection::tuning`, …).
 //!
 //! # Example
