@@ -6,6 +6,7 @@ in text (stdout, CSV) matched by TIMING_TOKENS are masked, and an XDF recording'
 streams' samples, marker texts and headers are compared through pyxdf when it is importable,
 e.g. `python -m venv v && v/bin/pip install -r tools/golden/xdf/requirements.txt`).
 Prints each difference; exits 1 if there is any."""
+import difflib
 import json
 import re
 import sys
@@ -22,13 +23,24 @@ TIMING_TOKENS = re.compile(
 )
 
 
+ROW_KEYS = ("dataset", "subject", "protocol", "preset", "pipeline")
+
+
+def row_name(v, i):
+    """A list item's name in a path: its identifying fields when it is a result row (so a row
+    added in between, e.g. a new preset, shows as added rather than shifting the others)."""
+    if isinstance(v, dict) and any(k in v for k in ROW_KEYS):
+        return "{" + ",".join(str(v[k]) for k in ROW_KEYS if k in v) + "}"
+    return str(i)
+
+
 def flat(x, path=""):
     if isinstance(x, dict):
         for k, v in x.items():
             yield from flat(v, f"{path}.{k}")
     elif isinstance(x, list):
         for i, v in enumerate(x):
-            yield from flat(v, f"{path}[{i}]")
+            yield from flat(v, f"{path}[{row_name(v, i)}]")
     else:
         yield path, x
 
@@ -48,11 +60,9 @@ def mask(line):
 def text_diffs(a, b):
     la = [mask(x) for x in a.decode(errors="replace").splitlines()]
     lb = [mask(x) for x in b.decode(errors="replace").splitlines()]
-    if len(la) != len(lb):
-        yield f"{len(la)} lines != {len(lb)} lines"
-    for i, (x, y) in enumerate(zip(la, lb)):
-        if x != y:
-            yield f"line {i + 1}:\n    - {x}\n    + {y}"
+    for line in difflib.unified_diff(la, lb, "before", "after", n=0, lineterm=""):
+        if not line.startswith(("---", "+++")):
+            yield line
 
 
 def xdf_diffs(a, b):
