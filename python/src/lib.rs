@@ -13,12 +13,11 @@
 
 use numpy::PyReadonlyArray3;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
-use oddball_decode::riemann::covariance::CovEstimator;
 use oddball_decode::classifiers::lda::{LdaParams, Shrinkage};
-use oddball_decode::pipeline::PipelineParams;
-use oddball_decode::riemann::{MdmParams, TangentSpaceParams};
 use oddball_decode::classifiers::toeplitz_lda::ToeplitzLdaParams;
+use oddball_decode::riemann::covariance::CovEstimator;
 use oddball_decode::riemann::xdawn::{XdawnCovariancesParams, XdawnParams};
+use oddball_decode::riemann::{MdmParams, TangentSpaceParams};
 use oddball_decode::DecodeError;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
@@ -143,50 +142,54 @@ struct XdawnCovariances {
     inner: oddball_decode::riemann::xdawn::XdawnCovariances,
 }
 
-methods_with_json!(XdawnCovariances, oddball_decode::riemann::xdawn::XdawnCovariances, {
-    #[staticmethod]
-    fn fit(
-        py: Python<'_>,
-        x: PyReadonlyArray3<'_, f64>,
-        y: PyReadonlyArray1<'_, bool>,
-        nfilter: usize,
-        estimator: &str,
-        xdawn_estimator: &str,
-    ) -> PyResult<Self> {
-        let params = XdawnCovariancesParams {
-            nfilter,
-            estimator: cov_estimator(estimator)?,
-            xdawn_estimator: cov_estimator(xdawn_estimator)?,
-        };
-        let (x, y) = (x.as_array(), labels(&y));
-        let inner = py.detach(|| params.fit(x, &y)).map_err(value_err)?;
-        Ok(Self { inner })
-    }
+methods_with_json!(
+    XdawnCovariances,
+    oddball_decode::riemann::xdawn::XdawnCovariances,
+    {
+        #[staticmethod]
+        fn fit(
+            py: Python<'_>,
+            x: PyReadonlyArray3<'_, f64>,
+            y: PyReadonlyArray1<'_, bool>,
+            nfilter: usize,
+            estimator: &str,
+            xdawn_estimator: &str,
+        ) -> PyResult<Self> {
+            let params = XdawnCovariancesParams {
+                nfilter,
+                estimator: cov_estimator(estimator)?,
+                xdawn_estimator: cov_estimator(xdawn_estimator)?,
+            };
+            let (x, y) = (x.as_array(), labels(&y));
+            let inner = py.detach(|| params.fit(x, &y)).map_err(value_err)?;
+            Ok(Self { inner })
+        }
 
-    /// SPD matrices `(n_epochs, 4k, 4k)`.
-    fn transform<'py>(
-        &self,
-        py: Python<'py>,
-        x: PyReadonlyArray3<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let x = x.as_array();
-        let out = py.detach(|| self.inner.transform(x)).map_err(value_err)?;
-        Ok(out.into_pyarray(py))
-    }
+        /// SPD matrices `(n_epochs, 4k, 4k)`.
+        fn transform<'py>(
+            &self,
+            py: Python<'py>,
+            x: PyReadonlyArray3<'py, f64>,
+        ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+            let x = x.as_array();
+            let out = py.detach(|| self.inner.transform(x)).map_err(value_err)?;
+            Ok(out.into_pyarray(py))
+        }
 
-    /// The xDAWN filters and prototypes inside.
-    #[getter]
-    fn xdawn(&self) -> Xdawn {
-        Xdawn {
-            inner: self.inner.xdawn().clone(),
+        /// The xDAWN filters and prototypes inside.
+        #[getter]
+        fn xdawn(&self) -> Xdawn {
+            Xdawn {
+                inner: self.inner.xdawn().clone(),
+            }
+        }
+
+        #[getter]
+        fn estimator(&self) -> &'static str {
+            cov_estimator_name(self.inner.estimator())
         }
     }
-
-    #[getter]
-    fn estimator(&self) -> &'static str {
-        cov_estimator_name(self.inner.estimator())
-    }
-});
+);
 
 /// Covariance per epoch (pyRiemann's `Covariances`): `(n, c, t)` → `(n, c, c)`.
 #[pyfunction]
@@ -407,63 +410,67 @@ struct ToeplitzLda {
     inner: oddball_decode::classifiers::toeplitz_lda::ToeplitzLda,
 }
 
-methods_with_json!(ToeplitzLda, oddball_decode::classifiers::toeplitz_lda::ToeplitzLda, {
-    /// `x` `(n, n_channels · n_times)`, feature `ch · n_times + t`.
-    #[staticmethod]
-    fn fit(
-        py: Python<'_>,
-        x: PyReadonlyArray2<'_, f64>,
-        y: PyReadonlyArray1<'_, bool>,
-        n_channels: usize,
-    ) -> PyResult<Self> {
-        let (x, y) = (x.as_array(), labels(&y));
-        let inner = py
-            .detach(|| ToeplitzLdaParams::default().fit(x, &y, n_channels))
-            .map_err(value_err)?;
-        Ok(Self { inner })
-    }
+methods_with_json!(
+    ToeplitzLda,
+    oddball_decode::classifiers::toeplitz_lda::ToeplitzLda,
+    {
+        /// `x` `(n, n_channels · n_times)`, feature `ch · n_times + t`.
+        #[staticmethod]
+        fn fit(
+            py: Python<'_>,
+            x: PyReadonlyArray2<'_, f64>,
+            y: PyReadonlyArray1<'_, bool>,
+            n_channels: usize,
+        ) -> PyResult<Self> {
+            let (x, y) = (x.as_array(), labels(&y));
+            let inner = py
+                .detach(|| ToeplitzLdaParams::default().fit(x, &y, n_channels))
+                .map_err(value_err)?;
+            Ok(Self { inner })
+        }
 
-    fn decision_function<'py>(
-        &self,
-        py: Python<'py>,
-        x: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let x = x.as_array();
-        let out = py
-            .detach(|| self.inner.decision_function(x))
-            .map_err(value_err)?;
-        Ok(out.into_pyarray(py))
-    }
+        fn decision_function<'py>(
+            &self,
+            py: Python<'py>,
+            x: PyReadonlyArray2<'py, f64>,
+        ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+            let x = x.as_array();
+            let out = py
+                .detach(|| self.inner.decision_function(x))
+                .map_err(value_err)?;
+            Ok(out.into_pyarray(py))
+        }
 
-    /// Channel-major weights.
-    /// P(target) per row.
-    fn predict_proba<'py>(
-        &self,
-        py: Python<'py>,
-        x: PyReadonlyArray2<'py, f64>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let x = x.as_array();
-        let out = py
-            .detach(|| self.inner.predict_proba(x))
-            .map_err(value_err)?;
-        Ok(out.into_pyarray(py))
-    }
+        /// Channel-major weights.
+        /// P(target) per row.
+        fn predict_proba<'py>(
+            &self,
+            py: Python<'py>,
+            x: PyReadonlyArray2<'py, f64>,
+        ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+            let x = x.as_array();
+            let out = py
+                .detach(|| self.inner.predict_proba(x))
+                .map_err(value_err)?;
+            Ok(out.into_pyarray(py))
+        }
 
-    #[getter]
-    fn coef<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.inner.coef().to_owned().into_pyarray(py)
-    }
+        #[getter]
+        fn coef<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+            self.inner.coef().to_owned().into_pyarray(py)
+        }
 
-    #[getter]
-    fn intercept(&self) -> f64 {
-        self.inner.intercept()
-    }
+        #[getter]
+        fn intercept(&self) -> f64 {
+            self.inner.intercept()
+        }
 
-    #[getter]
-    fn shrinkage(&self) -> f64 {
-        self.inner.shrinkage()
+        #[getter]
+        fn shrinkage(&self) -> f64 {
+            self.inner.shrinkage()
+        }
     }
-});
+);
 
 /// A fitted preset pipeline (`oddball train --pipeline NAME`) on band-passed epochs.
 #[pyclass(module = "oddball._oddball", frozen)]

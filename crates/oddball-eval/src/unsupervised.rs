@@ -1,4 +1,4 @@
-//! Speller recordings played as one unlabelled session ([`super::replay`]), then scored: the
+//! Speller recordings played as one unlabelled session (`oddball_decode::unsupervised`'s replay), then scored: the
 //! labels are read only after the decoder has finished, to count what it got right.
 
 use oddball_io::Speller;

@@ -3,7 +3,7 @@
 //! A session starts once, one of three ways ([`Start`]): it calibrates (and may then adapt its
 //! `lda` online, [`AdaptParams`]), it decides with a model trained elsewhere, or it starts
 //! without calibration (the unsupervised decoder, optionally from a transferred model). Each
-//! start leaves the engine one [`OnlineDecoder`]; the engine asks it to score each online epoch,
+//! start leaves the engine one `OnlineDecoder`; the engine asks it to score each online epoch,
 //! to decide a trial without labels, and to adapt after a decision.
 
 use ndarray::{ArrayView2, Axis};

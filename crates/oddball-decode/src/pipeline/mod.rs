@@ -935,7 +935,7 @@ impl Pipeline {
     }
 
     /// [`Self::decision_function`] of an [`EpochSource`] (e.g. `(&epochs).into()`): of their
-    /// array when preloaded, otherwise of [`EPOCH_CHUNK`] epochs at a time (each epoch's score
+    /// array when preloaded, otherwise of [`oddball_signal::EPOCH_CHUNK`] epochs at a time (each epoch's score
     /// depends on that epoch alone, so the scores are the same).
     pub fn decision_function_source(&self, epochs: EpochSource<'_>) -> Result<Array1<f64>> {
         epochs.map_scores(|chunk| self.decision_function(chunk))

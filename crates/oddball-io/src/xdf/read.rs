@@ -48,7 +48,7 @@ pub struct XdfStreamInfo {
     pub last_timestamp: Option<f64>,
     /// `(collection time, offset value)` of each ClockOffset chunk.
     pub clock_offsets: Vec<(f64, f64)>,
-    /// `(a, b)` of the clock correction `t + a + b·t` applied by [`read_xdf`] (when
+    /// `(a, b)` of the clock correction `t + a + b·t` applied by `read_xdf` (when
     /// synchronizing and the stream has clock offsets).
     pub clock_fit: Option<(f64, f64)>,
     pub footer: Option<XdfFooter>,

@@ -2,7 +2,7 @@
 //! text.
 //!
 //! A [`Pilot`] turns an intended direction into a decided command that moves the arm: a live or
-//! simulated [`Session`], or a [`ReplayPilot`] of real speller EEG. The tasks choose the
+//! simulated [`Session`](crate::engine::Session), or a [`ReplayPilot`] of real speller EEG. The tasks choose the
 //! intention the way a person would and measure what a BCI study reports.
 //!
 //! * **Tracking** ([`run_tracking`]): targets on the board's `h`-grid, seeded (each 2–5 steps
