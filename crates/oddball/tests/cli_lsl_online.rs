@@ -44,6 +44,9 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
             &format!("lsl:{eeg}"),
             "--markers",
             &markers,
+            // The paper's six commands (online's default is the 20-move stroke-font G).
+            "--commands",
+            "paper-g",
         ])
         .args(["--model", model.to_str().unwrap()])
         .args(["--out", dir.join("online").to_str().unwrap()])
