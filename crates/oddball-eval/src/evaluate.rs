@@ -515,6 +515,22 @@ impl SpellerScores {
     }
 }
 
+/// Character accuracy by repetitions over several speller files' characters pooled (each file
+/// weighted by its characters), up to the fewest repetitions any file has.
+pub fn pooled_accuracy(spellers: &[SpellerScores]) -> Vec<f64> {
+    let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
+    let reps = spellers.iter().map(|s| s.accuracy.len()).min().unwrap_or(0);
+    (0..reps)
+        .map(|r| {
+            spellers
+                .iter()
+                .map(|s| s.accuracy[r] * s.n_chars as f64)
+                .sum::<f64>()
+                / n_chars.max(1) as f64
+        })
+        .collect()
+}
+
 /// Character accuracy by repetitions of a speller recording from its epochs' `scores`; every
 /// flash must have been epoched.
 pub fn score_speller(
@@ -643,16 +659,7 @@ pub fn score_test(
     };
     if let Some(first) = spellers.first() {
         let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
-        let reps = spellers.iter().map(|s| s.accuracy.len()).min().unwrap_or(0);
-        let acc: Vec<f64> = (0..reps)
-            .map(|r| {
-                spellers
-                    .iter()
-                    .map(|s| s.accuracy[r] * s.n_chars as f64)
-                    .sum::<f64>()
-                    / n_chars.max(1) as f64
-            })
-            .collect();
+        let acc = pooled_accuracy(&spellers);
         // Seconds per character with r repetitions, averaged over the files' characters.
         let per_char = |r: usize| {
             spellers

@@ -5,7 +5,7 @@ use oddball_io::Speller;
 use oddball_signal::{Epochs, Events, SignalError};
 use serde::Serialize;
 
-use crate::evaluate::{labels, score_speller, EpochedRecording, EvaluateError};
+use crate::evaluate::{labels, pooled_accuracy, score_speller, EpochedRecording, EvaluateError};
 use oddball_decode::metrics::{character_of_flashes, roc_auc};
 use oddball_decode::pipeline::EpochSource;
 use oddball_decode::unsupervised::{
@@ -168,16 +168,7 @@ pub fn evaluate_unsupervised(
         spellers.push(s);
     }
     let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
-    let reps = spellers.iter().map(|s| s.accuracy.len()).min().unwrap_or(0);
-    let posthoc_chars_by_reps = (0..reps)
-        .map(|i| {
-            spellers
-                .iter()
-                .map(|s| s.accuracy[i] * s.n_chars as f64)
-                .sum::<f64>()
-                / n_chars.max(1) as f64
-        })
-        .collect();
+    let posthoc_chars_by_reps = pooled_accuracy(&spellers);
     let (init, _) = r.model.init();
     Ok(UnsupervisedResult {
         online_correct,
