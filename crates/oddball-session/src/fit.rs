@@ -5,6 +5,7 @@
 use ndarray::{Array2, Array3, Axis};
 use oddball_decode::decision::{DecisionModel, ScoreModelParams};
 use oddball_decode::metrics::roc_auc;
+use oddball_decode::model_selection::{cross_val_predict, interleaved_folds};
 use oddball_decode::pipeline::{EpochSource, FrontCache, Model};
 
 use crate::decoder::DecoderParams;
@@ -34,9 +35,9 @@ impl Calibration {
     }
 }
 
-/// Fits the preset on labelled epochs `x` and its score model on out-of-fold scores: fold `g % k`
-/// holds the epochs of group `g` (a trial or a spelled character), so overlapping epochs of one
-/// group never straddle a split. Returns the model with its decision rule, the cross-validated
+/// Fits the preset on labelled epochs `x` and its score model on out-of-fold scores
+/// ([`interleaved_folds`]: fold `g % k` holds the epochs of group `g`, a trial or a spelled
+/// character, so overlapping epochs of one group never straddle a split). Returns the model with its decision rule, the cross-validated
 /// AUC, the scores' d′ and the out-of-fold scores themselves (what stopping is chosen from).
 pub(crate) fn fit_session_model_oof(
     decoder: &DecoderParams,
@@ -48,25 +49,11 @@ pub(crate) fn fit_session_model_oof(
 ) -> Result<(Model, f64, f64, Vec<f64>), SessionError> {
     let params = decoder.pipeline.params(sfreq)?;
     let k = decoder.cv_folds.max(2);
-    let mut oof = vec![0.0; y.len()];
     // A front that learns nothing is computed once for every fold and the final fit; epochs
     // held as windows are read a part at a time (the scores are those of fitting on copies).
     let mut cache = FrontCache::new(x);
-    for fold in 0..k {
-        let (test, train): (Vec<usize>, Vec<usize>) =
-            (0..y.len()).partition(|&i| groups[i] % k == fold);
-        if test.is_empty() || train.is_empty() {
-            continue;
-        }
-        let ytr: Vec<bool> = train.iter().map(|&i| y[i]).collect();
-        let gtr: Vec<usize> = train.iter().map(|&i| groups[i]).collect();
-        let s = params
-            .fit_score_cached(&mut cache, &train, &ytr, Some(&gtr), &test)?
-            .scores;
-        for (&i, &v) in test.iter().zip(s.iter()) {
-            oof[i] = v;
-        }
-    }
+    let folds = interleaved_folds(groups, k);
+    let oof = cross_val_predict(&params, &mut cache, y, Some(groups), &folds, || {})?;
     let cv_auc = roc_auc(&oof, y)?;
     let scores = ScoreModelParams::default().fit(&oof, y)?;
     let mut model = Model::new(

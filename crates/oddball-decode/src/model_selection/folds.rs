@@ -1,7 +1,8 @@
 //! Cross-validation folds of epochs, the one home of every fold rule: groups (speller
 //! characters) kept whole ([`cv_folds`]), or stratified by label as scikit-learn's
 //! `StratifiedKFold` without shuffling ([`stratified_folds`]) or shuffled as with its
-//! `random_state` ([`stratified_folds_shuffled`], the SVM's probability calibration).
+//! `random_state` ([`stratified_folds_shuffled`], the SVM's probability calibration), or groups
+//! dealt round-robin ([`interleaved_folds`], a session's calibration).
 
 use crate::features::scaler::check_labels;
 use crate::DecodeError;
@@ -121,6 +122,35 @@ pub fn cv_folds(y: &[bool], groups: Option<&[usize]>, k: usize) -> Result<Folds>
     Ok(folds)
 }
 
+/// Folds that deal groups round-robin, as a session's calibration is cross-validated: group `g`
+/// (a trial: `groups[i]` is epoch `i`'s) falls in fold `g % k`, so consecutive trials land in
+/// different folds and slow drift is spread over all of them. Residues no group falls on make no
+/// fold (the others keep their order); with fewer than two, nothing can be held out and there is
+/// no fold.
+pub fn interleaved_folds(groups: &[usize], k: usize) -> Folds {
+    let k = k.max(1);
+    let mut used = vec![false; k];
+    for &g in groups {
+        used[g % k] = true;
+    }
+    let mut fold_index = vec![0; k];
+    let mut n_folds = 0;
+    for (r, &u) in used.iter().enumerate() {
+        if u {
+            fold_index[r] = n_folds;
+            n_folds += 1;
+        }
+    }
+    if n_folds < 2 {
+        n_folds = 0;
+    }
+    Folds {
+        fold_of: groups.iter().map(|&g| fold_index[g % k]).collect(),
+        n_folds,
+        grouped: true,
+    }
+}
+
 /// Test-fold index of every sample, as scikit-learn's `StratifiedKFold(n_splits, shuffle=False)`:
 /// each class (in order of first appearance) is dealt to folds in contiguous blocks whose sizes
 /// follow scikit-learn's allocation. Every class needs at least `n_splits` samples.
@@ -228,5 +258,25 @@ mod tests {
         assert_eq!(f, vec![0, 0, 0, 1, 0, 1, 2, 1, 2, 2]);
         assert!(stratified_folds(&y, 4).is_err());
         assert!(stratified_folds(&y, 1).is_err());
+    }
+
+    /// Every epoch of group `g` is tested in the fold of residue `g % k`; residues no group
+    /// falls on make no fold; a single residue leaves nothing to train on, so no fold.
+    #[test]
+    fn interleaved_folds_deal_groups_round_robin() {
+        let groups: Vec<usize> = (0..24).map(|i| i / 4).collect(); // 6 trials of 4 epochs
+        let f = interleaved_folds(&groups, 4);
+        assert_eq!(f.n_folds(), 4);
+        for (i, &g) in groups.iter().enumerate() {
+            assert_eq!(f.fold_of()[i], g % 4);
+        }
+        // Groups 0, 2, 4 with k = 4: residues 0 and 2 only, renumbered 0 and 1 in order.
+        let sparse = [0, 0, 2, 2, 4, 4];
+        let f = interleaved_folds(&sparse, 4);
+        assert_eq!(f.n_folds(), 2);
+        assert_eq!(f.fold_of(), &[0, 0, 1, 1, 0, 0]);
+        let (train, test) = f.split(1);
+        assert_eq!((train, test), (vec![0, 1, 4, 5], vec![2, 3]));
+        assert_eq!(interleaved_folds(&[3, 3, 7], 4).n_folds(), 0);
     }
 }

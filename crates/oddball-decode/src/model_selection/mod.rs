@@ -8,4 +8,4 @@ pub mod folds;
 pub mod tuning;
 
 pub use cross_val::{cross_val_predict, cross_val_scores, FoldScores, Split};
-pub use folds::{cv_folds, Folds};
+pub use folds::{cv_folds, interleaved_folds, Folds};
