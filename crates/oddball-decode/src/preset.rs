@@ -38,14 +38,25 @@ pub struct Candidate {
     pub params: PipelineParams,
 }
 
+/// An optional gloss of the list: `None`, or `Some` of the literal.
+macro_rules! gloss {
+    () => {
+        None
+    };
+    ($g:literal) => {
+        Some($g)
+    };
+}
+
 /// Generates [`Preset`] and everything read from its list. Called (through
 /// `crate::classifiers::with_classifier_presets!`, which puts the classifier registry's presets
-/// first) with `classifiers: Tag = "name" => ClassifierTag, …; Tag = "name" { params, grid }, …`.
+/// first) with `classifiers: Tag = "name" => ClassifierTag, …; Tag = "name" ("gloss")? { params,
+/// grid }, …`; the optional gloss is what the preset's name alone does not say, for help texts.
 macro_rules! presets {
     (
         $($(#[$cdoc:meta])* $ctag:ident = $cname:literal => $cls:ident,)*
         ;
-        $($(#[$fdoc:meta])* $ftag:ident = $fname:literal { $params:ident, $grid:ident },)*
+        $($(#[$fdoc:meta])* $ftag:ident = $fname:literal $(($gloss:literal))? { $params:ident, $grid:ident },)*
     ) => {
         /// A named pipeline for epochs sampled at `sfreq` Hz ([`Preset::params`]); each variant
         /// says what it runs, [`Preset::ALL`] lists them in the order reports use.
@@ -64,6 +75,14 @@ macro_rules! presets {
                 match self {
                     $(Preset::$ctag => $cname,)*
                     $(Preset::$ftag => $fname,)*
+                }
+            }
+
+            /// What the name alone does not say (for help texts), if anything.
+            pub const fn gloss(self) -> Option<&'static str> {
+                match self {
+                    $(Preset::$ctag => None,)*
+                    $(Preset::$ftag => gloss!($($gloss)?),)*
                 }
             }
 
@@ -100,11 +119,11 @@ crate::classifiers::with_classifier_presets! {
     /// `lda+riemann`: score fusion of `lda` and `riemann` (each pipeline's decision value
     /// divided by its standard deviation on the training epochs, then summed; no weights to
     /// tune).
-    LdaRiemann = "lda+riemann" { lda_riemann, no_grid },
+    LdaRiemann = "lda+riemann" ("score fusion") { lda_riemann, no_grid },
     /// `stack`: `toeplitz-lda`, `riemann` and `mdm` stacked ([`Fusion::Stacked`], 5 inner
     /// folds): a logistic regression learns their weights from out-of-fold scores on the
     /// training epochs.
-    Stack = "stack" { stack, no_grid },
+    Stack = "stack" ("toeplitz-lda + riemann + mdm, stacked") { stack, no_grid },
     /// `mdm`: the same XdawnCovariances → minimum distance to (Riemannian) mean (pyRiemann's
     /// `MDM`), scored `d²(C, M_non-target) − d²(C, M_target)`.
     Mdm = "mdm" { mdm, xdawn_grid },
@@ -133,6 +152,19 @@ impl Preset {
     pub fn names() -> String {
         PRESETS.join(", ")
     }
+
+    /// The names with their glosses, comma-separated, for help texts: `lda+riemann (score
+    /// fusion)`.
+    pub fn described() -> String {
+        Preset::ALL
+            .iter()
+            .map(|p| match p.gloss() {
+                Some(g) => format!("{} ({g})", p.name()),
+                None => p.name().to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 impl fmt::Display for Preset {
@@ -153,6 +185,20 @@ impl FromStr for Preset {
                 value: s.to_string(),
                 reason: format!("unknown preset; known: {}", Preset::names()),
             })
+    }
+}
+
+/// A preset is saved as its name.
+impl serde::Serialize for Preset {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Preset {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let name = <std::borrow::Cow<'de, str>>::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
     }
 }
 
@@ -400,6 +446,17 @@ fn knn_grid(_preset: Preset, base: PipelineParams, _sfreq: f64) -> Result<Vec<Ca
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn presets_are_saved_as_their_names() {
+        for &p in Preset::ALL {
+            let json = serde_json::to_string(&p).unwrap();
+            assert_eq!(json, format!("\"{}\"", p.name()));
+            assert_eq!(serde_json::from_str::<Preset>(&json).unwrap(), p);
+        }
+        let e = serde_json::from_str::<Preset>("\"no-such\"").unwrap_err();
+        assert!(e.to_string().contains("unknown preset"), "{e}");
+    }
 
     #[test]
     fn names_parse_back_and_unknown_ones_are_errors() {

@@ -16,14 +16,14 @@ pub fn preset(name: &str) -> Result<Preset, String> {
 
 /// The help of a `--pipeline` taking one preset.
 pub fn one_help() -> String {
-    format!("Pipeline preset: {}", Preset::names())
+    format!("Pipeline preset: {}", Preset::described())
 }
 
 /// The help of a `--pipeline` taking a list.
 pub fn list_help() -> String {
     format!(
         "Pipeline presets, comma-separated ({}), or `all`",
-        Preset::names()
+        Preset::described()
     )
 }
 
