@@ -1,29 +1,23 @@
 //! Arguments shared by several commands, typed once (clap parses them into library types):
 //! where the EEG comes from ([`SourceArgs`]), who watches the panel and how the session decides
-//! ([`SessionOptions`]), the browser panel ([`PanelOptions`]) and NIC's framing ([`NicWire`]).
+//! ([`SessionOptions`]), the browser panel ([`PanelOptions`]) and NIC's framing ([`NicWire`]);
+//! each becomes `oddball_app`'s settings, and [`app_error`] maps a run's errors back to the flags.
 
-use std::net::{SocketAddr, ToSocketAddrs};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
-use std::time::Duration;
 
-use anyhow::{bail, Context, Result};
-use oddball_arm::{ArmSim, Command, Vector2};
-use oddball_decode::decision::DecisionRule;
-use oddball_decode::pipeline::Model;
+use anyhow::{anyhow, bail, Result};
+use oddball_app::error::{AppError, SettingError, StartKind};
+use oddball_app::panel::PanelSettings;
+pub use oddball_app::settings::{join_paths, CalibrationSpec, SubjectSpec};
+use oddball_app::settings::{SessionSettings, SourceSettings};
+use oddball_arm::Command;
 use oddball_decode::preset::Preset;
 use oddball_io::nic::{NicFormat, NicMode};
-use oddball_live::clock::Clock;
-use oddball_live::live::LiveSubject;
-use oddball_live::panel::{PanelConfig, PanelServer};
-use oddball_live::plan::{recording_arm, PlanError, SessionPlan};
-use oddball_live::source::AnySource;
-use oddball_live::source::{OpenOptions, SourceSpec, SOURCE_HELP};
-use oddball_session::decision::{CalibrationProgress, CalibrationReport};
-use oddball_session::decoder::{AdaptParams, Start, UncalibratedParams};
-use oddball_session::engine::{Session, SessionParams};
-use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides};
-use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
+use oddball_live::plan::PlanError;
+use oddball_live::source::{SourceSpec, SOURCE_HELP};
+use oddball_session::paradigm::{ParadigmPreset, TimingOverrides};
 use oddball_session::SessionError;
 
 /// An output file (`-o`, `--json`, `--csv`): checked when the arguments are parsed, before any
@@ -109,52 +103,6 @@ pub fn commands_arg(s: &str) -> Result<Vec<Command>, String> {
     Ok(c)
 }
 
-/// How a session starts: `--calibration labelled|none|FILE`.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub enum CalibrationSpec {
-    /// Labelled calibration decisions (a replayed subject: its sibling recording).
-    #[default]
-    Labelled,
-    /// No calibration: the unsupervised decoder learns from the session itself.
-    None,
-    /// The calibration recordings of a replayed subject (comma-separated).
-    Files(Vec<PathBuf>),
-}
-
-impl FromStr for CalibrationSpec {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Ok(match s {
-            "labelled" | "labeled" => Self::Labelled,
-            "none" => Self::None,
-            "" => return Err("give labelled, none or a calibration recording".into()),
-            files => Self::Files(files.split(',').map(PathBuf::from).collect()),
-        })
-    }
-}
-
-/// Who watches the panel.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum SubjectSpec {
-    /// A simulated subject: easy, typical or hard.
-    Preset(SubjectPreset),
-    /// P300-speller recordings played back, in order, as four-choice decisions.
-    Replay(Vec<PathBuf>),
-}
-
-impl FromStr for SubjectSpec {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s.strip_prefix("replay:") {
-            Some(f) if !f.split(',').any(str::is_empty) => {
-                Ok(Self::Replay(f.split(',').map(PathBuf::from).collect()))
-            }
-            Some(_) => Err("replay: needs a file, or files separated by commas".into()),
-            None => s.parse().map(Self::Preset).map_err(|e| e.to_string()),
-        }
-    }
-}
-
 /// `--subject` of `online`: a simulated preset only (a replayed speller recording is not a live
 /// source).
 pub fn simulated_subject(s: &str) -> Result<SubjectSpec, String> {
@@ -180,23 +128,14 @@ pub struct SourceArgs {
 }
 
 impl SourceArgs {
-    /// How to open the source for `subject` (the simulated one, which also names a NIC
-    /// stream's channels).
-    pub fn open_options(
-        &self,
-        subject: oddball_session::SimulatedSubject,
-        paced: bool,
-    ) -> Result<OpenOptions> {
-        let opts = OpenOptions {
-            subject,
-            paced,
-            sim_latency_ms: self.sim_latency_ms,
+    /// The source's settings (NIC's framing checked).
+    pub fn settings(&self) -> Result<SourceSettings> {
+        Ok(SourceSettings {
+            source: self.source.clone(),
             nic: self.nic.format()?,
-            nic_sfreq: STARSTIM_SFREQ,
             markers: self.markers.clone(),
-        };
-        opts.check().context("checking --sim-latency-ms")?;
-        Ok(opts)
+            sim_latency_ms: self.sim_latency_ms,
+        })
     }
 }
 
@@ -326,400 +265,176 @@ fn paradigm_preset(s: &str) -> Result<ParadigmPreset, String> {
         .map_err(|e: oddball_session::SessionError| e.to_string())
 }
 
-impl TimingArgs {
-    /// The panel's timing, checked.
-    pub fn paradigm(&self) -> Result<FourBulbParams> {
-        let o = TimingOverrides {
-            flash_ms: self.flash_ms,
-            gap_ms: self.gap_ms,
-            cue_ms: self.cue_ms,
-            round_ms: self.round_ms,
-        };
-        FourBulbParams::timed(self.paradigm, &o)
-            .context("checking --paradigm/--flash-ms/--gap-ms/--cue-ms/--round-ms")
+impl SessionOptions {
+    /// The session's settings.
+    pub fn settings(&self) -> SessionSettings {
+        let t = &self.timing;
+        SessionSettings {
+            subject: self.subject.clone(),
+            calibration: self.calibration.clone(),
+            transfer: self.transfer.clone(),
+            model: self.model.clone(),
+            montage: self.montage.clone(),
+            adapt: self.adapt,
+            test_text: self.test_text.clone(),
+            seed: self.seed,
+            realtime: self.realtime,
+            dynamic_stopping: self.dynamic_stopping,
+            threshold: self.threshold,
+            max_rounds: self.max_rounds,
+            pipeline: self.pipeline,
+            calibration_per_bulb: self.calibration_per_bulb,
+            paradigm: t.paradigm,
+            timing: TimingOverrides {
+                flash_ms: t.flash_ms,
+                gap_ms: t.gap_ms,
+                cue_ms: t.cue_ms,
+                round_ms: t.round_ms,
+            },
+            optimise_stopping: self.optimise_stopping,
+            round_limit: self.round_limit,
+            min_accuracy: self.min_accuracy,
+            step: self.step,
+        }
     }
 }
 
-impl SessionOptions {
-    /// The fixed rule (5 rounds) and the rule in effect (the options checked first).
-    pub fn rules(&self) -> Result<(DecisionRule, DecisionRule)> {
-        self.check()?;
-        let fixed = DecisionRule::Fixed {
-            rounds: self.timing.paradigm()?.n_rounds,
-        };
-        let dynamic = DecisionRule::Dynamic {
-            threshold: self.threshold,
-            min_rounds: 1,
-            max_rounds: self.max_rounds,
-            credible: 0.5,
-            p_no_control: 0.2,
-        };
-        dynamic
-            .validate()
-            .context("checking --threshold/--max-rounds")?;
-        if self.optimise_stopping {
-            let search = self.stopping_search();
-            search
-                .validate()
-                .context("checking --round-limit/--min-accuracy")?;
-            // Replaced by the rule calibration chooses.
-            return Ok((fixed, DecisionRule::dynamic(search.max_rounds)));
-        }
-        Ok((
-            fixed,
-            if self.dynamic_stopping {
-                dynamic
-            } else {
-                fixed
-            },
-        ))
-    }
-
-    /// The panel's timing (checked by [`Self::rules`], which every command calls first; the
-    /// paper's should it be invalid).
-    pub fn paradigm(&self) -> FourBulbParams {
-        self.timing.paradigm().unwrap_or_default()
-    }
-
-    /// The simulated preset (the subject of a `sim` source, and the montage of a NIC stream).
-    pub fn preset(&self) -> Option<SubjectPreset> {
-        match self.subject {
-            SubjectSpec::Preset(p) => Some(p),
-            SubjectSpec::Replay(_) => None,
-        }
-    }
-
-    /// The simulated subject of this seed.
-    pub fn simulated(&self) -> Result<oddball_session::SimulatedSubject> {
-        let preset = self
-            .preset()
-            .context("--subject replay:… is not a live source")?;
-        SubjectParams::preset(preset)
-            .with_seed(self.seed)
-            .build()
-            .context("building the simulated subject")
-    }
-
-    /// The session's settings under `rule`.
-    pub fn params(&self, rule: DecisionRule) -> SessionParams {
-        let mut params = SessionParams::paper(self.pipeline);
-        params.paradigm = self.paradigm();
-        params.decoder.seed = self.seed;
-        params.decoder.rule = rule;
-        params.calibration_per_bulb = self.calibration_per_bulb;
-        // Only for the rule in effect (a fixed-rounds comparison keeps its rounds).
-        params.decoder.stopping = (self.optimise_stopping
-            && !matches!(rule, DecisionRule::Fixed { .. }))
-        .then(|| self.stopping_search());
-        params
-    }
-
-    /// What --optimise-stopping searches.
-    pub fn stopping_search(&self) -> oddball_decode::stopping::StoppingSearch {
-        oddball_decode::stopping::StoppingSearch {
-            max_rounds: self.round_limit,
-            min_accuracy: self.min_accuracy,
-            seed: self.seed,
-            ..Default::default()
-        }
-    }
-
-    /// The session's plan over `source` under `rule` (paced by the wall clock when `paced`),
-    /// starting with `model` (`--model`, read by [`Self::session_model`]) when given.
-    pub fn plan(
-        &self,
-        source: &SourceArgs,
-        rule: DecisionRule,
-        paced: bool,
-        model: Option<Model>,
-    ) -> Result<SessionPlan> {
-        let montage = match &self.montage {
-            Some(path) => Some(oddball_io::montage::read_montage(path)?),
-            None => None,
-        };
-        Ok(SessionPlan {
-            source: source.source.clone(),
-            open: source.open_options(self.simulated()?, paced)?,
-            params: self.params(rule),
-            start: self.start(model)?,
-            montage,
-            step_m: self.step,
-        })
-    }
-
-    /// Opens `plan`'s live session and starts it, printing what it did when `verbose`: the
-    /// session, what calibration measured, the pen's start.
-    pub fn open(
-        &self,
-        plan: &SessionPlan,
-        clock: Clock,
-        verbose: bool,
-    ) -> Result<(
-        Session<LiveSubject<AnySource>>,
-        CalibrationReport,
-        Vector2<f64>,
-    )> {
-        let pen_start = self.arm()?.pen();
-        let opened = if verbose {
-            plan.open(clock, &mut calibration_progress())
-        } else {
-            plan.open(clock, &mut |_| {})
-        }
-        .map_err(|e| self.plan_error(e, plan))?;
-        let session = opened.session;
-        if let Some(c) = opened.rate_change {
-            println!("{c}");
-        }
-        if matches!(plan.start, Start::Uncalibrated { .. }) {
-            self.print_transfer();
-        }
-        if !verbose {
-            let calibration = opened.calibration.unwrap_or_else(CalibrationReport::none);
-            return Ok((session, calibration, pen_start));
-        }
-        match (&plan.start, opened.calibration) {
-            (Start::Model(model), _) => println!("{}", model_line(model, self.model.as_deref())),
-            (Start::Uncalibrated { .. }, _) => {
-                println!(
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
-                    UncalibratedParams::for_sfreq(session.sfreq())?.abstain_below
-                );
-            }
-            (Start::Calibrate { .. }, Some(calibration)) => {
-                println!(
-                    "calibration: {} decisions, {} epochs ({} targets, {} rejected) in {:.1} s of EEG; cross-validated AUC {:.3}, d' {:.2}",
-                    calibration.n_trials,
-                    calibration.n_epochs,
-                    calibration.n_targets,
-                    calibration.n_rejected,
-                    session.time_s(),
-                    calibration.cv_auc,
-                    calibration.d_prime
-                );
-                return Ok((session, calibration, pen_start));
-            }
-            (Start::Calibrate { .. }, None) => {}
-        }
-        Ok((session, CalibrationReport::none(), pen_start))
-    }
-
-    /// `transfer: starting from FILE` for a session started from `--transfer`.
-    pub fn print_transfer(&self) {
-        if let (CalibrationSpec::None, Some(path)) = (&self.calibration, &self.transfer) {
-            println!("transfer: starting from {}", path.display());
-        }
-    }
-
-    /// A plan's error as the option at fault.
-    pub fn plan_error(&self, e: PlanError, plan: &SessionPlan) -> anyhow::Error {
-        let path =
-            |p: &Option<PathBuf>| p.as_deref().unwrap_or(Path::new("")).display().to_string();
-        match e {
-            PlanError::Invalid(why) => anyhow::anyhow!("{why}"),
+/// A run's error in the command line's terms: the flags at fault named, the library's facts as
+/// the cause (`opts`: the session's options, for the files they name).
+pub fn app_error(e: AppError, opts: &SessionOptions) -> anyhow::Error {
+    let path = |p: &Option<PathBuf>| p.as_deref().unwrap_or(Path::new("")).display().to_string();
+    match e {
+        AppError::Setting(s) => setting_error(s),
+        AppError::Plan {
+            error,
+            source_spec,
+            start,
+        } => match error {
+            PlanError::Invalid(why) => anyhow!("{why}"),
             PlanError::Arm(e) => anyhow::Error::new(e).context("checking --step"),
-            PlanError::Open(e) => {
-                anyhow::Error::new(e).context(format!("--source {}", plan.source))
-            }
+            PlanError::Open(e) => anyhow::Error::new(e).context(format!("--source {source_spec}")),
             PlanError::Rate(e) => {
                 anyhow::Error::new(e).context("resampling the EEG to the model's rate")
             }
             PlanError::Session(e) => anyhow::Error::new(e).context("setting up the session"),
             PlanError::Montage(e) => anyhow::Error::new(e).context(format!(
                 "naming the channels with --montage {}",
-                path(&self.montage)
+                path(&opts.montage)
             )),
             PlanError::Start(e) => {
                 let channels = matches!(e, SessionError::ModelChannels { .. });
                 let e = anyhow::Error::new(e);
-                match &plan.start {
-                    Start::Calibrate { .. } => e.context("calibrating"),
-                    Start::Model(_) if channels => e.context(
+                match start {
+                    StartKind::Calibrate => e.context("calibrating"),
+                    StartKind::Model if channels => e.context(
                         "using --model: name the EEG's channels in order with --montage FILE",
                     ),
-                    Start::Model(_) => e.context("using --model"),
-                    Start::Uncalibrated {
-                        transfer: Some(_), ..
-                    } => e.context(format!("starting from --transfer {}", path(&self.transfer))),
-                    Start::Uncalibrated { .. } => e.context("setting up the uncalibrated decoder"),
+                    StartKind::Model => e.context("using --model"),
+                    StartKind::Uncalibrated { transfer: true } => {
+                        e.context(format!("starting from --transfer {}", path(&opts.transfer)))
+                    }
+                    StartKind::Uncalibrated { transfer: false } => {
+                        e.context("setting up the uncalibrated decoder")
+                    }
                 }
             }
-        }
-    }
-
-    /// How the session starts: without calibration (`--calibration none`, from the
-    /// `--transfer` model if given), with `model` (`--model`, read by [`Self::session_model`]),
-    /// or calibrating (and with `--adapt` adapting).
-    pub fn start(&self, model: Option<Model>) -> Result<Start> {
-        if self.calibration == CalibrationSpec::None {
-            let transfer = match &self.transfer {
-                Some(path) => Some(crate::load::load_model(path)?),
-                None => None,
-            };
-            return Ok(Start::Uncalibrated {
-                params: None,
-                transfer,
-            });
-        }
-        Ok(match model {
-            Some(model) => Start::Model(model),
-            None => Start::Calibrate {
-                adapt: self.adapt.then(AdaptParams::default),
-            },
-        })
-    }
-
-    /// The `--model` to decide with instead of calibrating (read and checked), its decision
-    /// rule replaced by this session's `rule`.
-    pub fn session_model(&self, rule: DecisionRule) -> Result<Option<Model>> {
-        let Some(path) = &self.model else {
-            return Ok(None);
-        };
-        let mut model = crate::load::load_model(path)?;
-        match &mut model.decision {
-            // The stopping rule is this session's choice, not the training's.
-            Some(d) => d.rule = rule,
-            None => bail!(
-                "--model {}: {}",
-                path.display(),
-                oddball_decode::model::NO_DECISION_MODEL
-            ),
-        }
-        Ok(Some(model))
-    }
-
-    /// The arm the session drives (recording its trace), with `--step`.
-    pub fn arm(&self) -> Result<ArmSim> {
-        recording_arm(self.step).context("checking --step")
-    }
-
-    /// Checks, before any EEG work, that the intended commands keep the pen on the board.
-    pub fn check_commands(&self, commands: &[Command]) -> Result<()> {
-        oddball_session::tasks::check_path(&self.arm()?, commands, "the commands")
-            .map(|_| ())
-            .map_err(|e| off_board(e, "--commands", "fewer commands"))
-    }
-
-    /// Checks option combinations before any session starts.
-    pub fn check(&self) -> Result<()> {
-        if self.model.is_some() {
-            if self.calibration == CalibrationSpec::None {
-                bail!("--calibration none starts without a model: not with --model");
-            }
-            if self.adapt {
-                bail!(
-                    "--adapt adapts a calibration made in this session (--calibrate), not --model"
-                );
-            }
-            if self.optimise_stopping {
-                bail!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model");
-            }
-            if let SubjectSpec::Replay(files) = &self.subject {
-                bail!(
-                    "--subject replay:{} calibrates on the recording's calibration file, not --model; to replay a recording with a model: oddball online --source replay:{} --model MODEL --fast",
-                    join_paths(files),
-                    files.first().map(|f| f.display().to_string()).unwrap_or_default()
-                );
-            }
-        }
-        self.arm()?;
-        if self.transfer.is_some() && self.calibration != CalibrationSpec::None {
-            bail!("--transfer starts an uncalibrated session: it needs --calibration none");
-        }
-        if self.adapt && self.calibration == CalibrationSpec::None {
-            bail!("--adapt adapts a labelled calibration; --calibration none adapts by itself");
-        }
-        if !self.test_text.is_empty() && self.preset().is_some() {
-            bail!("--test-text labels replayed files: it needs --subject replay:FILE");
-        }
-        if self.adapt && self.pipeline != Preset::Lda {
-            bail!("--adapt needs --pipeline lda (got {})", self.pipeline);
-        }
-        Ok(())
+        },
+        e => anyhow::Error::new(e),
     }
 }
 
-/// What a session says of the model it decides with instead of calibrating.
-pub fn model_line(model: &Model, path: Option<&Path>) -> String {
-    format!(
-        "model: {}{}, {} channels at {} Hz, epochs {}–{} s{}: no calibration",
-        model.pipeline.name(),
-        path.map(|p| format!(" from {}", p.display()))
-            .unwrap_or_default(),
-        model.ch_names.len(),
-        model.sfreq,
-        model.preprocess.tmin,
-        model.preprocess.tmax,
-        match (model.preprocess.causal, &model.live) {
-            (true, _) => "",
-            (false, Some(_)) => " (its causal fit, as a session filters)",
-            (false, None) => " (trained zero-phase, run causally: expect lower accuracy)",
+/// Settings at fault, as the flags that gave them.
+fn setting_error(e: SettingError) -> anyhow::Error {
+    use SettingError as S;
+    let within =
+        |e: SessionError, flags: &str| anyhow::Error::new(e).context(format!("checking {flags}"));
+    match e {
+        S::ModelWithoutCalibration => anyhow!("--calibration none starts without a model: not with --model"),
+        S::AdaptWithModel => anyhow!("--adapt adapts a calibration made in this session (--calibrate), not --model"),
+        S::OptimiseWithModel => anyhow!("--optimise-stopping chooses the rule from this session's calibration: use it with --calibrate, not --model"),
+        S::ReplayWithModel { files } => anyhow!(
+            "--subject replay:{} calibrates on the recording's calibration file, not --model; to replay a recording with a model: oddball online --source replay:{} --model MODEL --fast",
+            join_paths(&files),
+            files.first().map(|f| f.display().to_string()).unwrap_or_default()
+        ),
+        S::TransferNeedsUncalibrated => anyhow!("--transfer starts an uncalibrated session: it needs --calibration none"),
+        S::AdaptUncalibrated => anyhow!("--adapt adapts a labelled calibration; --calibration none adapts by itself"),
+        S::TestTextWithoutReplay => anyhow!("--test-text labels replayed files: it needs --subject replay:FILE"),
+        S::AdaptNeedsLda { pipeline } => anyhow!("--adapt needs --pipeline lda (got {pipeline})"),
+        S::Timing(e) => within(e, "--paradigm/--flash-ms/--gap-ms/--cue-ms/--round-ms"),
+        S::DynamicRule(e) => anyhow::Error::new(e).context("checking --threshold/--max-rounds"),
+        S::StoppingSearch(e) => anyhow::Error::new(e).context("checking --round-limit/--min-accuracy"),
+        S::Arm(e) => anyhow::Error::new(e).context("checking --step"),
+        S::Commands(e) => off_board(e, "--commands", "fewer commands"),
+        S::Drawing { text, source } => off_board(source, &format!("--draw {text:?}"), "shorter text"),
+        S::Track(e) => within(e, "--target/--targets/--tolerance-mm"),
+        S::NotLive => anyhow!("--subject replay:… is not a live source"),
+        S::Subject(e) => anyhow::Error::new(e).context("building the simulated subject"),
+        S::SourceOptions(e) => anyhow::Error::new(e).context("checking --sim-latency-ms"),
+        S::NoDecisionModel { path } => anyhow!(
+            "--model {}: {}",
+            path.display(),
+            oddball_decode::model::NO_DECISION_MODEL
+        ),
+        S::Montage { source, .. } => anyhow::Error::new(source),
+        S::ReplayUncalibrated => anyhow!(
+            "--calibration none runs a live or simulated session; a replayed subject \
+             (--subject replay:…) is calibrated on its recording (use `oddball evaluate \
+             --unsupervised` to replay a recording without labels)"
+        ),
+        S::ReplayedFile(e) => anyhow::Error::new(e).context("--subject replay:FILE"),
+        S::TestTextCount { texts, files } => anyhow!(
+            "--test-text gives {texts} texts for {files} replayed files (one per file)"
+        ),
+        S::CalibrationFile(e) => anyhow::Error::new(e).context("the calibration recording"),
+        S::NoSibling { path } => anyhow!(
+            "no calibration recording for {}: give one with --calibration FILE",
+            path.display()
+        ),
+        S::Unlabelled {
+            path,
+            n_events,
+            events,
+            calibration,
+        } => anyhow!(
+            "{} has {n_events} events but none is labelled target or non-target (its events: {events}); {}",
+            path.display(),
+            if calibration {
+                "calibrate on a labelled recording (--calibration FILE)"
+            } else {
+                "give the text each replayed speller run spelled with --test-text"
+            }
+        ),
+        S::ReplayWithSource { files, spec } => anyhow!(
+            "--subject replay:{} replays decisions offline: it takes no --source {spec}",
+            join_paths(&files)
+        ),
+        S::ServeReplay => anyhow!("--serve: the panel runs with simulated subjects; a replayed recording's flashes are already fixed"),
+        S::WaitPage { seconds, max } => anyhow!("--wait-page {seconds}: expected 0 to {max} seconds"),
+        S::Address { addr, source: Some(e) } => {
+            anyhow::Error::new(e).context(format!("{addr}: expected HOST:PORT"))
         }
-    )
-}
-
-/// Prints a calibration's progress ("calibration decision 3 of 40 …") when it is slow enough
-/// to need it: a line after each trial once two seconds of wall time have passed since the
-/// start or the last line (a live or real-time calibration prints every trial; an unpaced
-/// simulation, over in a second, prints nothing).
-pub fn calibration_progress() -> impl FnMut(CalibrationProgress) {
-    let mut last = std::time::Instant::now();
-    let mut printed = false;
-    move |p| {
-        let end = p.done == p.total;
-        if last.elapsed().as_secs_f64() >= 2.0 || (printed && end) {
-            println!(
-                "calibration decision {} of {} · {} of EEG{}",
-                p.done,
-                p.total,
-                minutes_seconds(p.eeg_seconds),
-                if end {
-                    " · training".to_string()
-                } else {
-                    format!(" · about {} left", minutes_seconds(p.seconds_left))
-                }
-            );
-            last = std::time::Instant::now();
-            printed = true;
+        S::Address { addr, source: None } => anyhow!("{addr}: no address"),
+        e @ (S::ReadModel { .. } | S::LoadModel { .. } | S::ReplayedAndCalibrated { .. }) => {
+            anyhow::Error::new(e)
         }
-    }
-}
-
-/// "7 s", "2 min 05 s".
-fn minutes_seconds(s: f64) -> String {
-    let s = s.max(0.0).round() as u64;
-    if s < 60 {
-        format!("{s} s")
-    } else {
-        format!("{} min {:02} s", s / 60, s % 60)
     }
 }
 
 /// A path that leaves the board as one line naming the option at fault (`option`) and what
 /// fixes it: `--step` with the largest step that fits, or `less` (shorter text, fewer
 /// commands); the library's facts follow as the cause.
-pub fn off_board(e: oddball_session::SessionError, option: &str, less: &str) -> anyhow::Error {
+fn off_board(e: SessionError, option: &str, less: &str) -> anyhow::Error {
     let hint = match &e {
-        oddball_session::SessionError::PathOffBoard {
+        SessionError::PathOffBoard {
             max_step_m: Some(m),
             ..
         } => format!("use --step {m} (metres) or less, or {less}"),
-        oddball_session::SessionError::PathOffBoard { .. } => {
-            format!("no step fits from the pen's start: {less}")
-        }
+        SessionError::PathOffBoard { .. } => format!("no step fits from the pen's start: {less}"),
         _ => return anyhow::Error::new(e).context(format!("checking {option}")),
     };
     anyhow::Error::new(e).context(format!("checking {option}: it leaves the board; {hint}"))
 }
-
-pub fn join_paths(p: &[PathBuf]) -> String {
-    p.iter()
-        .map(|p| p.display().to_string())
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
-/// The longest --wait-page, seconds (a day).
-const MAX_WAIT_PAGE_S: f64 = 86_400.0;
 
 /// The stimulus panel in a browser: shared by `online` and `task`.
 #[derive(Debug, Clone, clap::Args)]
@@ -738,39 +453,13 @@ pub struct PanelOptions {
 }
 
 impl PanelOptions {
-    /// Starts the panel (when --serve) and waits for a page; prints its address first.
-    pub fn start(&self, config: PanelConfig, clock: Clock) -> Result<Option<PanelServer>> {
-        let Some(addr) = &self.serve else {
-            return Ok(None);
-        };
-        if !(self.wait_page.is_finite() && (0.0..=MAX_WAIT_PAGE_S).contains(&self.wait_page)) {
-            bail!(
-                "--wait-page {}: expected 0 to {MAX_WAIT_PAGE_S} seconds",
-                self.wait_page
-            );
+    /// The panel's settings.
+    pub fn settings(&self) -> PanelSettings {
+        PanelSettings {
+            serve: self.serve.clone(),
+            allow_remote: self.allow_remote,
+            wait_page: self.wait_page,
         }
-        let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
-            .context("starting the panel")?;
-        println!("panel: http://{}/", panel.local_addr());
-        println!(
-            "operator view: http://{}{}",
-            panel.local_addr(),
-            oddball_live::panel::protocol::OPERATOR_PAGE
-        );
-        if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
-            bail!(
-                "no page opened the panel at http://{}/ within {} s",
-                panel.local_addr(),
-                self.wait_page
-            );
-        }
-        let stats = panel.stats();
-        println!(
-            "panel page connected: frame {:.2} ms, {}",
-            stats.frame_ms.unwrap_or(f64::NAN),
-            stats.agent.as_deref().unwrap_or("?")
-        );
-        Ok(Some(panel))
     }
 }
 
@@ -815,8 +504,5 @@ impl NicWire {
 
 /// `HOST:PORT` → its first address.
 pub fn resolve(addr: &str) -> Result<SocketAddr> {
-    addr.to_socket_addrs()
-        .with_context(|| format!("{addr}: expected HOST:PORT"))?
-        .next()
-        .with_context(|| format!("{addr}: no address"))
+    oddball_app::panel::resolve(addr).map_err(setting_error)
 }

@@ -23,7 +23,6 @@ mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
 mod load;
-mod pilot;
 mod preset_arg;
 
 #[derive(Debug, Parser)]
