@@ -48,6 +48,22 @@ pub enum TrialOutcome {
 }
 
 impl TrialOutcome {
+    /// A decision rule's verdict as an outcome and its posterior per bulb (`None` when the rule
+    /// would go on flashing: there is no posterior to report).
+    pub fn of(verdict: oddball_decode::decision::Verdict) -> (TrialOutcome, Option<Vec<f64>>) {
+        use oddball_decode::decision::Verdict;
+        match verdict {
+            Verdict::Choose { index, posterior } => (
+                TrialOutcome::Chosen {
+                    code: index as u32 + 1,
+                },
+                Some(posterior.p),
+            ),
+            Verdict::Abstain { posterior } => (TrialOutcome::Abstained, Some(posterior.p)),
+            Verdict::Continue => (TrialOutcome::Abstained, None),
+        }
+    }
+
     /// The decision's confidence given the posterior per bulb (`posterior[code − 1]`): the
     /// posterior of the chosen bulb, or, abstaining, of the best one (0 with none).
     pub fn confidence(&self, posterior: &[f64]) -> f64 {

@@ -27,7 +27,6 @@ use crate::SessionError;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DecoderParams {
     /// The pipeline preset.
-    #[serde(with = "preset_name")]
     pub pipeline: Preset,
     pub preprocess: Preprocess,
     /// The online decision rule (fixed rounds, or dynamic stopping).
@@ -45,18 +44,21 @@ pub struct DecoderParams {
     pub stopping: Option<StoppingSearch>,
 }
 
-/// A [`Preset`] as its name.
-mod preset_name {
-    use oddball_decode::preset::Preset;
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(p: &Preset, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(p.name())
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Preset, D::Error> {
-        let name = String::deserialize(d)?;
-        name.parse().map_err(serde::de::Error::custom)
+impl DecoderParams {
+    /// The paper's decoder for `pipeline` on `paradigm`: causal 1–15 Hz band-pass, the
+    /// paradigm's rounds fixed, 20-sample chunks, 5 folds, seed 0, no stopping search.
+    pub fn paper(pipeline: Preset, paradigm: &crate::paradigm::FourBulbParams) -> Self {
+        Self {
+            pipeline,
+            preprocess: Preprocess::online(),
+            rule: DecisionRule::Fixed {
+                rounds: paradigm.n_rounds,
+            },
+            chunk: 20,
+            cv_folds: 5,
+            seed: 0,
+            stopping: None,
+        }
     }
 }
 

@@ -28,8 +28,8 @@
 
 use ndarray::{Array2, Axis};
 use oddball_arm::{ArmSim, Command};
-use oddball_decode::decision::{DecisionRule, Verdict};
-use oddball_decode::pipeline::{Model, Preprocess};
+use oddball_decode::decision::Verdict;
+use oddball_decode::pipeline::Model;
 use oddball_decode::preset::Preset;
 use oddball_decode::stopping::Expected;
 use oddball_decode::unsupervised::Unsupervised;
@@ -76,17 +76,7 @@ impl SessionParams {
         let paradigm = FourBulbParams::paper();
         Self {
             paradigm,
-            decoder: DecoderParams {
-                pipeline,
-                preprocess: Preprocess::online(),
-                rule: DecisionRule::Fixed {
-                    rounds: paradigm.n_rounds,
-                },
-                chunk: 20,
-                cv_folds: 5,
-                seed: 0,
-                stopping: None,
-            },
+            decoder: DecoderParams::paper(pipeline, &paradigm),
             calibration_per_bulb: 10,
         }
     }

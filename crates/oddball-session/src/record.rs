@@ -21,7 +21,6 @@
 use std::path::Path;
 
 use oddball_arm::Command;
-use oddball_decode::decision::Verdict;
 use oddball_decode::pipeline::Model;
 use oddball_io::xdf::session_markers;
 use oddball_io::{
@@ -432,16 +431,8 @@ pub fn reevaluate(
         }
         let rounds = complete_rounds(&shown);
         let (verdict, used) = decision.decide(&rounds);
-        let (outcome, posterior) = match verdict {
-            Verdict::Choose { index, posterior } => (
-                TrialOutcome::Chosen {
-                    code: index as u32 + 1,
-                },
-                posterior.p,
-            ),
-            Verdict::Abstain { posterior } => (TrialOutcome::Abstained, posterior.p),
-            Verdict::Continue => (TrialOutcome::Abstained, Vec::new()),
-        };
+        let (outcome, posterior) = TrialOutcome::of(verdict);
+        let posterior = posterior.unwrap_or_default();
         out.push(Redecision {
             number: t.number,
             intended: t.intended,

@@ -25,7 +25,7 @@
 //! their P300s were not shrunk by a short target-to-target interval as the panel's would be.
 
 use oddball_arm::Command;
-use oddball_decode::decision::{DecisionModel, DecisionRule, Verdict};
+use oddball_decode::decision::DecisionModel;
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::preset::Preset;
 use oddball_io::Recording;
@@ -66,18 +66,12 @@ impl ReplayParams {
         Self {
             paradigm,
             decoder: DecoderParams {
-                pipeline,
                 preprocess: Preprocess {
                     reject_peak_to_peak_uv: None,
                     ..Preprocess::online()
                 },
-                rule: DecisionRule::Fixed {
-                    rounds: paradigm.n_rounds,
-                },
                 cv_folds: 4,
-                chunk: 20,
-                seed: 0,
-                stopping: None,
+                ..DecoderParams::paper(pipeline, &paradigm)
             },
             rounds_per_decision: paradigm.n_rounds,
         }
@@ -519,16 +513,8 @@ impl ReplaySource {
             .map(|m| source.iter().map(|c| m[c]).collect())
             .collect();
         let (verdict, used) = self.decision.decide(&rounds);
-        let (outcome, posterior) = match verdict {
-            Verdict::Choose { index, posterior } => (
-                TrialOutcome::Chosen {
-                    code: index as u32 + 1,
-                },
-                posterior.p,
-            ),
-            Verdict::Abstain { posterior } => (TrialOutcome::Abstained, posterior.p),
-            Verdict::Continue => (TrialOutcome::Abstained, vec![0.25; 4]),
-        };
+        let (outcome, posterior) = TrialOutcome::of(verdict);
+        let posterior = posterior.unwrap_or_else(|| vec![0.25; 4]);
         let decided = match outcome {
             TrialOutcome::Chosen { code } => self.paradigm.command_of(code),
             _ => None,
