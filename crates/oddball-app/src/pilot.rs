@@ -8,7 +8,7 @@ use oddball_decode::decision::DecisionRule;
 use oddball_live::clock::Clock;
 pub use oddball_live::pilot::{AnyPilot, Prepared};
 use oddball_live::source::SourceSpec;
-use oddball_session::engine::AdaptationReport;
+use oddball_session::decoder::AdaptationReport;
 use oddball_session::replay::ReplaySource;
 use oddball_session::tasks::ReplayPilot;
 

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use ndarray::Array2;
 use oddball_arm::ArmSim;
 use oddball_io::xdf::session_markers;
-use oddball_session::engine::{Phase, TrialOutcome, TrialRecord};
+use oddball_session::decision::{Phase, TrialOutcome, TrialRecord};
 use oddball_session::online::ChannelFaults;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::{Drawn, EegStream, Observer, Presenter};

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use oddball_session::decision::Decision;
-use oddball_session::engine::ShownFlash;
+use oddball_session::decision::ShownFlash;
 use oddball_session::SessionError;
 use serde::Serialize;
 
@@ -179,7 +179,7 @@ pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String>
     );
     if k < shown.len() {
         line.push_str(
-            "; the others met EEG with no response to them (replay with the recording's --seed and --commands)",
+            "; the others met EEG with no response to them (replay with the recording's seed and commands)",
         );
     }
     Some(line)

@@ -6,8 +6,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use oddball_arm::{ArmSim, Command, Vector2};
+use oddball_session::decision::CalibrationReport;
 use oddball_session::decision::Decision;
-use oddball_session::engine::{CalibrationReport, Session};
+use oddball_session::engine::Session;
 use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::REPLAY_NOTE;
 use oddball_session::roles::EegStream;

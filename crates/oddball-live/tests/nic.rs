@@ -98,7 +98,7 @@ fn a_session_over_nic_binary_draws_the_letter_g() {
     let online: Vec<_> = log
         .trials
         .iter()
-        .filter(|t| t.phase == oddball_session::engine::Phase::Online)
+        .filter(|t| t.phase == oddball_session::decision::Phase::Online)
         .collect();
     assert_eq!(again.len(), 6);
     for (a, o) in again.iter().zip(online) {

@@ -38,16 +38,16 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-pub use crate::decision::{
+use crate::decision::{
     complete_rounds, CalibrationProgress, CalibrationReport, Phase, SessionLog, ShownFlash,
     TrialOutcome, TrialRecord,
 };
-pub use crate::decoder::{AdaptParams, AdaptationReport, DecoderParams, Start, UncalibratedParams};
+use crate::decoder::{AdaptationReport, DecoderParams, Start, UncalibratedParams};
 use crate::decoder::{Adaptation, OnlineDecoder, Unlabelled};
 use crate::fit::{fit_session_model_oof, Calibration};
 use crate::online::{Marker, OnlineEpocher};
 use crate::paradigm::FourBulbParams;
-pub use crate::roles::{Drawn, EegStream, Observer, Presenter, Subject};
+use crate::roles::{Drawn, Subject};
 use crate::SessionError;
 
 /// A flash's measured onset (a page's stamp) further than this from its planned onset, seconds,

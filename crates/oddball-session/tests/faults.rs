@@ -5,7 +5,8 @@
 use ndarray::Array2;
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::preset::Preset;
-use oddball_session::engine::{Session, SessionParams, TrialOutcome};
+use oddball_session::decision::TrialOutcome;
+use oddball_session::engine::{Session, SessionParams};
 use oddball_session::roles::{EegStream, Observer, Presenter};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 use oddball_session::SessionError;

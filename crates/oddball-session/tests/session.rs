@@ -4,7 +4,8 @@
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::decision::DecisionRule;
 use oddball_decode::preset::Preset;
-use oddball_session::engine::{Session, SessionParams, TrialOutcome};
+use oddball_session::decision::TrialOutcome;
+use oddball_session::engine::{Session, SessionParams};
 use oddball_session::record::{read_session, reevaluate, save_session};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 
@@ -212,7 +213,7 @@ impl oddball_session::roles::Presenter for Paused {
     fn trial_started(
         &mut self,
         start: u64,
-        _phase: oddball_session::engine::Phase,
+        _phase: oddball_session::decision::Phase,
         _intended: Option<u32>,
     ) -> Result<(), oddball_session::SessionError> {
         self.starts.push(start);
@@ -236,7 +237,7 @@ impl oddball_session::roles::Presenter for Paused {
 impl oddball_session::roles::Observer for Paused {
     fn trial_ended(
         &mut self,
-        _t: &oddball_session::engine::TrialRecord,
+        _t: &oddball_session::decision::TrialRecord,
     ) -> Result<(), oddball_session::SessionError> {
         self.trials_ended += 1;
         Ok(())

@@ -3,8 +3,9 @@
 use oddball_arm::{ArmSim, Command};
 
 use crate::decision::Decision;
-use crate::engine::{Session, Subject};
+use crate::engine::Session;
 use crate::replay::ReplaySource;
+use crate::roles::Subject;
 use crate::SessionError;
 
 /// Something that turns intentions into arm moves.
