@@ -6,17 +6,19 @@
 // EEG samples), and the measured gap between the frame
 // that took a flash off and the one that drew the next must be within one frame of GAP_MS.
 //
-//   node panel.mjs URL SCREENSHOT.png N_DECISIONS [ON_MS [GAP_MS]]
+//   node panel.mjs URL OPERATOR_URL SCREENSHOT.png N_DECISIONS [ON_MS [GAP_MS]]
+//
+// URL and OPERATOR_URL: the session's `panel:` and `operator view:` lines (each with its key).
 //
 // Chromium: $CHROMIUM or /usr/bin/chromium (Debian's). Prints one JSON line of measurements;
 // exits 1 with the reasons when a check fails.
 import { chromium } from "playwright-core";
 
-const [url, shot, nDecisions, onArg, gapArg] = process.argv.slice(2);
+const [url, operatorUrl, shot, nDecisions, onArg, gapArg] = process.argv.slice(2);
 const onMs = onArg === undefined ? 100 : Number(onArg);
 const gapMs = gapArg === undefined ? null : Number(gapArg);
-if (!url || !shot || !nDecisions) {
-  console.error("usage: node panel.mjs URL SCREENSHOT.png N_DECISIONS");
+if (!url || !operatorUrl || !shot || !nDecisions) {
+  console.error("usage: node panel.mjs URL OPERATOR_URL SCREENSHOT.png N_DECISIONS");
   process.exit(2);
 }
 const want = Number(nDecisions);
@@ -33,25 +35,32 @@ try {
   // The countdown shows a digit before the first flash.
   await page.waitForFunction(() => /^[1-5]$/.test(document.getElementById("count").textContent), null, { timeout: 30000 });
   // A rogue second client: malformed, oversized and binary messages and an abort on the
-  // subject's socket, then it just goes away.
-  // The server must refuse them and carry on with the real page.
+  // subject's socket, then it just goes away. Without the key it is refused at the door
+  // (and with it, as a second subject view, closed unheard): the session carries on.
   await page.waitForFunction(() => window.oddballDiag.flashes >= 2, null, { timeout: 30000 });
-  await page.evaluate(() => new Promise((done) => {
-    const ws = new WebSocket(`ws://${location.host}/ws`);
-    ws.onopen = () => {
-      ws.send("{not json");
-      ws.send(JSON.stringify({ t: "hello", frame_ms: 16, agent: "x".repeat(4000) }));
-      ws.send(new Uint8Array([1, 2, 3]));
-      ws.send(JSON.stringify({ t: "on", id: 1, code: 99, on_ms: 0 }));
-      // Only the operator view may abort: on the subject's socket this is refused.
-      ws.send(JSON.stringify({ t: "control", action: "abort" }));
-      setTimeout(() => { ws.close(); done(); }, 200);
-    };
-    ws.onerror = () => done();
-  }));
+  const rogue = await page.evaluate(() => {
+    const attempt = (query) => new Promise((done) => {
+      const ws = new WebSocket(`ws://${location.host}/ws${query}`);
+      let closedBy = null;
+      ws.onopen = () => {
+        ws.send("{not json");
+        ws.send(JSON.stringify({ t: "hello", frame_ms: 16, agent: "x".repeat(4000) }));
+        ws.send(new Uint8Array([1, 2, 3]));
+        ws.send(JSON.stringify({ t: "on", id: 1, code: 99, on_ms: 0 }));
+        // Only the operator view may abort: on the subject's socket this is refused.
+        ws.send(JSON.stringify({ t: "control", action: "abort" }));
+      };
+      ws.onclose = (ev) => { closedBy = ev.code; done(closedBy); };
+      setTimeout(() => { ws.close(); done(closedBy); }, 1000);
+    });
+    // Without the key (refused at the door), then with the page's own key (a second subject
+    // view: closed by the server, 4409, unheard).
+    return Promise.all([attempt(""), attempt(location.search)]);
+  });
+  if (rogue[1] !== 4409) failures.push(`a second subject socket was not closed by the server: ${JSON.stringify(rogue)}`);
   const operator = await browser.newPage({ viewport: { width: 1280, height: 800 } });
   operator.on("pageerror", (e) => failures.push(`operator page error: ${e.message}`));
-  await operator.goto(url.replace(/\/?$/, "/") + "operator");
+  await operator.goto(operatorUrl);
   await page.waitForFunction((n) => window.oddballDiag.decisions.length >= n, want, { timeout: 60000 * want, polling: 200 });
   // Let the arm move after the last decision.
   await page.waitForTimeout(1500);

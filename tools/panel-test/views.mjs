@@ -8,15 +8,16 @@
 //
 // CHANNELS, a JSON object such as {"ch0":"ok","ch1":"flat or saturated"}: the state the
 // operator view must show for each channel after the first trial.
-// URL is the subject view (the session's `panel:` line); the operator view is URL + "operator".
+// URL is the subject view (the session's `panel:` line), OPERATOR_URL the operator view (its
+// `operator view:` line); each carries its view's key.
 // Chromium: $CHROMIUM or /usr/bin/chromium. Prints one JSON line of what it saw; exits 1 with
 // the reasons when a check fails. Also saves each view paused (-paused.png) and at the end
 // (-end.png) beside the two screenshots.
 import { chromium } from "playwright-core";
 
-const [url, subjectShot, operatorShot, channelsJson] = process.argv.slice(2);
-if (!url || !subjectShot || !operatorShot) {
-  console.error("usage: node views.mjs URL SUBJECT.png OPERATOR.png");
+const [url, operatorUrl, subjectShot, operatorShot, channelsJson] = process.argv.slice(2);
+if (!url || !operatorUrl || !subjectShot || !operatorShot) {
+  console.error("usage: node views.mjs URL OPERATOR_URL SUBJECT.png OPERATOR.png");
   process.exit(2);
 }
 const browser = await chromium.launch({
@@ -35,7 +36,7 @@ try {
     p.on("pageerror", (e) => failures.push(`${name} page error: ${e.message}`));
   }
   // The operator view first: the session must still wait for the subject view.
-  await operator.goto(url.replace(/\/?$/, "/") + "operator");
+  await operator.goto(operatorUrl);
   await operator.waitForFunction(() => window.oddballOperator.connected, null, { timeout: 10000 });
   await sleep(1500);
   out.started_without_subject = await operator.evaluate(() => window.oddballOperator.number);

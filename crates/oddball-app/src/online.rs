@@ -259,8 +259,8 @@ impl Online {
             let s = panel.stats();
             writeln!(
                 out,
-                "panel: {} connection(s), {} message(s) rejected",
-                s.connections, s.rejected
+                "panel: {} connection(s), {} message(s) rejected, {} request(s) refused at the door, {} other subject view(s) refused",
+                s.connections, s.rejected, s.refused, s.refused_subjects
             )?;
         }
         writeln!(out, "{summary_line}")?;

@@ -44,13 +44,9 @@ impl PanelSettings {
         }
         let panel = PanelServer::start(resolve(addr)?, self.allow_remote, config, clock)
             .map_err(AppError::Panel)?;
-        writeln!(out, "panel: http://{}/", panel.local_addr())?;
-        writeln!(
-            out,
-            "operator view: http://{}{}",
-            panel.local_addr(),
-            oddball_live::panel::protocol::OPERATOR_PAGE
-        )?;
+        // Each view's address carries its key: a page without it gets nothing.
+        writeln!(out, "panel: {}", panel.subject_url())?;
+        writeln!(out, "operator view: {}", panel.operator_url())?;
         if !panel.wait_for_page(Duration::from_secs_f64(self.wait_page)) {
             return Err(AppError::NoPage {
                 addr: panel.local_addr().to_string(),

@@ -15,8 +15,10 @@ const Oddball = {
    */
   connect(path, h) {
     let ws = null, ended = false;
+    // The view's key, from the address the session printed: without it the server refuses.
+    const key = encodeURIComponent(new URLSearchParams(location.search).get("key") || "");
     const open = () => {
-      ws = new WebSocket(`ws://${location.host}${path}`);
+      ws = new WebSocket(`ws://${location.host}${path}?key=${key}`);
       ws.onopen = () => h.open && h.open();
       ws.onmessage = (ev) => {
         const m = JSON.parse(ev.data);

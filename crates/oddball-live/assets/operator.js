@@ -142,8 +142,9 @@
       case "diag": $("diag").textContent = m.text; break;
       case "pages":
         O.subjectPages = m.subject;
-        $("pages").textContent = m.subject > 0 ? `subject view open (${m.subject})` : "no subject view open!";
-        $("pages").className = m.subject > 0 ? "q-ok" : "q-flat";
+        $("pages").textContent = (m.subject > 0 ? `subject view open (${m.subject})` : "no subject view open!") +
+          (m.refused_subjects > 0 ? ` — ALARM: ${m.refused_subjects} other subject view(s) refused (a stale tab or a stranger: only the first one stamps flashes)` : "");
+        $("pages").className = m.subject > 0 && !(m.refused_subjects > 0) ? "q-ok" : "q-flat";
         break;
       case "end":
         S.ended = m.summary; O.ended = true;

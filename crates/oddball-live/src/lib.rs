@@ -1,7 +1,9 @@
 //! Live operation of the oddball BCI: a session against a live EEG stream with a stimulus panel
 //! a person looks at, recorded to disk as it runs.
 //!
-//! * [`panel`]: the stimulus panel, a web page served by the binary, live over a WebSocket.
+//! * [`panel`]: the stimulus panel, a web page served by the binary, live over a WebSocket;
+//!   each view only for its session's pages (a key per view, `Host` and `Origin` checked).
+//! * [`listen`]: every listener, loopback only unless remote connections are allowed.
 //! * [`live`]: the live session's subject: a live EEG source, the panel, the marker stream and
 //!   the recording on one clock; the simulated subject as a live source.
 //! * [`clock`]: the session clock (ms) the panel, the sources and the recording share, and the
@@ -34,6 +36,7 @@
 
 pub mod clock;
 mod error;
+pub mod listen;
 pub mod live;
 #[cfg(feature = "lsl")]
 pub mod lsl;

@@ -42,8 +42,8 @@ use crate::decision::{
     complete_rounds, CalibrationProgress, CalibrationReport, Phase, SessionLog, ShownFlash,
     TrialOutcome, TrialRecord,
 };
-use crate::decoder::{AdaptationReport, DecoderParams, Start, UncalibratedParams};
 use crate::decoder::{Adaptation, OnlineDecoder, Unlabelled};
+use crate::decoder::{AdaptationReport, DecoderParams, Start, UncalibratedParams};
 use crate::fit::{fit_session_model_oof, Calibration};
 use crate::online::{Marker, OnlineEpocher};
 use crate::paradigm::FourBulbParams;

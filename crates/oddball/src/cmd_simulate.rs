@@ -15,7 +15,7 @@
 //!   t0 + i / sfreq + latency); markers that come later than that are counted and reported. The
 //!   marker stream is looked for in the background: background EEG flows until it appears.
 
-use std::net::{SocketAddr, TcpListener};
+use std::net::SocketAddr;
 
 use anyhow::{bail, Context, Result};
 #[cfg(feature = "lsl")]
@@ -29,10 +29,14 @@ use crate::args::{resolve, NicWire};
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("wire").required(true).args(["nic", "lsl"])))]
 pub struct SimulateArgs {
-    /// Serve NIC's TCP data stream on this address (loopback unless you say otherwise; port 0
+    /// Serve NIC's TCP data stream on this address (loopback unless --allow-remote; port 0
     /// picks a free port, printed on the first line).
     #[arg(long, value_name = "HOST:PORT")]
     pub nic: Option<String>,
+    /// Let --nic bind a non-loopback address (its data and panel ports are then reachable from
+    /// the network).
+    #[arg(long, requires = "nic")]
+    pub allow_remote: bool,
     /// Stream as a Lab Streaming Layer EEG outlet of this name, following the panel's marker
     /// stream (needs the `lsl` feature; the name is printed on the first line).
     #[arg(long, value_name = "NAME")]
@@ -122,13 +126,15 @@ fn run_lsl(args: &SimulateArgs, name: &str, preset: SubjectPreset) -> Result<()>
 fn run_nic(args: &SimulateArgs, nic: &str, preset: SubjectPreset) -> Result<()> {
     let format = args.wire.format()?;
     let addr = resolve(nic)?;
-    let data = TcpListener::bind(addr).with_context(|| format!("binding {addr}"))?;
+    let data = oddball_live::listen::bind(addr, args.allow_remote, "nic")
+        .with_context(|| format!("--nic {nic}"))?;
     let data_addr = data.local_addr()?;
     let panel_addr = SocketAddr::new(
         data_addr.ip(),
         args.panel_port.unwrap_or(data_addr.port().wrapping_add(1)),
     );
-    let panel = TcpListener::bind(panel_addr).with_context(|| format!("binding {panel_addr}"))?;
+    let panel = oddball_live::listen::bind(panel_addr, args.allow_remote, "panel-port")
+        .with_context(|| format!("the panel port {panel_addr}"))?;
     let subject = SubjectParams::preset(preset)
         .with_seed(args.seed)
         .build()

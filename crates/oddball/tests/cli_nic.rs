@@ -85,3 +85,14 @@ fn nothing_listening_is_a_clear_error() {
     assert!(err.contains("connect"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue #30: the NIC simulator's listeners are loopback only unless --allow-remote, as the
+/// panel's are.
+#[test]
+fn the_simulator_binds_loopback_unless_told_otherwise() {
+    let (ok, _, err) = common::oddball(&["simulate", "--nic", "0.0.0.0:0"]);
+    assert!(
+        !ok && err.contains("--nic 0.0.0.0:0") && err.contains("loopback"),
+        "{err}"
+    );
+}

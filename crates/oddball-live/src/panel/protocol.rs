@@ -188,6 +188,9 @@ pub enum ServerMsg {
     Pages {
         subject: usize,
         operator: usize,
+        /// Subject pages refused because one was already open (the first keeps the panel).
+        #[serde(default)]
+        refused_subjects: usize,
     },
     /// The session is over.
     End {

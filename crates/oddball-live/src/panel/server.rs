@@ -1,14 +1,23 @@
 //! The panel's HTTP/WebSocket server (axum on a one-worker tokio runtime, on its own thread):
 //! the subject view and the operator view, each page with its own socket.
+//!
+//! The panel belongs to its session: each view has its own secret key, in the addresses the
+//! session prints ([`PanelServer::subject_url`], [`PanelServer::operator_url`]); a page or a
+//! socket without its view's key gets nothing. Every request's `Host` must name the server
+//! (a loopback server answers only to loopback names, against DNS rebinding) and a socket's
+//! `Origin`, when a browser sends one, must be the panel itself (against cross-site
+//! WebSockets). One subject page at a time owns the flashes' stamps: a second one is refused,
+//! counted and announced to the operator view. A pause left by an operator view that closed
+//! ends once no operator has been connected for [`ORPHANED_PAUSE_S`].
 
-use std::net::{SocketAddr, TcpListener};
+use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, LazyLock, Mutex};
 use std::time::{Duration, Instant};
 
-use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::ws::{CloseFrame, Message, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
-use axum::http::header;
+use axum::http::{header, HeaderMap, StatusCode, Uri};
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
@@ -53,6 +62,12 @@ pub struct PanelStats {
     /// Client messages refused (malformed, oversized, binary), with the last reason.
     pub rejected: usize,
     pub last_rejection: Option<String>,
+    /// Requests refused at the door (no or a wrong key, a foreign `Host` or `Origin`), with the
+    /// last reason.
+    pub refused: usize,
+    pub last_refusal: Option<String>,
+    /// Subject pages refused because one was already open.
+    pub refused_subjects: usize,
     /// The page's refresh interval as it measured it, ms, and its user agent.
     pub frame_ms: Option<f64>,
     pub agent: Option<String>,
@@ -73,6 +88,98 @@ struct Shared {
     /// The operator's requests: hold before the next trial; stop the session.
     pause: AtomicBool,
     abort: AtomicBool,
+    /// Who may come in.
+    access: Access,
+    /// Whether a subject page owns the panel now.
+    subject_taken: AtomicBool,
+    /// Since when no operator view has been connected (`None`: one is).
+    operatorless_since: Mutex<Option<Instant>>,
+}
+
+/// A pause whose operator views have all been gone this long ends by itself, s.
+pub const ORPHANED_PAUSE_S: f64 = 120.0;
+
+/// The keys of the two views and the `Host` names the server answers to.
+#[derive(Debug)]
+struct Access {
+    subject_key: String,
+    operator_key: String,
+    /// `None`: any host (a server that allows remote pages; the keys still hold).
+    hosts: Option<Vec<String>>,
+}
+
+impl Access {
+    fn new(addr: SocketAddr, allow_remote: bool) -> Self {
+        let port = addr.port();
+        let hosts = (!allow_remote || addr.ip().is_loopback()).then(|| {
+            let mut h = vec![
+                addr.to_string(),
+                format!("localhost:{port}"),
+                format!("127.0.0.1:{port}"),
+                format!("[::1]:{port}"),
+            ];
+            h.dedup();
+            h
+        });
+        Self {
+            subject_key: secret(),
+            operator_key: secret(),
+            hosts,
+        }
+    }
+
+    /// Why a request for `role`'s view (`None`: a script, which needs no key) is refused, if it
+    /// is: its `Host`, its `Origin` (sockets only: `socket`), its key.
+    fn refusal(
+        &self,
+        headers: &HeaderMap,
+        uri: &Uri,
+        role: Option<Role>,
+        socket: bool,
+    ) -> Option<String> {
+        let host = headers
+            .get(header::HOST)
+            .and_then(|h| h.to_str().ok())
+            .unwrap_or("");
+        if let Some(hosts) = &self.hosts {
+            if !hosts.iter().any(|h| h.eq_ignore_ascii_case(host)) {
+                return Some(format!("Host {host:?} is not this panel"));
+            }
+        }
+        if socket {
+            if let Some(origin) = headers.get(header::ORIGIN) {
+                let origin = origin.to_str().unwrap_or("");
+                if !origin.eq_ignore_ascii_case(&format!("http://{host}")) {
+                    return Some(format!("a socket from Origin {origin:?}, not this panel"));
+                }
+            }
+        }
+        let want = match role? {
+            Role::Subject => &self.subject_key,
+            Role::Operator => &self.operator_key,
+        };
+        let given = uri
+            .query()
+            .unwrap_or("")
+            .split('&')
+            .find_map(|kv| kv.strip_prefix("key="))
+            .unwrap_or("");
+        (!constant_time_eq(given.as_bytes(), want.as_bytes()))
+            .then(|| format!("no or a wrong key for the {role:?} view"))
+    }
+}
+
+/// 128 random bits from the operating system, as hex.
+fn secret() -> String {
+    use rand::RngCore;
+    let mut bytes = [0u8; 16];
+    rand::rngs::OsRng.fill_bytes(&mut bytes);
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Equality that takes as long whatever the first differing byte.
+fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |d, (x, y)| d | (x ^ y)) == 0
 }
 
 #[derive(Debug, Default)]
@@ -113,19 +220,7 @@ impl PanelServer {
         config: PanelConfig,
         clock: Clock,
     ) -> Result<Self, LiveError> {
-        if !allow_remote && !addr.ip().is_loopback() {
-            return Err(LiveError::InvalidParameter {
-                name: "serve",
-                value: addr.to_string(),
-                reason: "not a loopback address: the panel would be reachable from the network \
-                         (allow it explicitly to do so)"
-                    .into(),
-            });
-        }
-        let listener = TcpListener::bind(addr).map_err(|e| LiveError::Bind {
-            addr: addr.to_string(),
-            reason: e.to_string(),
-        })?;
+        let listener = crate::listen::bind(addr, allow_remote, "serve")?;
         let addr = listener.local_addr().map_err(|e| LiveError::Bind {
             addr: addr.to_string(),
             reason: e.to_string(),
@@ -145,6 +240,9 @@ impl PanelServer {
             stats: Mutex::new(PanelStats::default()),
             pause: AtomicBool::new(false),
             abort: AtomicBool::new(false),
+            access: Access::new(addr, allow_remote),
+            subject_taken: AtomicBool::new(false),
+            operatorless_since: Mutex::new(Some(Instant::now())),
         });
         let (shutdown, shutdown_rx) = watch::channel(false);
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -201,6 +299,22 @@ impl PanelServer {
         self.addr
     }
 
+    /// The subject view's address, with its key: the page the person watches.
+    pub fn subject_url(&self) -> String {
+        format!(
+            "http://{}{SUBJECT_PAGE}?key={}",
+            self.addr, self.shared.access.subject_key
+        )
+    }
+
+    /// The operator view's address, with its key.
+    pub fn operator_url(&self) -> String {
+        format!(
+            "http://{}{OPERATOR_PAGE}?key={}",
+            self.addr, self.shared.access.operator_key
+        )
+    }
+
     pub fn clock(&self) -> Clock {
         self.shared.clock
     }
@@ -244,9 +358,19 @@ impl PanelServer {
         lock(&self.shared.stats).clone()
     }
 
-    /// Whether the operator asked to pause (and has not resumed since).
+    /// Whether the operator asked to pause (and has not resumed since). A pause whose operator
+    /// views have all been gone for [`ORPHANED_PAUSE_S`] ends here.
     pub fn pause_requested(&self) -> bool {
-        self.shared.pause.load(Ordering::SeqCst)
+        if !self.shared.pause.load(Ordering::SeqCst) {
+            return false;
+        }
+        let orphaned = lock(&self.shared.operatorless_since)
+            .is_some_and(|t| t.elapsed().as_secs_f64() >= ORPHANED_PAUSE_S);
+        if orphaned {
+            self.shared.pause.store(false, Ordering::SeqCst);
+            return false;
+        }
+        true
     }
 
     /// Whether the operator asked to abort the session.
@@ -284,8 +408,38 @@ impl Drop for PanelServer {
 
 type AppState = (Arc<Shared>, watch::Receiver<bool>);
 
-async fn index() -> Html<&'static str> {
-    Html(INDEX_HTML)
+/// A refused request, counted: 403 with a word of why (no session data).
+fn refuse(shared: &Shared, why: String) -> Response {
+    {
+        let mut s = lock(&shared.stats);
+        s.refused += 1;
+        s.last_refusal = Some(why.clone());
+    }
+    (
+        StatusCode::FORBIDDEN,
+        format!("refused: {why}; open the address the session printed\n"),
+    )
+        .into_response()
+}
+
+/// `body` if the request may have it (`role`: the view whose key it needs; `None`: a script).
+fn admitted(
+    (shared, _): &AppState,
+    headers: &HeaderMap,
+    uri: &Uri,
+    role: Option<Role>,
+    body: impl FnOnce() -> Response,
+) -> Response {
+    match shared.access.refusal(headers, uri, role, false) {
+        Some(why) => refuse(shared, why),
+        None => body(),
+    }
+}
+
+async fn index(State(state): State<AppState>, headers: HeaderMap, uri: Uri) -> Response {
+    admitted(&state, &headers, &uri, Some(Role::Subject), || {
+        Html(INDEX_HTML).into_response()
+    })
 }
 
 fn javascript(text: &'static str) -> Response {
@@ -296,16 +450,18 @@ fn javascript(text: &'static str) -> Response {
         .into_response()
 }
 
-async fn script() -> Response {
-    javascript(PANEL_JS)
+async fn script(State(state): State<AppState>, headers: HeaderMap, uri: Uri) -> Response {
+    admitted(&state, &headers, &uri, None, || javascript(PANEL_JS))
 }
 
-async fn operator() -> Html<&'static str> {
-    Html(OPERATOR_HTML)
+async fn operator(State(state): State<AppState>, headers: HeaderMap, uri: Uri) -> Response {
+    admitted(&state, &headers, &uri, Some(Role::Operator), || {
+        Html(OPERATOR_HTML).into_response()
+    })
 }
 
-async fn operator_script() -> Response {
-    javascript(OPERATOR_JS)
+async fn operator_script(State(state): State<AppState>, headers: HeaderMap, uri: Uri) -> Response {
+    admitted(&state, &headers, &uri, None, || javascript(OPERATOR_JS))
 }
 
 /// The shared script, headed by the socket paths of [`super::protocol`] (their one home).
@@ -316,23 +472,42 @@ static COMMON: LazyLock<String> = LazyLock::new(|| {
     )
 });
 
-async fn common_script() -> Response {
-    javascript(COMMON.as_str())
+async fn common_script(State(state): State<AppState>, headers: HeaderMap, uri: Uri) -> Response {
+    admitted(&state, &headers, &uri, None, || javascript(COMMON.as_str()))
 }
 
-async fn no_icon() -> axum::http::StatusCode {
-    axum::http::StatusCode::NO_CONTENT
+async fn no_icon() -> StatusCode {
+    StatusCode::NO_CONTENT
 }
 
-async fn subject_ws(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
-    upgrade(ws, state, Role::Subject)
+async fn subject_ws(
+    ws: WebSocketUpgrade,
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    uri: Uri,
+) -> Response {
+    upgrade(ws, state, Role::Subject, &headers, &uri)
 }
 
-async fn operator_ws(ws: WebSocketUpgrade, State(state): State<AppState>) -> Response {
-    upgrade(ws, state, Role::Operator)
+async fn operator_ws(
+    ws: WebSocketUpgrade,
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    uri: Uri,
+) -> Response {
+    upgrade(ws, state, Role::Operator, &headers, &uri)
 }
 
-fn upgrade(ws: WebSocketUpgrade, state: AppState, role: Role) -> Response {
+fn upgrade(
+    ws: WebSocketUpgrade,
+    state: AppState,
+    role: Role,
+    headers: &HeaderMap,
+    uri: &Uri,
+) -> Response {
+    if let Some(why) = state.0.access.refusal(headers, uri, Some(role), true) {
+        return refuse(&state.0, why);
+    }
     // Frames beyond 16 × the protocol's limit close the connection; anything between is
     // refused message by message.
     ws.max_message_size(16 * MAX_CLIENT_MESSAGE)
@@ -347,6 +522,7 @@ fn announce_pages(shared: &Shared) {
         ServerMsg::Pages {
             subject: s.connected,
             operator: s.operators,
+            refused_subjects: s.refused_subjects,
         }
     };
     let text: Arc<str> = serde_json::to_string(&msg)
@@ -357,6 +533,23 @@ fn announce_pages(shared: &Shared) {
 }
 
 async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role) {
+    // One subject page owns the flashes' stamps: a second one is closed at once, unheard.
+    if role == Role::Subject
+        && shared
+            .subject_taken
+            .compare_exchange(false, true, Ordering::SeqCst, Ordering::SeqCst)
+            .is_err()
+    {
+        lock(&shared.stats).refused_subjects += 1;
+        announce_pages(&shared);
+        let _ = socket
+            .send(Message::Close(Some(CloseFrame {
+                code: 4409,
+                reason: "another subject view has this panel".into(),
+            })))
+            .await;
+        return;
+    }
     {
         let mut s = lock(&shared.stats);
         match role {
@@ -367,6 +560,7 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             Role::Operator => {
                 s.operators += 1;
                 s.operator_connections += 1;
+                *lock(&shared.operatorless_since) = None;
             }
         }
     }
@@ -407,8 +601,14 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             Role::Subject => {
                 s.connected -= 1;
                 s.disconnects += 1;
+                shared.subject_taken.store(false, Ordering::SeqCst);
             }
-            Role::Operator => s.operators -= 1,
+            Role::Operator => {
+                s.operators -= 1;
+                if s.operators == 0 {
+                    *lock(&shared.operatorless_since) = Some(Instant::now());
+                }
+            }
         }
     }
     announce_pages(&shared);
