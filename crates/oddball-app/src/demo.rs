@@ -38,10 +38,11 @@ pub struct Demo {
 }
 
 /// What a demo leaves to say after its report: the calibration's fit time (wall clock, so never
-/// written to a file).
-#[derive(Debug, Clone, Copy)]
+/// written to a file), and why it stopped before its last command, if it did.
+#[derive(Debug, Clone)]
 pub struct DemoOutcome {
     pub fit_seconds: f64,
+    pub stopped: Option<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -179,7 +180,8 @@ impl Demo {
         )?
         .steps;
         said?;
-        if let Some(end) = oddball_live::stop::reason() {
+        let stopped = oddball_live::stop::reason();
+        if let Some(end) = &stopped {
             // Stopped early: what was decided and recorded is kept and written below.
             writeln!(out, "stopped after {} decision(s): {end}", steps.len())?;
             note = Some(match note {
@@ -273,6 +275,9 @@ impl Demo {
         }
         writeln!(out, "{}", time_text(&time, &paradigm))?;
         writeln!(out, "report in {}", self.out.display())?;
-        Ok(DemoOutcome { fit_seconds })
+        Ok(DemoOutcome {
+            fit_seconds,
+            stopped,
+        })
     }
 }

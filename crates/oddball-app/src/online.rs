@@ -45,8 +45,11 @@ pub struct Online {
 }
 
 impl Online {
-    /// Runs the session, saying on `out` what it does, decision by decision.
-    pub fn run(&self, out: &mut dyn Write) -> Result<()> {
+    /// Runs the session, saying on `out` what it does, decision by decision. Returns why it
+    /// stopped before its last command, if it did (a signal, the operator's abort, the source
+    /// lost, a replayed recording's end). A session that fails after its recording was created
+    /// leaves no empty recording behind.
+    pub fn run(&self, out: &mut dyn Write) -> Result<Option<String>> {
         let settings = &self.settings;
         let (_, rule) = settings.rules()?;
         settings.check_commands(&self.commands)?;
@@ -79,7 +82,14 @@ impl Online {
         if let Some(c) = change {
             writeln!(out, "{c}")?;
         }
-        self.run_with(&plan, source, markers, clock, out)
+        report::create_dir(&self.out)?;
+        let record_path = free_recording_path(&self.out);
+        let ran = self.run_with(&plan, source, markers, clock, &record_path, out);
+        if ran.is_err() && oddball_io::read(&record_path).is_ok_and(|r| r.raw.n_times() == 0) {
+            // A session that failed before any EEG leaves no empty recording.
+            let _ = std::fs::remove_file(&record_path);
+        }
+        ran
     }
 
     fn run_with(
@@ -88,22 +98,21 @@ impl Online {
         source: AnySource,
         markers: Option<Box<dyn MarkerSink>>,
         clock: Clock,
+        record_path: &std::path::Path,
         out: &mut dyn Write,
-    ) -> Result<()> {
+    ) -> Result<Option<String>> {
         let settings = &self.settings;
         let commands = &self.commands;
-        report::create_dir(&self.out)?;
         let paradigm = plan.params.paradigm;
         let arm = settings.arm()?;
-        let record_path = free_recording_path(&self.out);
         let recorder = Recorder::create(
-            &record_path,
+            record_path,
             source.ch_names(),
             source.sfreq(),
             &self.source.source.to_string(),
         )
         .map_err(|source| AppError::CreateRecording {
-            path: record_path.clone(),
+            path: record_path.to_path_buf(),
             source,
         })?;
         let uncalibrated = settings.calibration == CalibrationSpec::None;
@@ -246,9 +255,9 @@ impl Online {
             &steps,
             &subject.timing,
             &subject.decision_latency_ms,
-            &record_path,
+            record_path,
             replay,
-            ended,
+            ended.clone(),
         );
         let timing = subject.timing.clone();
         let latency = subject.decision_latency_ms.clone();
@@ -279,7 +288,7 @@ impl Online {
             .into_subject()
             .finish()
             .map_err(|source| AppError::CloseRecording {
-                path: record_path.clone(),
+                path: record_path.to_path_buf(),
                 source,
             })?;
         report::write_json(&self.out.join("summary.json"), &summary)?;
@@ -287,8 +296,8 @@ impl Online {
             out,
             "recording: {} ({} samples)",
             record_path.display(),
-            recording_samples(&record_path)
+            recording_samples(record_path)
         )?;
-        Ok(())
+        Ok(ended)
     }
 }

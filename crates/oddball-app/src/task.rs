@@ -39,8 +39,9 @@ struct TaskView {
 }
 
 impl TaskRun {
-    /// Tracks targets; `params` are checked against the arm before any EEG work.
-    pub fn track(&self, params: &TrackParams, out: &mut dyn Write) -> Result<()> {
+    /// Tracks targets; `params` are checked against the arm before any EEG work. Returns why the
+    /// session stopped early, if it did (a signal, the operator's abort, the source lost).
+    pub fn track(&self, params: &TrackParams, out: &mut dyn Write) -> Result<Option<String>> {
         params
             .check(&self.settings.arm()?)
             .map_err(SettingError::Track)?;
@@ -74,8 +75,8 @@ impl TaskRun {
     }
 
     /// Draws `text` in the stroke font; the text must fit the board at this step, checked
-    /// before any EEG work.
-    pub fn draw(&self, text: &str, out: &mut dyn Write) -> Result<()> {
+    /// before any EEG work. Returns why the session stopped early, if it did.
+    pub fn draw(&self, text: &str, out: &mut dyn Write) -> Result<Option<String>> {
         self.settings.rules()?;
         check_drawing(&self.settings.arm()?, text).map_err(|source| SettingError::Drawing {
             text: text.to_string(),
@@ -195,7 +196,7 @@ impl TaskRun {
         task: &'static str,
         r: &T,
         out: &mut dyn Write,
-    ) -> Result<()> {
+    ) -> Result<Option<String>> {
         let summary = prep.task_summary(task, self.settings.pipeline.name(), self.settings.seed, r);
         report::write_json(&self.out.join("summary.json"), &summary)?;
         report::save_session(
@@ -204,6 +205,6 @@ impl TaskRun {
             &format!("task over: report in {}", self.out.display()),
         )?;
         writeln!(out, "report in {}", self.out.display())?;
-        Ok(())
+        Ok(oddball_live::stop::reason())
     }
 }

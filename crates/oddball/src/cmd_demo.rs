@@ -34,7 +34,8 @@ pub struct DemoArgs {
     pub out: PathBuf,
 }
 
-pub fn run(args: &DemoArgs) -> Result<()> {
+/// Runs the demo; `Some(reason)` when it stopped before its last command.
+pub fn run(args: &DemoArgs) -> Result<Option<String>> {
     let wall = Instant::now();
     let demo = Demo {
         settings: args.session.settings(),
@@ -51,5 +52,5 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         wall.elapsed().as_secs_f64(),
         done.fit_seconds,
     );
-    Ok(())
+    Ok(done.stopped)
 }

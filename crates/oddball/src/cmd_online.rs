@@ -53,7 +53,8 @@ pub struct OnlineArgs {
     pub out: PathBuf,
 }
 
-pub fn run(args: &OnlineArgs) -> Result<()> {
+/// Runs the session; `Some(reason)` when it stopped before its last command.
+pub fn run(args: &OnlineArgs) -> Result<Option<String>> {
     let settings = args.session.settings();
     let error = |e| app_error(e, &args.session);
     settings.rules().map_err(|e| error(e.into()))?;

@@ -68,7 +68,8 @@ pub struct DrawArgs {
     pub out: std::path::PathBuf,
 }
 
-pub fn run(args: &TaskArgs) -> Result<()> {
+/// Runs the task; `Some(reason)` when it stopped before its end.
+pub fn run(args: &TaskArgs) -> Result<Option<String>> {
     let wall = Instant::now();
     let mut out = std::io::stdout();
     let (session, done) = match &args.task {
@@ -82,9 +83,9 @@ pub fn run(args: &TaskArgs) -> Result<()> {
             (&a.session, run.draw(&a.text, &mut out))
         }
     };
-    done.map_err(|e| app_error(e, session))?;
+    let stopped = done.map_err(|e| app_error(e, session))?;
     eprintln!("wall time {:.2} s", wall.elapsed().as_secs_f64());
-    Ok(())
+    Ok(stopped)
 }
 
 fn task_run(

@@ -2,8 +2,11 @@
 //!
 //! Subcommands live in `cmd_*.rs`; errors are printed as a chain (`error: …: caused by …`) and the
 //! process exits with status 1 (2 for command-line usage errors, which clap reports itself). A
-//! reader that closes standard output early (`oddball inspect FILE | head -1`) ends the program
-//! quietly with status 0, as in other command-line tools.
+//! session (`demo`, `task`, `online`) that stopped before its end — a signal, the operator's
+//! abort, the amplifier lost, a replayed recording's end — keeps and writes what it has and
+//! exits with status 3 ([`STOPPED`]); 0 means it ran to its end. A second signal ends the process
+//! at once (130). A reader that closes standard output early (`oddball inspect FILE | head -1`)
+//! ends the program quietly with status 0, as in other command-line tools.
 
 // The doc comments of the clap arguments are `--help` text (`[default: <out>/arm.png]`), not
 // rustdoc markup.
@@ -133,6 +136,9 @@ fn stop_on_signals() {
     }
 }
 
+/// The exit status of a session that stopped before its end, what it had kept and written.
+const STOPPED: u8 = 3;
+
 fn main() -> ExitCode {
     exit_quietly_on_broken_pipe();
     let cli = Cli::parse();
@@ -142,19 +148,21 @@ fn main() -> ExitCode {
     ) {
         stop_on_signals();
     }
+    let done = |r: anyhow::Result<()>| r.map(|()| None);
     let result = match cli.command {
         Command::Demo(args) => cmd_demo::run(&args),
         Command::Task(args) => cmd_task::run(&args),
         Command::Online(args) => cmd_online::run(&args),
-        Command::Simulate(args) => cmd_simulate::run(&args),
-        Command::Inspect(args) => cmd_inspect::run(&args),
-        Command::Train(args) => cmd_decode::run_train(&args),
-        Command::Evaluate(args) => cmd_decode::run_evaluate(&args),
-        Command::Benchmark(args) => cmd_benchmark::run(&args),
-        Command::Arm(args) => cmd_arm::run(&args),
+        Command::Simulate(args) => done(cmd_simulate::run(&args)),
+        Command::Inspect(args) => done(cmd_inspect::run(&args)),
+        Command::Train(args) => done(cmd_decode::run_train(&args)),
+        Command::Evaluate(args) => done(cmd_decode::run_evaluate(&args)),
+        Command::Benchmark(args) => done(cmd_benchmark::run(&args)),
+        Command::Arm(args) => done(cmd_arm::run(&args)),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(None) => ExitCode::SUCCESS,
+        Ok(Some(_stopped)) => ExitCode::from(STOPPED),
         Err(err) if is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("oddball: error: {err}");

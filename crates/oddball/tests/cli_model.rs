@@ -288,6 +288,23 @@ fn a_session_picks_a_models_channels_by_name_and_a_montage_renames_them() {
         err.contains("no channel named [\"A1\"") && err.contains("--montage"),
         "{err}"
     );
+    // Issue #30: an online session that fails to start leaves no empty recording behind.
+    let d = dir.join("d");
+    let (ok, _, err) = common::oddball(&[
+        "online",
+        "--model",
+        m8.to_str().unwrap(),
+        "--fast",
+        "--source",
+        &format!("replay:{}", session.display()),
+        "--out",
+        d.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("no channel named"), "{err}");
+    assert!(
+        !d.join("session.xdf").exists(),
+        "an empty recording was left"
+    );
     let out = common::oddball_ok(&[
         "demo",
         "--model",
