@@ -120,6 +120,25 @@ impl ScoreModel {
                 reason: "a finite spread > 0".into(),
             });
         }
+        // Finite but absurd statistics (means of 1e308, a spread of 1e-320) overflow the
+        // log-likelihood ratio, and the posterior becomes NaN: the ratio of every score within
+        // ten spreads of either mean, summed over the most rounds a decision may take, must stay
+        // finite.
+        let d = self.mean_target - self.mean_nontarget;
+        let slope = d / (self.std * self.std);
+        let reach = slope.abs() * (0.5 * d.abs() + 10.0 * self.std) * MAX_ROUNDS as f64;
+        if !reach.is_finite() {
+            return Err(DecodeError::InvalidParameter {
+                name: "std",
+                value: format!(
+                    "{} (means {} and {})",
+                    self.std, self.mean_target, self.mean_nontarget
+                ),
+                reason: "statistics that give finite posteriors: these overflow the \
+                         log-likelihood ratio"
+                    .into(),
+            });
+        }
         Ok(())
     }
 
@@ -278,8 +297,21 @@ impl DecisionRule {
         }
     }
 
-    /// What to do after `rounds_done` complete rounds with the summed evidence per stimulus.
+    /// What to do after `rounds_done` complete rounds with the summed evidence per stimulus. A
+    /// posterior that is not finite (infinite or NaN evidence) never chooses: the rule abstains
+    /// where it would have chosen, so NaN never moves the arm.
     pub fn check(&self, rounds_done: usize, evidence: &[f64]) -> Verdict {
+        match self.check_finite(rounds_done, evidence) {
+            Verdict::Choose { posterior, .. }
+                if !(posterior.p.iter().all(|p| p.is_finite()) && posterior.p_none.is_finite()) =>
+            {
+                Verdict::Abstain { posterior }
+            }
+            v => v,
+        }
+    }
+
+    fn check_finite(&self, rounds_done: usize, evidence: &[f64]) -> Verdict {
         let posterior = Posterior::from_evidence(evidence, self.p_no_control());
         let (best, p) = posterior.best();
         match *self {
@@ -380,6 +412,52 @@ impl DecisionModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue #30: finite but absurd statistics (the probe's model: `mean_target` 1e308, `std`
+    /// 1e-320) gave NaN posteriors, and every decision moved the arm "up". They are refused; a
+    /// posterior that is not finite anyway abstains instead of choosing the first bulb.
+    #[test]
+    fn absurd_statistics_are_refused_and_a_nan_posterior_abstains() {
+        let absurd = ScoreModel {
+            mean_target: 1e308,
+            mean_nontarget: 0.0,
+            std: 1e-320,
+        };
+        let e = absurd.validate().unwrap_err();
+        assert!(e.to_string().contains("finite posteriors"), "{e}");
+        let tiny = ScoreModel {
+            mean_target: 1.0,
+            mean_nontarget: 0.0,
+            std: 1e-160,
+        };
+        assert!(tiny.validate().is_err());
+        let fine = ScoreModel {
+            mean_target: 1.5,
+            mean_nontarget: -0.3,
+            std: 1.0,
+        };
+        fine.validate().unwrap();
+        for rule in [DecisionRule::Fixed { rounds: 1 }, DecisionRule::dynamic(1)] {
+            for evidence in [
+                [f64::NAN, 0.0, 0.0, 0.0],
+                [f64::INFINITY, f64::INFINITY, 0.0, 0.0],
+                [f64::INFINITY, 0.0, 0.0, 0.0],
+            ] {
+                let v = rule.check(1, &evidence);
+                assert!(
+                    matches!(v, Verdict::Abstain { .. } | Verdict::Choose { .. }),
+                    "{v:?}"
+                );
+                if let Verdict::Choose { posterior, .. } = &v {
+                    assert!(posterior.p.iter().all(|p| p.is_finite()), "{v:?}");
+                }
+            }
+            assert!(matches!(
+                rule.check(1, &[f64::NAN, 0.0, 0.0, 0.0]),
+                Verdict::Abstain { .. }
+            ));
+        }
+    }
 
     #[test]
     fn no_scored_epoch_abstains_under_any_rule() {
