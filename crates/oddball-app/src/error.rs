@@ -57,6 +57,8 @@ pub enum SettingError {
     Subject(#[source] SessionError),
     #[error("opening the source: {0}")]
     SourceOptions(#[source] LiveError),
+    #[error("{0}")]
+    ModelFile(#[source] Box<IoError>),
     #[error("reading {}", path.display())]
     ReadModel {
         path: PathBuf,

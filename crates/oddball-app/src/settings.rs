@@ -144,6 +144,7 @@ pub struct SessionSettings {
 
 /// Reads a saved model.
 pub fn load_model(path: &Path) -> Result<Model, SettingError> {
+    oddball_io::check_file(path).map_err(|e| SettingError::ModelFile(Box::new(e)))?;
     let text = std::fs::read_to_string(path).map_err(|source| SettingError::ReadModel {
         path: path.to_path_buf(),
         source,

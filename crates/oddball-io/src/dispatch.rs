@@ -13,8 +13,10 @@ use crate::{IoError, Recording};
 /// The extensions [`read`] dispatches on (any case), as `IoError::UnknownFormat` lists them.
 pub const RECORDING_EXTENSIONS: [&str; 7] = ["dat", "csv", "edf", "bdf", "easy", "xdf", "mat"];
 
-/// Refuses, before any reading, a path that does not exist or is a directory (naming the
-/// recordings inside it).
+/// Refuses, before any reading, a path that does not exist, is a directory (naming the
+/// recordings inside it), or is not a regular file (a device such as `/dev/zero`, a pipe, a
+/// socket, or a link to one: reading it could cost without end). Every path oddball reads
+/// passes here.
 pub fn check_file(path: &Path) -> Result<(), IoError> {
     let meta = std::fs::metadata(path).map_err(|source| match source.kind() {
         std::io::ErrorKind::NotFound => IoError::NotFound {
@@ -48,6 +50,11 @@ pub fn check_file(path: &Path) -> Result<(), IoError> {
         return Err(IoError::IsDirectory {
             path: path.to_path_buf(),
             recordings,
+        });
+    }
+    if !meta.is_file() {
+        return Err(IoError::NotRegular {
+            path: path.to_path_buf(),
         });
     }
     Ok(())

@@ -90,6 +90,11 @@ pub enum IoError {
     #[error("{path}: no such file")]
     NotFound { path: PathBuf },
 
+    /// The path is a device, a pipe or a socket (or a link to one): its content has no end to
+    /// bound what reading it costs, so it is refused.
+    #[error("{path}: not a regular file (a device, pipe or socket): refused")]
+    NotRegular { path: PathBuf },
+
     /// A sample a writer was asked to store is not finite or does not fit the file's number type.
     #[error("{path}: channel {channel:?} (index {channel_index}), sample {sample}: cannot write {value} µV: {reason}")]
     UnwritableSample {
@@ -188,6 +193,7 @@ impl IoError {
             | IoError::UnknownFormat { path, .. }
             | IoError::IsDirectory { path, .. }
             | IoError::NotFound { path }
+            | IoError::NotRegular { path }
             | IoError::UnwritableSample { path, .. }
             | IoError::InvalidState { path, .. }
             | IoError::InvalidParameterLine { path, .. }
@@ -231,8 +237,10 @@ pub enum StateProblem {
     Duplicate { first: usize, second: usize },
 }
 
-/// Reads a whole file, mapping the OS error to [`IoError::Io`].
+/// Reads a whole regular file ([`crate::check_file`] first: devices and pipes refused), mapping
+/// the OS error to [`IoError::Io`].
 pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, IoError> {
+    crate::check_file(path)?;
     std::fs::read(path).map_err(|source| IoError::Io {
         path: path.to_path_buf(),
         action: "read",

@@ -166,6 +166,9 @@ pub struct Manifest {
 /// A manifest that cannot be used, with the file and the field at fault.
 #[derive(Debug, Error)]
 pub enum ManifestError {
+    /// The manifest's path is not a readable regular file (missing, a folder, a device).
+    #[error(transparent)]
+    File(Box<crate::IoError>),
     #[error("{path}: cannot read the manifest: {source}")]
     Read {
         path: PathBuf,
@@ -205,6 +208,7 @@ impl Manifest {
         root: Option<&Path>,
     ) -> Result<Self, ManifestError> {
         let path = path.as_ref();
+        crate::check_file(path).map_err(|e| ManifestError::File(Box::new(e)))?;
         let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
             path: path.to_path_buf(),
             source,

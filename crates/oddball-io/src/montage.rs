@@ -11,6 +11,7 @@ use crate::IoError;
 /// The channel labels of an EEGLAB `.loc` file, in file order, trailing dots removed.
 pub fn read_montage(path: impl AsRef<Path>) -> Result<Vec<String>, IoError> {
     let path = path.as_ref();
+    crate::check_file(path)?;
     let text = std::fs::read_to_string(path).map_err(|source| IoError::Io {
         path: path.to_path_buf(),
         action: "read",

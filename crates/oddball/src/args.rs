@@ -415,7 +415,10 @@ fn setting_error(e: SettingError) -> anyhow::Error {
             anyhow::Error::new(e).context(format!("{addr}: expected HOST:PORT"))
         }
         S::Address { addr, source: None } => anyhow!("{addr}: no address"),
-        e @ (S::ReadModel { .. } | S::LoadModel { .. } | S::ReplayedAndCalibrated { .. }) => {
+        e @ (S::ModelFile(_)
+        | S::ReadModel { .. }
+        | S::LoadModel { .. }
+        | S::ReplayedAndCalibrated { .. }) => {
             anyhow::Error::new(e)
         }
     }

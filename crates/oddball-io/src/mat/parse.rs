@@ -287,6 +287,7 @@ pub(crate) fn parse(b: &[u8], path: &Path) -> Result<MatFile, IoError> {
     };
     let mut variables = Vec::new();
     let mut at = HEADER_LEN;
+    let mut inflated = 0u64;
     while at < end {
         let what = match peek_name(&buf, at) {
             Some(name) => format!("variable {} ({name:?})", variables.len() + 1),
@@ -305,7 +306,9 @@ pub(crate) fn parse(b: &[u8], path: &Path) -> Result<MatFile, IoError> {
                 }
             }
             MI_COMPRESSED => {
-                let inner = inflate(&buf, &e, &what)?;
+                let budget = inflate_budget(buf.file_len).saturating_sub(inflated);
+                let inner = inflate(&buf, &e, &what, budget)?;
+                inflated += inner.len() as u64;
                 let ibuf = Buf {
                     bytes: &inner,
                     big_endian: buf.big_endian,
@@ -444,9 +447,23 @@ fn parse_header(b: &[u8], path: &Path) -> Result<MatHeader, IoError> {
     })
 }
 
+/// What all the compressed variables of one file may decompress to together: this allowance
+/// plus [`INFLATE_RATIO`] bytes per byte of the file. EEG compresses a few times at most; a
+/// file that inflates further is a zip bomb (the probe's: 522 KB that took `inspect` to 4.6 GB),
+/// refused before anything is inflated.
+pub const INFLATE_ALLOWANCE: u64 = 16 << 20;
+/// See [`INFLATE_ALLOWANCE`].
+pub const INFLATE_RATIO: u64 = 40;
+
+/// What a file of `file_len` bytes may decompress to in all (see [`INFLATE_ALLOWANCE`]).
+pub fn inflate_budget(file_len: u64) -> u64 {
+    INFLATE_ALLOWANCE.saturating_add(INFLATE_RATIO.saturating_mul(file_len))
+}
+
 /// Decompresses a `miCOMPRESSED` element: at most as many bytes as the `miMATRIX` tag at the
-/// start of the stream announces (plus its tag), and never more than the stream holds.
-fn inflate(buf: &Buf<'_>, e: &Element, what: &str) -> Result<Vec<u8>, IoError> {
+/// start of the stream announces (plus its tag), never more than the stream holds, and refused
+/// before inflating when that is more than the file's remaining budget (`budget` bytes).
+fn inflate(buf: &Buf<'_>, e: &Element, what: &str, budget: u64) -> Result<Vec<u8>, IoError> {
     let err = |msg: String| {
         buf.invalid(
             e.tag_at,
@@ -468,6 +485,19 @@ fn inflate(buf: &Buf<'_>, e: &Element, what: &str) -> Result<Vec<u8>, IoError> {
         }
     };
     let declared = u64::from(word(&tag[4..8]));
+    if declared.saturating_add(8) > budget {
+        return Err(buf.invalid(
+            e.tag_at,
+            &format!("{what}: decompressed size"),
+            &format!(
+                "at most {budget} bytes left of what the file's {} bytes may decompress to \
+                 ({} MiB + {INFLATE_RATIO} × its size, for all its variables)",
+                buf.file_len,
+                INFLATE_ALLOWANCE >> 20
+            ),
+            format!("{declared} bytes: a zip bomb, not a recording"),
+        ));
+    }
     let mut out = tag.to_vec();
     dec.take(declared)
         .read_to_end(&mut out)
