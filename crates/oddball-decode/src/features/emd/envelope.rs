@@ -2,7 +2,18 @@
 //! `CubicSpline` (tridiagonal solve as LAPACK's `dgtsv`) and PyEMD's three-knot spline.
 
 use super::extrema::Extrema;
-use super::{degenerate, Result};
+use crate::DecodeError;
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+/// The error of a signal whose envelopes cannot be built.
+fn degenerate(reason: &str) -> DecodeError {
+    DecodeError::InvalidParameter {
+        name: "signal",
+        value: "EMD input".into(),
+        reason: reason.into(),
+    }
+}
 
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Mirror {
