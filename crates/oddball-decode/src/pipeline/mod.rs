@@ -80,11 +80,6 @@ impl From<SingleParams> for PipelineParams {
 }
 
 impl PipelineParams {
-    /// The [`Preset`] named `name` for epochs sampled at `sfreq` Hz.
-    pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
-        name.parse::<Preset>()?.params(sfreq)
-    }
-
     /// The name for reports.
     pub fn name(&self) -> &str {
         &self.main.name
