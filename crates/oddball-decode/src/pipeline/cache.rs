@@ -6,7 +6,8 @@ use std::sync::Arc;
 
 use ndarray::Array1;
 
-use super::{check_labels, Front, Neck, Necked, Pipeline, PipelineParams, SingleParams};
+use super::single::{check_labels, Front, Neck, Necked, SingleParams};
+use super::{Pipeline, PipelineParams};
 use crate::features::Features;
 use crate::traits::FeatureData;
 use crate::DecodeError;
