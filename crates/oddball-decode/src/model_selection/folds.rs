@@ -4,7 +4,7 @@
 //! `random_state` ([`stratified_folds_shuffled`], the SVM's probability calibration); and each
 //! fold's two parts ([`Split`], from [`Folds::splits`]).
 
-use crate::features::scaler::check_labels;
+use crate::linalg::check_labels;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;

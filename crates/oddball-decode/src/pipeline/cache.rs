@@ -6,9 +6,10 @@ use std::sync::Arc;
 
 use ndarray::Array1;
 
-use super::single::{check_labels, Front, Neck, Necked, SingleParams};
+use super::single::{Front, Neck, Necked, SingleParams};
 use super::{Pipeline, PipelineParams};
 use crate::features::Features;
+use crate::linalg::check_labels;
 use crate::traits::FeatureData;
 use crate::DecodeError;
 

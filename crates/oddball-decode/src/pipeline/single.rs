@@ -10,6 +10,7 @@ use crate::features::channel_select::{ChannelSelection, ChannelSelectionParams};
 use crate::features::pca::{Pca, PcaParams};
 use crate::features::scaler::{StandardScaler, StandardScalerParams};
 use crate::features::{FeatureParams, Features};
+use crate::linalg::check_labels;
 use crate::traits::{FeatureData, FeatureView};
 use crate::DecodeError;
 
@@ -302,24 +303,6 @@ pub(crate) struct Necked {
     pub(crate) xte: FeatureData,
     pub(crate) fit_s: f64,
     pub(crate) transform_s: f64,
-}
-
-/// The checks [`SingleParams::fit`] makes before fitting: one label per epoch, both classes.
-pub(super) fn check_labels(n_epochs: usize, y: &[bool]) -> Result<()> {
-    if y.len() != n_epochs {
-        return Err(DecodeError::LabelCount {
-            n_samples: n_epochs,
-            n_labels: y.len(),
-        });
-    }
-    let n_targets = y.iter().filter(|&&t| t).count();
-    if n_targets == 0 || n_targets == n_epochs {
-        return Err(DecodeError::NeedBothClasses {
-            n_targets,
-            n_nontargets: n_epochs - n_targets,
-        });
-    }
-    Ok(())
 }
 
 /// scikit-learn's `gamma='scale'` of the features `x`: `1 / (n_features · Var(X))` (1 when the
