@@ -191,12 +191,8 @@ impl DwtFeatures {
     pub fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
         let (_, n_ch, n_t) = epochs.dim();
         let mut ex = self.extractor(n_t)?;
-        two_block_rows(
-            epochs,
-            self.n_features(n_ch, n_t),
-            n_ch * self.n_coefficients(n_t),
-            |epoch, approx, detail| ex.epoch(epoch, approx, detail),
-        )
+        let (width, split) = (self.n_features(n_ch, n_t), n_ch * self.n_coefficients(n_t));
+        two_block_rows(epochs, width, split, |epoch, a, b| ex.epoch(epoch, a, b))
     }
 }
 
