@@ -407,7 +407,7 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
         )
     };
     while let Some((line_no, text)) =
-        next_line(&mut lines, path, byte_column, line_end_required, &truncated)?
+        next_line(&mut lines, path, byte_column, line_end_required, truncated)?
     {
         let mut n_cells = 0usize;
         for (j, cell) in text.split(options.delimiter as char).enumerate() {

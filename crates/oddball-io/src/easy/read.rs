@@ -293,7 +293,7 @@ pub fn parse_easy(
         )
     };
     while let Some((line_no, text)) =
-        next_line(&mut lines, path, cell_column, line_end_required, &truncated)?
+        next_line(&mut lines, path, cell_column, line_end_required, truncated)?
     {
         let text = text.trim_end();
         last_line = line_no;
