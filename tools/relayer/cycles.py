@@ -20,7 +20,9 @@ lives), and the re-exporting file itself gets an edge to the file it re-exports 
 child::X;`, `pub use child::*;`). Importing a module by name alone (`use crate::a;`) is no edge;
 using it (`a::f()`) is. `#[cfg(test)]` items (e.g. `mod tests { .. }`, `mod tests;`) and
 `tests/` folders are ignored; comments and string literals are skipped. Paths into other
-crates are not edges.
+crates are not edges. A `mod NAME` written in a macro invocation (e.g. oddball-decode's
+`registry! { Lda(..), mod lda, ..; }`, which expands to `pub mod lda;`) declares the module
+`NAME` of the file beside it, as `mod NAME;` would.
 
 It also prints, per crate, the files longer than `--max-lines` (1000) lines before their first
 `#[cfg(test)]` line.
@@ -150,6 +152,31 @@ def attribute(toks, i):
     return " ".join(toks[j + 1:k]), k + 1
 
 
+def macro_bodies(toks):
+    """For each token, whether it lies inside the brackets of a macro invocation `name!(..)`,
+    `name![..]` or `name! {..}` (not a `macro_rules!` definition)."""
+    inside = [False] * len(toks)
+    i = 0
+    while i + 2 < len(toks):
+        if (is_ident(toks[i]) and toks[i] != "macro_rules" and toks[i + 1] == "!"
+                and toks[i + 2] in OPEN):
+            depth, k = 0, i + 2
+            while k < len(toks):
+                if toks[k] in OPEN:
+                    depth += 1
+                elif toks[k] in CLOSE:
+                    depth -= 1
+                    if depth == 0:
+                        break
+                k += 1
+            for j in range(i + 3, k):
+                inside[j] = True
+            i = k + 1
+            continue
+        i += 1
+    return inside
+
+
 def is_test_cfg(attr):
     return bool(re.match(r"cfg \( (all \( )?test\b", attr))
 
@@ -214,6 +241,7 @@ def parse_file(crate, file, modpath, occurrences, used):
     mod = crate.setdefault(modpath, Module(modpath, file))
     mod.file = file
     used_here = used.setdefault(file, set())
+    in_macro = macro_bodies(toks)
     stack = [(modpath, None)]  # (module path, brace depth at which its inline block closes)
     depth = 0
     pending_attrs = []
@@ -243,7 +271,7 @@ def parse_file(crate, file, modpath, occurrences, used):
                 stack.pop()
         elif t == "mod" and i + 2 < len(toks) and is_ident(toks[i + 1]) and (i == 0 or toks[i - 1] != "::"):
             name = toks[i + 1]
-            if toks[i + 2] == ";":
+            if toks[i + 2] == ";" or (in_macro[i] and toks[i + 2] != "{"):
                 child_path = None
                 for a in attrs:
                     m = re.match(r'path = "', a)

@@ -1,6 +1,7 @@
 //! Unfitted settings: the TOML-configurable description of the arm, board, controller and
 //! simulation. [`ArmConfig::build`] validates them into the runtime types ([`ArmModel`],
 //! [`Board`], [`TaskSpaceController`], [`SimSettings`]); nothing at run time reads these structs.
+//! The links' sections are [`LinkParams`] as the model takes them, checked when it is built.
 //!
 //! Every section is optional in TOML and missing sections take the defaults below (a desk-sized
 //! arm, shoulder at the origin, drawing on a 30 cm × 30 cm board to its right). The physical
@@ -36,29 +37,11 @@ use crate::reference::TransitionKind;
 use crate::settings::{ControlUpdate, SimSettings};
 use crate::workspace::{Board, Workspace};
 
-/// One link and its proximal joint.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LinkConfig {
-    /// Joint-to-joint length (m).
-    pub length_m: f64,
-    /// Mass (kg).
-    pub mass_kg: f64,
-    /// Centre of mass distance from the proximal joint along the link (m).
-    pub com_m: f64,
-    /// Inertia about the centre of mass (kg·m²).
-    pub inertia_kg_m2: f64,
-    /// Joint viscous friction (N·m·s/rad).
-    pub friction_n_m_s_per_rad: f64,
-    /// Actuator torque limit (N·m), symmetric.
-    pub torque_limit_n_m: f64,
-    /// Lower joint limit (rad).
-    pub joint_min_rad: f64,
-    /// Upper joint limit (rad).
-    pub joint_max_rad: f64,
-}
+/// The `[link1]` and `[link2]` sections: a [`LinkParams`] as it is (validated by
+/// [`ArmConfig::build`]).
+pub type LinkConfig = LinkParams;
 
-impl LinkConfig {
+impl LinkParams {
     /// Upper arm: 30 cm aluminium-tube-like link of 1.2 kg (motor mass included), slender-rod
     /// inertia `m l²/12`.
     pub fn default_link1() -> Self {
@@ -85,19 +68,6 @@ impl LinkConfig {
             torque_limit_n_m: 6.0,
             joint_min_rad: -2.8,
             joint_max_rad: 2.8,
-        }
-    }
-
-    fn params(&self) -> LinkParams {
-        LinkParams {
-            length_m: self.length_m,
-            mass_kg: self.mass_kg,
-            com_m: self.com_m,
-            inertia_kg_m2: self.inertia_kg_m2,
-            friction_n_m_s_per_rad: self.friction_n_m_s_per_rad,
-            torque_limit_n_m: self.torque_limit_n_m,
-            joint_min_rad: self.joint_min_rad,
-            joint_max_rad: self.joint_max_rad,
         }
     }
 }
@@ -260,8 +230,8 @@ pub struct ArmConfig {
     pub gravity_m_s2: f64,
     /// Shoulder position (m).
     pub base: PointConfig,
-    pub link1: LinkConfig,
-    pub link2: LinkConfig,
+    pub link1: LinkParams,
+    pub link2: LinkParams,
     pub board: BoardConfig,
     pub start: StartConfig,
     pub controller: ControllerConfig,
@@ -275,8 +245,8 @@ impl Default for ArmConfig {
         Self {
             gravity_m_s2: 9.81,
             base: PointConfig { x_m: 0.0, z_m: 0.0 },
-            link1: LinkConfig::default_link1(),
-            link2: LinkConfig::default_link2(),
+            link1: LinkParams::default_link1(),
+            link2: LinkParams::default_link2(),
             board: BoardConfig::default(),
             start: StartConfig::default(),
             controller: ControllerConfig::default(),
@@ -330,8 +300,8 @@ impl ArmConfig {
     /// The physical model described by this configuration.
     pub fn model(&self) -> Result<ArmModel, ConfigError> {
         ArmModel::new(
-            self.link1.params(),
-            self.link2.params(),
+            self.link1,
+            self.link2,
             self.gravity_m_s2,
             Vector2::new(self.base.x_m, self.base.z_m),
         )

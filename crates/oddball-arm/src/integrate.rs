@@ -76,36 +76,23 @@ where
     let u1 = torque(t_s, state, trig);
     let k1q = state.qd;
     let k1v = model.forward_dynamics_t(trig, &state.qd, &u1);
+    // A stage at time `t`, its position `d` and its rates `dv` away from `state`: its rates and
+    // accelerations.
+    let mut stage = |t: f64, d: Vector2<f64>, dv: Vector2<f64>| {
+        let s = ArmState {
+            q: state.q + d,
+            qd: state.qd + dv,
+        };
+        let ts = trig.shifted(&d);
+        let u = torque(t, &s, &ts);
+        (s.qd, model.forward_dynamics_t(&ts, &s.qd, &u))
+    };
     // Stage 2 at the midpoint along k1.
-    let d2 = qd_half;
-    let s2 = ArmState {
-        q: state.q + d2,
-        qd: state.qd + k1v * half,
-    };
-    let t2 = trig.shifted(&d2);
-    let u2 = torque(t_s + half, &s2, &t2);
-    let k2q = s2.qd;
-    let k2v = model.forward_dynamics_t(&t2, &s2.qd, &u2);
+    let (k2q, k2v) = stage(t_s + half, qd_half, k1v * half);
     // Stage 3 at the midpoint along k2.
-    let d3 = qd_half + k1v * (half * half);
-    let s3 = ArmState {
-        q: state.q + d3,
-        qd: state.qd + k2v * half,
-    };
-    let t3 = trig.shifted(&d3);
-    let u3 = torque(t_s + half, &s3, &t3);
-    let k3q = s3.qd;
-    let k3v = model.forward_dynamics_t(&t3, &s3.qd, &u3);
+    let (k3q, k3v) = stage(t_s + half, qd_half + k1v * (half * half), k2v * half);
     // Stage 4 at the end along k3.
-    let d4 = state.qd * h + k2v * (half * h);
-    let s4 = ArmState {
-        q: state.q + d4,
-        qd: state.qd + k3v * h,
-    };
-    let t4 = trig.shifted(&d4);
-    let u4 = torque(t_s + h, &s4, &t4);
-    let k4q = s4.qd;
-    let k4v = model.forward_dynamics_t(&t4, &s4.qd, &u4);
+    let (k4q, k4v) = stage(t_s + h, state.qd * h + k2v * (half * h), k3v * h);
     ArmState {
         q: state.q + (k1q + 2.0 * k2q + 2.0 * k3q + k4q) * (h / 6.0),
         qd: state.qd + (k1v + 2.0 * k2v + 2.0 * k3v + k4v) * (h / 6.0),

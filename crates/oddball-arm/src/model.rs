@@ -18,8 +18,11 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{ArmError, ConfigError, RefusalReason};
 
-/// Physical parameters of one link and its (proximal) joint, validated.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Physical parameters of one link and its (proximal) joint, as a configuration's `[link1]` and
+/// `[link2]` sections give them (every field required, no unknown ones); [`ArmModel::new`]
+/// validates them.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LinkParams {
     /// Joint-to-joint length (m).
     pub length_m: f64,

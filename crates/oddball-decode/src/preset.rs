@@ -202,6 +202,13 @@ impl<'de> serde::Deserialize<'de> for Preset {
     }
 }
 
+impl PipelineParams {
+    /// The [`Preset`] named `name` for epochs sampled at `sfreq` Hz.
+    pub fn preset(name: &str, sfreq: f64) -> Result<Self> {
+        name.parse::<Preset>()?.params(sfreq)
+    }
+}
+
 /// A pipeline of `preset`'s name without channel selection.
 fn single(
     preset: Preset,

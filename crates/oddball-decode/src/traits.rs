@@ -232,6 +232,42 @@ impl<T: ProbabilisticClassifier> Scorer for T {
     }
 }
 
+/// Implements [`ProbabilisticClassifier`] for the fitted classifier `$fitted` by its inherent
+/// `predict_proba` and `decision_function`, and [`FitClassifier`] for its settings `$params` by
+/// their inherent `fit(rows, y)` (`$what` names the step when the features are not rows): all a
+/// classifier of feature rows needs when it reads no channel count, no distances and no γ.
+macro_rules! rows_classifier {
+    ($params:ty => $fitted:ident, $what:literal) => {
+        impl $crate::traits::ProbabilisticClassifier for $fitted {
+            fn predict_proba(
+                &self,
+                x: ndarray::ArrayView2<f64>,
+            ) -> std::result::Result<ndarray::Array1<f64>, $crate::DecodeError> {
+                $fitted::predict_proba(self, x)
+            }
+            fn decision_function(
+                &self,
+                x: ndarray::ArrayView2<f64>,
+            ) -> std::result::Result<ndarray::Array1<f64>, $crate::DecodeError> {
+                $fitted::decision_function(self, x)
+            }
+        }
+
+        impl $crate::traits::FitClassifier for $params {
+            type Fitted = $fitted;
+            fn fit_classifier(
+                &self,
+                x: $crate::traits::FeatureView<'_>,
+                y: &[bool],
+                _: usize,
+            ) -> std::result::Result<$fitted, $crate::DecodeError> {
+                self.fit(x.rows($what)?, y)
+            }
+        }
+    };
+}
+pub(crate) use rows_classifier;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -126,6 +126,34 @@ pub struct PipelineResult {
     pub tuning_per_fold: Option<Vec<TuningReport>>,
 }
 
+impl PipelineResult {
+    /// The result of `pipeline` scored on epochs alone: its AUC (`auc`, by fold `auc_folds`), the
+    /// seconds its fit took and the epochs it scored per second; nothing of spelling or tuning.
+    fn epochs_only(
+        pipeline: String,
+        auc: f64,
+        auc_folds: Vec<f64>,
+        fit_s: f64,
+        score_epochs_per_s: f64,
+    ) -> Self {
+        PipelineResult {
+            pipeline,
+            auc,
+            auc_folds,
+            speller_accuracy: None,
+            speller_choices: None,
+            speller_n_chars: None,
+            speller_text: None,
+            reps_for_all_correct: None,
+            itr_at_best: None,
+            fit_s,
+            score_epochs_per_s,
+            tuning: None,
+            tuning_per_fold: None,
+        }
+    }
+}
+
 /// Settings of an evaluation.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EvaluateParams {
@@ -642,21 +670,13 @@ pub fn score_test(
     }
     let auc = roc_auc(&all_scores, &all_y)?;
     // Speller files pooled: accuracy over all their characters, up to the fewest repetitions.
-    let mut result = PipelineResult {
-        pipeline: model.name().to_string(),
+    let mut result = PipelineResult::epochs_only(
+        model.name().to_string(),
         auc,
-        auc_folds: vec![auc],
-        speller_accuracy: None,
-        speller_choices: None,
-        speller_n_chars: None,
-        speller_text: None,
-        reps_for_all_correct: None,
-        itr_at_best: None,
+        vec![auc],
         fit_s,
-        score_epochs_per_s: all_scores.len() as f64 / score_s.max(1e-12),
-        tuning: None,
-        tuning_per_fold: None,
-    };
+        all_scores.len() as f64 / score_s.max(1e-12),
+    );
     if let Some(first) = spellers.first() {
         let n_chars: usize = spellers.iter().map(|s| s.n_chars).sum();
         let acc = pooled_accuracy(&spellers);
@@ -763,21 +783,15 @@ pub fn cross_validate(
         n_scored += f.split.test.len();
         aucs.push(roc_auc(&f.scores.scores.to_vec(), &f.split.y_test)?);
     }
-    Ok(PipelineResult {
-        pipeline: name.to_string(),
-        auc: aucs.iter().sum::<f64>() / aucs.len() as f64,
-        auc_folds: aucs,
-        speller_accuracy: None,
-        speller_choices: None,
-        speller_n_chars: None,
-        speller_text: None,
-        reps_for_all_correct: None,
-        itr_at_best: None,
-        fit_s: fit_s / folds.n_folds() as f64,
-        score_epochs_per_s: n_scored as f64 / score_s.max(1e-12),
-        tuning: None,
-        tuning_per_fold: tune_folds.is_some().then_some(reports),
-    })
+    let mut result = PipelineResult::epochs_only(
+        name.to_string(),
+        aucs.iter().sum::<f64>() / aucs.len() as f64,
+        aucs,
+        fit_s / folds.n_folds() as f64,
+        n_scored as f64 / score_s.max(1e-12),
+    );
+    result.tuning_per_fold = tune_folds.is_some().then_some(reports);
+    Ok(result)
 }
 
 #[cfg(test)]

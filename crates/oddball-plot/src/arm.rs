@@ -3,7 +3,14 @@
 //! and the executed one apart, with the decisions that left the intended path marked.
 
 use std::fmt::Write as _;
+use std::ops::Range;
 use std::path::Path;
+
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::{
+    Cartesian2d, ChartBuilder, ChartContext, DrawingArea, DrawingBackend, RGBColor,
+};
 
 use crate::PlotError;
 use oddball_arm::trace::point_segment_distance;
@@ -99,6 +106,39 @@ fn equal_aspect(points: &[Vector2<f64>], margin: f64, w: u32, h: u32) -> ((f64, 
 fn tick(v: f64) -> String {
     let v = if v.abs() < 1e-9 { 0.0 } else { v };
     format!("{v:.3}")
+}
+
+/// A chart of the board's x–z plane in metres on `area` over `x` × `z`, captioned `caption` at
+/// `caption_size` points, its mesh drawn; `fine`: ticks in millimetres ([`tick`]) and a light
+/// grid.
+pub(crate) fn xz_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    caption: &str,
+    caption_size: u32,
+    x: Range<f64>,
+    z: Range<f64>,
+    fine: bool,
+    path: &Path,
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, PlotError> {
+    let err = |e: &dyn std::fmt::Debug| PlotError::draw(path, format!("{e:?}"));
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, (crate::FONT_FAMILY, caption_size))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(x, z)
+        .map_err(|e| err(&e))?;
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc("x (m)")
+        .y_desc("z (m)")
+        .label_style((crate::FONT_FAMILY, 13));
+    if fine {
+        mesh.x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .light_line_style(RGBColor(235, 235, 235));
+    }
+    mesh.draw().map_err(|e| err(&e))?;
+    Ok(chart)
 }
 
 /// Ramer–Douglas–Peucker simplification: drops vertices closer than `tolerance` to the segment
@@ -298,23 +338,7 @@ fn draw_with(
         };
         for (area, title, pts, margin, zoomed) in panels {
             let (xr, zr) = equal_aspect(pts, margin, panel_w, h - 110);
-            let mut chart = ChartBuilder::on(area)
-                .caption(title, (crate::FONT_FAMILY, 20))
-                .margin(12)
-                .x_label_area_size(40)
-                .y_label_area_size(60)
-                .build_cartesian_2d(xr.0..xr.1, zr.0..zr.1)
-                .map_err(|e| err(&e))?;
-            chart
-                .configure_mesh()
-                .x_desc("x (m)")
-                .y_desc("z (m)")
-                .label_style((crate::FONT_FAMILY, 13))
-                .x_label_formatter(&|v| tick(*v))
-                .y_label_formatter(&|v| tick(*v))
-                .light_line_style(RGBColor(235, 235, 235))
-                .draw()
-                .map_err(|e| err(&e))?;
+            let mut chart = xz_chart(area, title, 20, xr.0..xr.1, zr.0..zr.1, true, path)?;
             let [b0, b1] = board_rect(&board);
             chart
                 .draw_series(std::iter::once(Rectangle::new(

@@ -115,22 +115,10 @@ macro_rules! with_backend {
         let temp = file.temp_path().to_path_buf();
         match format {
             $crate::PlotFormat::Png => {
-                let $root = BitMapBackend::new(&temp, $size).into_drawing_area();
-                $root
-                    .fill(&WHITE)
-                    .map_err(|e| $crate::PlotError::draw(path, e))?;
-                let r: Result<(), $crate::PlotError> = $body;
-                r?;
-                $root.present().map_err(|e| write(&e))?;
+                $crate::draw_on!(BitMapBackend, temp, $size, path, write, |$root| $body)
             }
             $crate::PlotFormat::Svg => {
-                let $root = SVGBackend::new(&temp, $size).into_drawing_area();
-                $root
-                    .fill(&WHITE)
-                    .map_err(|e| $crate::PlotError::draw(path, e))?;
-                let r: Result<(), $crate::PlotError> = $body;
-                r?;
-                $root.present().map_err(|e| write(&e))?;
+                $crate::draw_on!(SVGBackend, temp, $size, path, write, |$root| $body)
             }
         }
         file.commit().map_err(|e| write(&e))?;
@@ -138,6 +126,22 @@ macro_rules! with_backend {
     }};
 }
 pub(crate) use with_backend;
+
+/// One format's drawing in [`with_backend`]: the root area `$root` of a `$backend` writing
+/// `$temp`, filled white, the body drawn on it, presented (errors name `$path`, `$write` makes a
+/// write error).
+macro_rules! draw_on {
+    ($backend:ident, $temp:ident, $size:expr, $path:ident, $write:ident, |$root:ident| $body:block) => {{
+        let $root = plotters::prelude::$backend::new(&$temp, $size).into_drawing_area();
+        $root
+            .fill(&plotters::prelude::WHITE)
+            .map_err(|e| $crate::PlotError::draw($path, e))?;
+        let r: Result<(), $crate::PlotError> = $body;
+        r?;
+        $root.present().map_err(|e| $write(&e))?;
+    }};
+}
+pub(crate) use draw_on;
 
 #[cfg(test)]
 mod tests {

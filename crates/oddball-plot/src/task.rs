@@ -40,26 +40,19 @@ pub fn draw_track(path: &Path, arm: &ArmSim, r: &TrackReport) -> Result<(), Plot
     crate::with_backend!(path, (900, 900), |root| {
         use plotters::prelude::*;
         let err = |e: &dyn std::fmt::Debug| PlotError::draw(path, format!("{e:?}"));
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "Tracking: {}/{} targets reached (black: pen, dashed: minimal path)",
-                    r.n_reached, r.n_attempted
-                ),
-                (crate::FONT_FAMILY, 18),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(cx - span..cx + span, cz - span..cz + span)
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc("x (m)")
-            .y_desc("z (m)")
-            .label_style((crate::FONT_FAMILY, 13))
-            .draw()
-            .map_err(|e| err(&e))?;
+        let caption = format!(
+            "Tracking: {}/{} targets reached (black: pen, dashed: minimal path)",
+            r.n_reached, r.n_attempted
+        );
+        let mut chart = crate::arm::xz_chart(
+            &root,
+            &caption,
+            18,
+            cx - span..cx + span,
+            cz - span..cz + span,
+            false,
+            path,
+        )?;
         for t in &r.targets {
             let (a, b) = (t.start_m, t.target_m);
             let corner = (b[0], a[1]);

@@ -661,6 +661,19 @@ mod tests {
     use super::*;
     use ndarray::Array2;
 
+    /// 4th-order Butterworth band-pass, 1–15 Hz at 256 Hz.
+    fn bandpass_1_15() -> SosFilter {
+        SosFilter::butter(
+            4,
+            Band::Bandpass {
+                l_freq: 1.0,
+                h_freq: 15.0,
+            },
+            256.0,
+        )
+        .unwrap()
+    }
+
     fn test_signal(n_channels: usize, n_times: usize) -> Array2<f64> {
         Array2::from_shape_fn((n_channels, n_times), |(c, t)| {
             let t = t as f64 / 256.0;
@@ -673,15 +686,7 @@ mod tests {
 
     #[test]
     fn sosfiltfilt_matches_sci_rs() {
-        let f = SosFilter::butter(
-            4,
-            Band::Bandpass {
-                l_freq: 1.0,
-                h_freq: 15.0,
-            },
-            256.0,
-        )
-        .unwrap();
+        let f = bandpass_1_15();
         let x = test_signal(11, 2000);
         let ours = f.sosfiltfilt(x.view()).unwrap();
         let sos: Vec<Sos<f64>> = f
@@ -737,15 +742,7 @@ mod tests {
             SosFilter::butter(4, Band::Lowpass { h_freq: 20.0 }, 0.0),
             Err(SignalError::InvalidSfreq { .. })
         ));
-        let f = SosFilter::butter(
-            4,
-            Band::Bandpass {
-                l_freq: 1.0,
-                h_freq: 15.0,
-            },
-            256.0,
-        )
-        .unwrap();
+        let f = bandpass_1_15();
         let short = Array2::zeros((2, f.padlen()));
         assert!(matches!(
             f.sosfiltfilt(short.view()),

@@ -38,7 +38,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::classifiers::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid, sym_eigen};
-use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -308,21 +307,7 @@ impl Blda {
     }
 }
 
-impl ProbabilisticClassifier for Blda {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Blda::predict_proba(self, x)
-    }
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Blda::decision_function(self, x)
-    }
-}
-
-impl FitClassifier for BldaParams {
-    type Fitted = Blda;
-    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Blda> {
-        self.fit(x.rows("BLDA")?, y)
-    }
-}
+crate::traits::rows_classifier!(BldaParams => Blda, "BLDA");
 
 #[cfg(test)]
 mod tests {

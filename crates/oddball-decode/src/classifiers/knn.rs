@@ -11,7 +11,8 @@
 use ndarray::{Array1, Array2, ArrayView1, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::features::scaler::{check_finite, check_labels, check_n_features};
+use crate::features::scaler::{check_finite, check_n_features};
+use crate::linalg::check_labels;
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 

@@ -27,7 +27,6 @@ use crate::riemann::covariance::{estimate_columns, shrink_in_place, CovEstimator
 use crate::linalg::{
     check_finite, check_labels, sigmoid, standardise_columns, sym_eigen, to_array2,
 };
-use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -217,21 +216,7 @@ pub(crate) fn linear_decision(
     Ok(x.dot(&coef) + intercept)
 }
 
-impl ProbabilisticClassifier for Lda {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Lda::predict_proba(self, x)
-    }
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Lda::decision_function(self, x)
-    }
-}
-
-impl FitClassifier for LdaParams {
-    type Fitted = Lda;
-    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Lda> {
-        self.fit(x.rows("LDA")?, y)
-    }
-}
+crate::traits::rows_classifier!(LdaParams => Lda, "LDA");
 
 #[cfg(test)]
 mod tests {

@@ -24,7 +24,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::classifiers::lda::linear_decision;
 use crate::linalg::{check_finite, check_labels, sigmoid};
-use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -227,21 +226,7 @@ impl Logistic {
     }
 }
 
-impl ProbabilisticClassifier for Logistic {
-    fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Logistic::predict_proba(self, x)
-    }
-    fn decision_function(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        Logistic::decision_function(self, x)
-    }
-}
-
-impl FitClassifier for LogisticParams {
-    type Fitted = Logistic;
-    fn fit_classifier(&self, x: FeatureView<'_>, y: &[bool], _: usize) -> Result<Logistic> {
-        self.fit(x.rows("logistic regression")?, y)
-    }
-}
+crate::traits::rows_classifier!(LogisticParams => Logistic, "logistic regression");
 
 #[cfg(test)]
 mod tests {

@@ -9,7 +9,10 @@
 //! # Adding a classifier
 //! 1. Write `classifiers/NAME.rs` with `NameParams` (settings: `Clone`, `PartialEq`, `Default`,
 //!    serde) implementing [`FitClassifier`] with `type Fitted = Name`, and `Name` (fitted, serde)
-//!    implementing [`crate::traits::Scorer`]. A hyper-parameter grid, if any, is
+//!    implementing [`crate::traits::Scorer`]. A classifier of feature rows with inherent
+//!    `NameParams::fit(rows, y)`, `Name::decision_function` and `Name::predict_proba` gets both
+//!    impls from one line, `crate::traits::rows_classifier!(NameParams => Name, "name");` (as
+//!    `lda`, `logistic` and `blda` do). A hyper-parameter grid, if any, is
 //!    [`FitClassifier::grid`] (none by default).
 //! 2. Add ONE line at the end of the `registry!` list:
 //!    `Name(NAME::NameParams => NAME::Name), mod NAME, preset Name = "name";`

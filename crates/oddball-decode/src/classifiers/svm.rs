@@ -30,7 +30,8 @@ use linfa::prelude::*;
 use ndarray::{Array1, Array2, ArrayView2, Axis};
 use serde::{Deserialize, Serialize};
 
-use crate::features::scaler::{check_finite, check_labels, check_n_features};
+use crate::features::scaler::{check_finite, check_n_features};
+use crate::linalg::check_labels;
 use crate::model_selection::folds::stratified;
 use crate::traits::{FeatureView, FitClassifier, ProbabilisticClassifier};
 use crate::DecodeError;

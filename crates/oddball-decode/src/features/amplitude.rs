@@ -304,16 +304,8 @@ impl PaperExtractor {
         let (ifr, rest) = rest.split_at_mut(lay.inst_frequency);
         let (da, dd) = rest.split_at_mut(lay.dwt_approx);
         self.params.amplitude.epoch(epoch, amp)?;
-        let dc = lay.dwt_approx / n_ch.max(1);
         self.hht.epoch(epoch, ia, ifr)?;
-        for (c, lane) in epoch.outer_iter().enumerate() {
-            self.dwt.channel(
-                lane.iter().copied(),
-                &mut da[c * dc..(c + 1) * dc],
-                &mut dd[c * dc..(c + 1) * dc],
-            )?;
-        }
-        Ok(())
+        self.dwt.epoch(epoch, da, dd)
     }
 }
 

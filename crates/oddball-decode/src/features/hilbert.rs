@@ -41,6 +41,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::features::bins::{bin_mean_into, vec_bin};
 use crate::features::emd::{Emd, EmdParams};
+use crate::features::rows::two_block_rows;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -435,18 +436,10 @@ impl HhtFeatures {
 
     /// Features of every epoch: `(n_epochs, 2 · n_channels · n_bins)`, amplitude block first.
     pub fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
-        let (n_ep, n_ch, n_t) = epochs.dim();
-        let nb = self.n_bins(n_t);
+        let (_, n_ch, n_t) = epochs.dim();
         let mut ex = self.extractor(n_t)?;
-        let mut out = Array2::zeros((n_ep, self.n_features(n_ch, n_t)));
-        for (epoch, mut row) in epochs.outer_iter().zip(out.rows_mut()) {
-            let row = row
-                .as_slice_mut()
-                .expect("rows of a standard-layout array are contiguous");
-            let (amp_block, freq_block) = row.split_at_mut(n_ch * nb);
-            ex.epoch(epoch, amp_block, freq_block)?;
-        }
-        Ok(out)
+        let (width, split) = (self.n_features(n_ch, n_t), n_ch * self.n_bins(n_t));
+        two_block_rows(epochs, width, split, |epoch, a, b| ex.epoch(epoch, a, b))
     }
 }
 

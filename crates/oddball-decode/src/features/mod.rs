@@ -14,6 +14,7 @@ pub mod channel_select;
 pub mod emd;
 pub mod hilbert;
 pub mod pca;
+mod rows;
 pub mod scaler;
 pub mod wavelet;
 

@@ -146,25 +146,6 @@ pub(crate) fn check_n_features(what: &str, expected: usize, got: usize) -> Resul
     }
 }
 
-/// One label per sample and both classes present; returns (targets, non-targets).
-pub(crate) fn check_labels(n_samples: usize, y: &[bool]) -> Result<(usize, usize)> {
-    if y.len() != n_samples {
-        return Err(DecodeError::LabelCount {
-            n_samples,
-            n_labels: y.len(),
-        });
-    }
-    let n_t = y.iter().filter(|&&v| v).count();
-    let n_n = y.len() - n_t;
-    if n_t == 0 || n_n == 0 {
-        return Err(DecodeError::NeedBothClasses {
-            n_targets: n_t,
-            n_nontargets: n_n,
-        });
-    }
-    Ok((n_t, n_n))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -211,8 +192,5 @@ mod tests {
         assert!(StandardScalerParams::default()
             .fit(array![[f64::NAN]].view())
             .is_err());
-        assert!(check_labels(2, &[true, true]).is_err());
-        assert!(check_labels(3, &[true, false]).is_err());
-        assert_eq!(check_labels(3, &[true, false, false]).unwrap(), (1, 2));
     }
 }

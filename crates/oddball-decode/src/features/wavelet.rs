@@ -16,9 +16,10 @@
 //! brings SIMD, proc-macro and rayon dependencies for what is a 6-tap filter on ~200 samples. The
 //! transform here is checked against PyWavelets 1.9 in `tests/paper_golden.rs`.
 
-use ndarray::{Array2, ArrayView3};
+use ndarray::{Array2, ArrayView2, ArrayView3};
 use serde::{Deserialize, Serialize};
 
+use crate::features::rows::two_block_rows;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -188,24 +189,10 @@ impl DwtFeatures {
 
     /// Features of every epoch: `(n_epochs, 2 · n_channels · n_coefficients)`, approximations first.
     pub fn transform(&self, epochs: ArrayView3<f64>) -> Result<Array2<f64>> {
-        let (n_ep, n_ch, n_t) = epochs.dim();
-        let nc = self.n_coefficients(n_t);
+        let (_, n_ch, n_t) = epochs.dim();
         let mut ex = self.extractor(n_t)?;
-        let mut out = Array2::zeros((n_ep, self.n_features(n_ch, n_t)));
-        for (epoch, mut row) in epochs.outer_iter().zip(out.rows_mut()) {
-            let row = row
-                .as_slice_mut()
-                .expect("rows of a standard-layout array are contiguous");
-            let (ab, db) = row.split_at_mut(n_ch * nc);
-            for (c, lane) in epoch.outer_iter().enumerate() {
-                ex.channel(
-                    lane.iter().copied(),
-                    &mut ab[c * nc..(c + 1) * nc],
-                    &mut db[c * nc..(c + 1) * nc],
-                )?;
-            }
-        }
-        Ok(out)
+        let (width, split) = (self.n_features(n_ch, n_t), n_ch * self.n_coefficients(n_t));
+        two_block_rows(epochs, width, split, |epoch, a, b| ex.epoch(epoch, a, b))
     }
 }
 
@@ -220,6 +207,25 @@ pub struct DwtExtractor {
 }
 
 impl DwtExtractor {
+    /// Level-L approximations of every channel of one epoch `(n_channels, n_times)` into
+    /// `approx`, details into `detail` (channel-major, `n_channels · n_coefficients` each).
+    pub fn epoch(
+        &mut self,
+        epoch: ArrayView2<f64>,
+        approx: &mut [f64],
+        detail: &mut [f64],
+    ) -> Result<()> {
+        let nc = approx.len() / epoch.nrows().max(1);
+        for (c, lane) in epoch.outer_iter().enumerate() {
+            self.channel(
+                lane.iter().copied(),
+                &mut approx[c * nc..(c + 1) * nc],
+                &mut detail[c * nc..(c + 1) * nc],
+            )?;
+        }
+        Ok(())
+    }
+
     /// Level-L approximation and detail of one channel (`n_times` samples).
     pub fn channel(
         &mut self,

@@ -214,6 +214,13 @@ mod tests {
     use nalgebra::{Cholesky, DVector};
 
     #[test]
+    fn labels_need_one_per_sample_and_both_classes() {
+        assert!(check_labels(2, &[true, true]).is_err());
+        assert!(check_labels(3, &[true, false]).is_err());
+        assert_eq!(check_labels(3, &[true, false, false]).unwrap(), (1, 2));
+    }
+
+    #[test]
     fn generalized_eigh_matches_definition() {
         let a = DMatrix::from_row_slice(3, 3, &[4.0, 1.0, 0.5, 1.0, 3.0, 0.2, 0.5, 0.2, 2.0]);
         let b = DMatrix::from_row_slice(3, 3, &[2.0, 0.3, 0.1, 0.3, 1.5, 0.2, 0.1, 0.2, 1.0]);

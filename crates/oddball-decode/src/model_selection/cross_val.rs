@@ -1,6 +1,6 @@
-//! The one cross-validation spine, as scikit-learn's `cross_val_predict`: every fold's two parts
-//! ([`Split`], from [`Folds::splits`]), pipelines fitted on each fold's training part and scoring
-//! its test part through one [`FrontCache`] ([`cross_val_scores`]), and the out-of-fold score of
+//! The one cross-validation spine, as scikit-learn's `cross_val_predict`: pipelines fitted on
+//! the training part of every fold ([`Split`], from [`Folds::splits`]) and scoring its test part
+//! through one [`FrontCache`] ([`cross_val_scores`]), and the out-of-fold score of
 //! every epoch ([`cross_val_predict`]). Evaluation's cross-validation and decision models, the
 //! grid search ([`super::tuning`]) and the stacker's inner folds
 //! ([`crate::pipeline::Fusion::Stacked`]) all take their folds' parts from here.
@@ -8,46 +8,9 @@
 use crate::pipeline::{CachedScores, FrontCache, PipelineParams};
 use crate::DecodeError;
 
-use super::folds::Folds;
+use super::folds::{Folds, Split};
 
 type Result<T> = std::result::Result<T, DecodeError>;
-
-/// One fold's two parts: indices into the epochs (each in increasing order), the labels of both
-/// parts and the groups of the training part (a stack's inner folds keep them whole).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Split {
-    /// The fold (0-based) whose test part this is.
-    pub fold: usize,
-    pub train: Vec<usize>,
-    pub test: Vec<usize>,
-    pub y_train: Vec<bool>,
-    pub y_test: Vec<bool>,
-    pub groups_train: Option<Vec<usize>>,
-}
-
-impl Folds {
-    /// Fold `f`'s parts of the epochs labelled `y` (in `groups`, if given).
-    pub fn split_of(&self, f: usize, y: &[bool], groups: Option<&[usize]>) -> Split {
-        let (train, test) = self.split(f);
-        Split {
-            fold: f,
-            y_train: train.iter().map(|&i| y[i]).collect(),
-            y_test: test.iter().map(|&i| y[i]).collect(),
-            groups_train: groups.map(|g| train.iter().map(|&i| g[i]).collect()),
-            train,
-            test,
-        }
-    }
-
-    /// Every fold's parts, in fold order ([`Folds::split_of`]).
-    pub fn splits<'a>(
-        &'a self,
-        y: &'a [bool],
-        groups: Option<&'a [usize]>,
-    ) -> impl Iterator<Item = Split> + 'a {
-        (0..self.n_folds()).map(move |f| self.split_of(f, y, groups))
-    }
-}
 
 /// One fold's scores of its test part.
 #[derive(Debug, Clone)]

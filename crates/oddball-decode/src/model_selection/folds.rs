@@ -2,9 +2,10 @@
 //! characters) kept whole ([`cv_folds`]), or stratified by label as scikit-learn's
 //! `StratifiedKFold` without shuffling ([`stratified_folds`]) or shuffled as with its
 //! `random_state` ([`stratified_folds_shuffled`], the SVM's probability calibration), or groups
-//! dealt round-robin ([`interleaved_folds`], a session's calibration).
+//! dealt round-robin ([`interleaved_folds`], a session's calibration); and each fold's two parts
+//! ([`Split`], from [`Folds::splits`]).
 
-use crate::features::scaler::check_labels;
+use crate::linalg::check_labels;
 use crate::DecodeError;
 
 type Result<T> = std::result::Result<T, DecodeError>;
@@ -37,6 +38,41 @@ impl Folds {
     pub fn split(&self, f: usize) -> (Vec<usize>, Vec<usize>) {
         (0..self.fold_of.len()).partition(|&i| self.fold_of[i] != f)
     }
+
+    /// Fold `f`'s parts of the epochs labelled `y` (in `groups`, if given).
+    pub fn split_of(&self, f: usize, y: &[bool], groups: Option<&[usize]>) -> Split {
+        let (train, test) = self.split(f);
+        Split {
+            fold: f,
+            y_train: train.iter().map(|&i| y[i]).collect(),
+            y_test: test.iter().map(|&i| y[i]).collect(),
+            groups_train: groups.map(|g| train.iter().map(|&i| g[i]).collect()),
+            train,
+            test,
+        }
+    }
+
+    /// Every fold's parts, in fold order ([`Folds::split_of`]).
+    pub fn splits<'a>(
+        &'a self,
+        y: &'a [bool],
+        groups: Option<&'a [usize]>,
+    ) -> impl Iterator<Item = Split> + 'a {
+        (0..self.n_folds()).map(move |f| self.split_of(f, y, groups))
+    }
+}
+
+/// One fold's two parts: indices into the epochs (each in increasing order), the labels of both
+/// parts and the groups of the training part (a stack's inner folds keep them whole).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Split {
+    /// The fold (0-based) whose test part this is.
+    pub fold: usize,
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+    pub y_train: Vec<bool>,
+    pub y_test: Vec<bool>,
+    pub groups_train: Option<Vec<usize>>,
 }
 
 /// `k` folds of epochs labelled `y`: groups (e.g. speller characters; `groups[i]` is epoch `i`'s)

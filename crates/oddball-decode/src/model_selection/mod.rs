@@ -7,5 +7,5 @@ pub mod cross_val;
 pub mod folds;
 pub mod tuning;
 
-pub use cross_val::{cross_val_predict, cross_val_scores, FoldScores, Split};
-pub use folds::{cv_folds, interleaved_folds, Folds};
+pub use cross_val::{cross_val_predict, cross_val_scores, FoldScores};
+pub use folds::{cv_folds, interleaved_folds, Folds, Split};

@@ -5,7 +5,8 @@ use ndarray::parallel::prelude::*;
 use ndarray::{Array1, Array2};
 use serde::{Deserialize, Serialize};
 
-use super::{EpochSource, Pipeline, PipelineParams, Single, SingleParams};
+use super::single::{Single, SingleParams};
+use super::source::EpochSource;
 use crate::classifiers::logistic::LogisticParams;
 use crate::features::scaler::StandardScalerParams;
 use crate::model_selection::Split;
@@ -63,7 +64,7 @@ impl FusionTerm {
     }
 }
 
-/// A single pipeline fused with a [`Pipeline`]'s main one.
+/// A single pipeline fused with a [`Pipeline`](super::Pipeline)'s main one.
 #[derive(Debug, Clone)]
 pub struct FusedMember {
     pub(crate) single: Single,
@@ -78,36 +79,39 @@ impl FusedMember {
     }
 }
 
-/// Fits the fusion terms of `pipeline`, whose main and fused pipelines are fitted on `epochs`.
+/// The fusion terms of a fusion's pipelines fitted on `epochs` (`fitted`, the main one first, of
+/// the settings `singles`), in that order, and the fused score's offset.
 pub(super) fn fit_terms(
-    params: &PipelineParams,
-    pipeline: &mut Pipeline,
+    fusion: Fusion,
+    singles: &[&SingleParams],
+    fitted: &[&Single],
     epochs: EpochSource<'_>,
     y: &[bool],
     groups: Option<&[usize]>,
-) -> Result<()> {
-    match params.fusion {
+) -> Result<(Vec<FusionTerm>, f64)> {
+    match fusion {
         Fusion::Standardised => {
-            pipeline.term.scale = training_score_sd(&pipeline.main, epochs)?;
-            for m in &mut pipeline.fused {
-                m.term.scale = training_score_sd(&m.single, epochs)?;
+            let mut terms = Vec::with_capacity(fitted.len());
+            for single in fitted {
+                terms.push(FusionTerm {
+                    scale: training_score_sd(single, epochs)?,
+                    ..FusionTerm::UNIT
+                });
             }
+            Ok((terms, 0.0))
         }
         Fusion::Stacked { n_folds } => {
-            let stack = fit_stacker(params, epochs, y, groups, n_folds)?;
-            let terms = std::iter::once(&mut pipeline.term)
-                .chain(pipeline.fused.iter_mut().map(|m| &mut m.term));
-            for (k, t) in terms.enumerate() {
-                *t = FusionTerm {
+            let stack = fit_stacker(singles, epochs, y, groups, n_folds)?;
+            let terms = (0..fitted.len())
+                .map(|k| FusionTerm {
                     center: stack.center[k],
                     scale: stack.scale[k],
                     weight: stack.weight[k],
-                };
-            }
-            pipeline.fusion_intercept = stack.intercept;
+                })
+                .collect();
+            Ok((terms, stack.intercept))
         }
     }
-    Ok(())
 }
 
 /// Standard deviation of `single`'s decision values on its training `epochs` (its unit in a
@@ -138,14 +142,13 @@ struct Stacker {
 
 /// Stacking weights from out-of-fold scores (see [`Fusion::Stacked`]).
 fn fit_stacker(
-    params: &PipelineParams,
+    singles: &[&SingleParams],
     epochs: EpochSource<'_>,
     y: &[bool],
     groups: Option<&[usize]>,
     n_folds: usize,
 ) -> Result<Stacker> {
     let folds = crate::model_selection::cv_folds(y, groups, n_folds)?;
-    let singles: Vec<&SingleParams> = params.singles().collect();
     let n = y.len();
     let n_channels = epochs.dim().1;
     // The features of a pipeline whose front learns nothing are computed once for every fold
@@ -211,48 +214,50 @@ fn fit_stacker(
     })
 }
 
-impl Pipeline {
-    /// A fusion's score scales are finite and positive, its members take the same epochs (a
-    /// file could say anything).
-    pub(crate) fn check_fusion(&self) -> Result<()> {
-        if self.fused.is_empty() {
-            return Ok(());
-        }
-        if !self.fusion_intercept.is_finite() {
+/// A fusion's score scales are finite and positive, its members take the epochs of `main` (a
+/// file could say anything): `main` with its `term`, the `fused` members and the `intercept`.
+pub(super) fn check_terms(
+    main: &Single,
+    term: &FusionTerm,
+    fused: &[FusedMember],
+    intercept: f64,
+) -> Result<()> {
+    if fused.is_empty() {
+        return Ok(());
+    }
+    if !intercept.is_finite() {
+        return Err(DecodeError::ModelFormat {
+            reason: format!("fusion intercept {intercept} must be finite"),
+        });
+    }
+    let all = std::iter::once((main, term)).chain(fused.iter().map(|m| (&m.single, &m.term)));
+    for (p, t) in all {
+        if !(t.scale.is_finite() && t.scale > 0.0) {
             return Err(DecodeError::ModelFormat {
-                reason: format!("fusion intercept {} must be finite", self.fusion_intercept),
+                reason: format!(
+                    "fused pipeline {}: score scale {} (must be finite and > 0)",
+                    p.name, t.scale
+                ),
             });
         }
-        let all = std::iter::once((&self.main, &self.term))
-            .chain(self.fused.iter().map(|m| (&m.single, &m.term)));
-        for (p, t) in all {
-            if !(t.scale.is_finite() && t.scale > 0.0) {
-                return Err(DecodeError::ModelFormat {
-                    reason: format!(
-                        "fused pipeline {}: score scale {} (must be finite and > 0)",
-                        p.name, t.scale
-                    ),
-                });
-            }
-            if !(t.center.is_finite() && t.weight.is_finite()) {
-                return Err(DecodeError::ModelFormat {
-                    reason: format!(
-                        "fused pipeline {}: score centre {} and weight {} must be finite",
-                        p.name, t.center, t.weight
-                    ),
-                });
-            }
-            if p.epoch_shape() != self.epoch_shape() {
-                return Err(DecodeError::ModelFormat {
-                    reason: format!(
-                        "fused pipeline {} expects epochs {:?}, the model {:?}",
-                        p.name,
-                        p.epoch_shape(),
-                        self.epoch_shape()
-                    ),
-                });
-            }
+        if !(t.center.is_finite() && t.weight.is_finite()) {
+            return Err(DecodeError::ModelFormat {
+                reason: format!(
+                    "fused pipeline {}: score centre {} and weight {} must be finite",
+                    p.name, t.center, t.weight
+                ),
+            });
         }
-        Ok(())
+        if p.epoch_shape() != main.epoch_shape() {
+            return Err(DecodeError::ModelFormat {
+                reason: format!(
+                    "fused pipeline {} expects epochs {:?}, the model {:?}",
+                    p.name,
+                    p.epoch_shape(),
+                    main.epoch_shape()
+                ),
+            });
+        }
     }
+    Ok(())
 }

@@ -1,5 +1,6 @@
 use super::*;
 use crate::classifiers::logistic::LogisticParams;
+use crate::features::scaler::StandardScalerParams;
 use ndarray::{Array1, Array2, Array3};
 
 /// Synthetic epochs: targets (every 5th) carry a positive bump at 300 ms on the later channels.

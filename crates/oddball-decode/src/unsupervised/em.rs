@@ -20,7 +20,7 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ndarray::ArrayView2;
 
-use super::{Result, UnsupervisedError};
+use super::error::{Result, UnsupervisedError};
 
 /// Where each epoch sits in the paradigm's constraint: its slot (one trial's choice set, in
 /// which exactly one code is attended) and its choice within the slot.

@@ -15,7 +15,7 @@
 use ndarray::{Array1, Array2, ArrayView2};
 use serde::{Deserialize, Serialize};
 
-use super::{Result, UnsupervisedError};
+use super::error::{Result, UnsupervisedError};
 use crate::preprocess::Preprocess;
 
 /// The canonical P300 wave (seconds after the flash).

@@ -21,6 +21,7 @@
 
 mod info;
 
+use std::iter::Peekable;
 use std::path::Path;
 
 use ndarray::Array2;
@@ -173,13 +174,20 @@ pub(crate) fn csv_err(
     }
 }
 
-fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoError> {
+/// A line's text without its `\r`. A byte that is not UTF-8 is an error at the column
+/// `column(valid)` gives from the valid bytes before it.
+pub(crate) fn line_text<'a>(
+    raw: &'a [u8],
+    path: &Path,
+    line: usize,
+    column: fn(&[u8]) -> usize,
+) -> Result<&'a str, IoError> {
     let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
     std::str::from_utf8(raw).map_err(|e| {
         csv_err(
             path,
             line,
-            e.valid_up_to() + 1,
+            column(&raw[..e.valid_up_to()]),
             "text",
             "UTF-8 text",
             format!("byte 0x{:02x}", raw[e.valid_up_to()]),
@@ -187,9 +195,68 @@ fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoE
     })
 }
 
+/// The event of the marker `code` at sample `onset`: a target when `code` is one of `targets`, a
+/// non-target when one of `nontargets`, otherwise unlabelled.
+pub(crate) fn marker_event(onset: usize, code: u32, targets: &[u32], nontargets: &[u32]) -> Event {
+    let target = if targets.contains(&code) {
+        Some(true)
+    } else if nontargets.contains(&code) {
+        Some(false)
+    } else {
+        None
+    };
+    Event {
+        onset,
+        code,
+        target,
+        label: None,
+    }
+}
+
+/// The column (1-based, in bytes) after the bytes `valid`.
+fn byte_column(valid: &[u8]) -> usize {
+    valid.len() + 1
+}
+
+/// The next line of a text recording read row by row from `lines` (each line's index and bytes,
+/// split at `\n`): its line number and text ([`line_text`], `column` locating a byte that is not
+/// UTF-8; a UTF-8 byte-order mark before the file's first line left out), blank lines skipped.
+/// `None` at the end, the text after the final line end included. With `line_end_required` (the
+/// reader asks for a line end after the last line and the file has none), the last line is the
+/// error `truncated(line, text)`.
+pub(crate) fn next_line<'a>(
+    lines: &mut Peekable<impl Iterator<Item = (usize, &'a [u8])>>,
+    path: &Path,
+    column: fn(&[u8]) -> usize,
+    line_end_required: bool,
+    truncated: impl Fn(usize, &str) -> IoError,
+) -> Result<Option<(usize, &'a str)>, IoError> {
+    while let Some((idx, raw)) = lines.next() {
+        let line_no = idx + 1;
+        let is_last = lines.peek().is_none();
+        if is_last && raw.is_empty() {
+            break; // the text after the final line end
+        }
+        let raw = if idx == 0 {
+            raw.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(raw)
+        } else {
+            raw
+        };
+        let text = line_text(raw, path, line_no, column)?;
+        if text.trim().is_empty() {
+            continue;
+        }
+        if is_last && line_end_required {
+            return Err(truncated(line_no, text));
+        }
+        return Ok(Some((line_no, text)));
+    }
+    Ok(None)
+}
+
 fn split_header(raw: &[u8], delimiter: u8, path: &Path) -> Result<Vec<String>, IoError> {
     let raw = raw.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(raw);
-    let text = line_text(raw, path, 1)?;
+    let text = line_text(raw, path, 1, byte_column)?;
     Ok(text
         .split(delimiter as char)
         .map(|s| {
@@ -328,26 +395,20 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
     let mut n_times = 0usize;
     let ends_with_newline = bytes.last() == Some(&b'\n');
 
-    while let Some((idx, raw)) = lines.next() {
-        let line_no = idx + 1;
-        let is_last = lines.peek().is_none();
-        if is_last && raw.is_empty() {
-            break; // the text after the final line end
-        }
-        let text = line_text(raw, path, line_no)?;
-        if text.trim().is_empty() {
-            continue;
-        }
-        if is_last && !ends_with_newline && options.require_final_newline {
-            return Err(csv_err(
-                path,
-                line_no,
-                text.chars().count() + 1,
-                "line end",
-                "a line end after the last row (the file looks truncated)",
-                text.chars().take(80).collect::<String>(),
-            ));
-        }
+    let line_end_required = !ends_with_newline && options.require_final_newline;
+    let truncated = |line_no, text: &str| {
+        csv_err(
+            path,
+            line_no,
+            text.chars().count() + 1,
+            "line end",
+            "a line end after the last row (the file looks truncated)",
+            text.chars().take(80).collect::<String>(),
+        )
+    };
+    while let Some((line_no, text)) =
+        next_line(&mut lines, path, byte_column, line_end_required, truncated)?
+    {
         let mut n_cells = 0usize;
         for (j, cell) in text.split(options.delimiter as char).enumerate() {
             n_cells += 1;
@@ -388,19 +449,12 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
                 }
                 let code = value as u32;
                 if code != 0 && code != prev_marker {
-                    let target = if options.target_codes.contains(&code) {
-                        Some(true)
-                    } else if options.nontarget_codes.contains(&code) {
-                        Some(false)
-                    } else {
-                        None
-                    };
-                    events.push(Event {
-                        onset: n_times,
+                    events.push(marker_event(
+                        n_times,
                         code,
-                        target,
-                        label: None,
-                    });
+                        &options.target_codes,
+                        &options.nontarget_codes,
+                    ));
                 }
                 prev_marker = code;
             }

@@ -8,24 +8,9 @@ use crate::IoError;
 
 use super::types::*;
 
-pub(super) fn line_text<'a>(raw: &'a [u8], path: &Path, line: usize) -> Result<&'a str, IoError> {
-    let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-    std::str::from_utf8(raw).map_err(|e| {
-        // The cell holding the invalid byte.
-        let col = raw[..e.valid_up_to()]
-            .iter()
-            .filter(|&&b| b == b'\t')
-            .count()
-            + 1;
-        csv_err(
-            path,
-            line,
-            col,
-            "text",
-            "UTF-8 text",
-            format!("byte 0x{:02x}", raw[e.valid_up_to()]),
-        )
-    })
+/// The cell (1-based, tab-separated) after the bytes `valid` of a line.
+pub(super) fn cell_column(valid: &[u8]) -> usize {
+    valid.iter().filter(|&&b| b == b'\t').count() + 1
 }
 
 pub(super) fn shorten(s: &str) -> String {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use ndarray::Array2;
 use oddball_signal::Event;
 
-use crate::csv::csv_err;
+use crate::csv::{csv_err, marker_event, next_line};
 use crate::error::read_file;
 use crate::{Details, Format, IoError, Recording};
 
@@ -281,31 +281,20 @@ pub fn parse_easy(
     let mut not_increasing: Option<(usize, usize, u64, u64)> = None;
     let mut last_line = 0usize;
 
-    while let Some((idx, raw)) = lines.next() {
-        let line_no = idx + 1;
-        let is_last = lines.peek().is_none();
-        if is_last && raw.is_empty() {
-            break; // the text after the final line end
-        }
-        let raw = if idx == 0 {
-            raw.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(raw)
-        } else {
-            raw
-        };
-        let text = line_text(raw, path, line_no)?;
-        if text.trim().is_empty() {
-            continue;
-        }
-        if is_last && !ends_with_newline && options.require_final_newline {
-            return Err(csv_err(
-                path,
-                line_no,
-                text.split('\t').count(),
-                "line end",
-                "a line end after the last line (the file looks cut inside it)",
-                shorten(text),
-            ));
-        }
+    let line_end_required = !ends_with_newline && options.require_final_newline;
+    let truncated = |line_no, text: &str| {
+        csv_err(
+            path,
+            line_no,
+            text.split('\t').count(),
+            "line end",
+            "a line end after the last line (the file looks cut inside it)",
+            shorten(text),
+        )
+    };
+    while let Some((line_no, text)) =
+        next_line(&mut lines, path, cell_column, line_end_required, truncated)?
+    {
         let text = text.trim_end();
         last_line = line_no;
         let lay = match layout {
@@ -387,19 +376,12 @@ pub fn parse_easy(
                     let code = parse_trigger(cell)
                         .ok_or_else(|| bad("an integer trigger from 0 to 4294967295"))?;
                     if code != 0 && code != prev_trigger && !options.ignore_codes.contains(&code) {
-                        let target = if options.target_codes.contains(&code) {
-                            Some(true)
-                        } else if options.nontarget_codes.contains(&code) {
-                            Some(false)
-                        } else {
-                            None
-                        };
-                        events.push(Event {
-                            onset: triggers.len(),
+                        events.push(marker_event(
+                            triggers.len(),
                             code,
-                            target,
-                            label: None,
-                        });
+                            &options.target_codes,
+                            &options.nontarget_codes,
+                        ));
                     }
                     prev_trigger = code;
                     triggers.push(code);

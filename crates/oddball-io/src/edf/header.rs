@@ -224,15 +224,19 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
             )
         })?;
     let data_len = b.len() - header_bytes;
+    // The data record the file cuts short (of `n` when the header says how many there are).
+    let cut_record = |n: Option<usize>| {
+        let k = data_len / record_bytes;
+        let off = header_bytes + k * record_bytes;
+        let what = match n {
+            None => format!("data record {k} ({record_bytes} bytes)"),
+            Some(n) => format!("data record {k} of {n} ({record_bytes} bytes)"),
+        };
+        ctx.truncated(what, off, off + record_bytes)
+    };
     let n_records = if n_records == -1 {
         if data_len == 0 || data_len % record_bytes != 0 {
-            let k = data_len / record_bytes;
-            let off = header_bytes + k * record_bytes;
-            return Err(ctx.truncated(
-                format!("data record {k} ({record_bytes} bytes)"),
-                off,
-                off + record_bytes,
-            ));
+            return Err(cut_record(None));
         }
         data_len / record_bytes
     } else {
@@ -250,15 +254,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
                     format!("{data_len} bytes after the header"),
                 ))
             }
-            _ => {
-                let k = data_len / record_bytes;
-                let off = header_bytes + k * record_bytes;
-                return Err(ctx.truncated(
-                    format!("data record {k} of {n} ({record_bytes} bytes)"),
-                    off,
-                    off + record_bytes,
-                ));
-            }
+            _ => return Err(cut_record(Some(n))),
         }
     };
     Ok((

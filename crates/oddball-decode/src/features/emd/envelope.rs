@@ -2,7 +2,18 @@
 //! `CubicSpline` (tridiagonal solve as LAPACK's `dgtsv`) and PyEMD's three-knot spline.
 
 use super::extrema::Extrema;
-use super::{degenerate, Result};
+use crate::DecodeError;
+
+type Result<T> = std::result::Result<T, DecodeError>;
+
+/// The error of a signal whose envelopes cannot be built.
+fn degenerate(reason: &str) -> DecodeError {
+    DecodeError::InvalidParameter {
+        name: "signal",
+        value: "EMD input".into(),
+        reason: reason.into(),
+    }
+}
 
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Mirror {
@@ -391,46 +402,13 @@ pub(crate) fn dgtsv(dl: &mut [f64], d: &mut [f64], du: &mut [f64], b: &mut [f64]
     let nm1 = n.saturating_sub(1);
     let (dl, du, b) = (&mut dl[..nm1], &mut du[..nm1], &mut b[..n]);
     for i in 0..n.saturating_sub(2) {
-        if d[i].abs() >= dl[i].abs() {
-            if d[i] == 0.0 {
-                return Err(singular());
-            }
-            let fact = dl[i] / d[i];
-            d[i + 1] -= fact * du[i];
-            b[i + 1] -= fact * b[i];
-            dl[i] = 0.0;
-        } else {
-            let fact = d[i] / dl[i];
-            d[i] = dl[i];
-            let temp = d[i + 1];
-            d[i + 1] = du[i] - fact * temp;
-            dl[i] = du[i + 1];
-            du[i + 1] = -fact * dl[i];
-            du[i] = temp;
-            let temp = b[i];
-            b[i] = b[i + 1];
-            b[i + 1] = temp - fact * b[i + 1];
+        if !eliminate(i, true, dl, d, du, b) {
+            return Err(singular());
         }
     }
-    if n > 1 {
-        let i = n - 2;
-        if d[i].abs() >= dl[i].abs() {
-            if d[i] == 0.0 {
-                return Err(singular());
-            }
-            let fact = dl[i] / d[i];
-            d[i + 1] -= fact * du[i];
-            b[i + 1] -= fact * b[i];
-        } else {
-            let fact = d[i] / dl[i];
-            d[i] = dl[i];
-            let temp = d[i + 1];
-            d[i + 1] = du[i] - fact * temp;
-            du[i] = temp;
-            let temp = b[i];
-            b[i] = b[i + 1];
-            b[i + 1] = temp - fact * b[i + 1];
-        }
+    // The last row has no second super-diagonal to fill.
+    if n > 1 && !eliminate(n - 2, false, dl, d, du, b) {
+        return Err(singular());
     }
     if d[n - 1] == 0.0 {
         return Err(singular());
@@ -443,6 +421,45 @@ pub(crate) fn dgtsv(dl: &mut [f64], d: &mut [f64], du: &mut [f64], b: &mut [f64]
         b[i] = (b[i] - du[i] * b[i + 1] - dl[i] * b[i + 2]) / d[i];
     }
     Ok(())
+}
+
+/// [`dgtsv`]'s elimination of row `i + 1` by row `i` (LAPACK's loop body), pivoting on the larger
+/// of `d[i]` and `dl[i]`; `fill` (every row but the last) also fills the second super-diagonal
+/// (kept in `dl[i]`). False when the pivot is zero (the system is singular).
+#[inline(always)]
+fn eliminate(
+    i: usize,
+    fill: bool,
+    dl: &mut [f64],
+    d: &mut [f64],
+    du: &mut [f64],
+    b: &mut [f64],
+) -> bool {
+    if d[i].abs() >= dl[i].abs() {
+        if d[i] == 0.0 {
+            return false;
+        }
+        let fact = dl[i] / d[i];
+        d[i + 1] -= fact * du[i];
+        b[i + 1] -= fact * b[i];
+        if fill {
+            dl[i] = 0.0;
+        }
+    } else {
+        let fact = d[i] / dl[i];
+        d[i] = dl[i];
+        let temp = d[i + 1];
+        d[i + 1] = du[i] - fact * temp;
+        if fill {
+            dl[i] = du[i + 1];
+            du[i + 1] = -fact * dl[i];
+        }
+        du[i] = temp;
+        let temp = b[i];
+        b[i] = b[i + 1];
+        b[i + 1] = temp - fact * b[i + 1];
+    }
+    true
 }
 
 /// PyEMD's `cubic_spline_3pts` (a natural cubic spline through three knots), evaluated at 0..n.

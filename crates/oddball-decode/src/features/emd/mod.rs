@@ -280,14 +280,6 @@ fn invalid(name: &'static str, value: &str, reason: &str) -> DecodeError {
     }
 }
 
-fn degenerate(reason: &str) -> DecodeError {
-    DecodeError::InvalidParameter {
-        name: "signal",
-        value: "EMD input".into(),
-        reason: reason.into(),
-    }
-}
-
 /// Sifts `ws.imf` in place into an IMF. Returns the report and PyEMD's final `extNo` (the extrema
 /// count it tests for "trend" after the loop).
 fn sift(p: &EmdParams, ws: &mut Workspace) -> Result<(SiftReport, usize)> {

@@ -1,0 +1,47 @@
+//! Why an unsupervised fit could not run.
+
+use crate::DecodeError;
+
+/// Why an unsupervised fit could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum UnsupervisedError {
+    #[error("{n_epochs} epochs but {n_codes} stimulus codes and {n_trials} trial numbers")]
+    Length {
+        n_epochs: usize,
+        n_codes: usize,
+        n_trials: usize,
+    },
+    #[error("{n_scores} initial scores for {n_epochs} epochs")]
+    InitLength { n_epochs: usize, n_scores: usize },
+    #[error("epoch {index}: stimulus code {code} is in none of the choice sets {sets:?}")]
+    UnknownCode {
+        index: usize,
+        code: u32,
+        sets: Vec<Vec<u32>>,
+    },
+    #[error("choice set {set} has {n_codes} codes; a choice needs at least two")]
+    TooFewChoices { set: usize, n_codes: usize },
+    #[error("stimulus code {code} is in more than one choice set")]
+    SharedCode { code: u32 },
+    #[error("an unsupervised fit needs at least two epochs, got {n_epochs}")]
+    TooFewEpochs { n_epochs: usize },
+    #[error("non-finite feature {feature} in epoch {epoch}")]
+    NonFinite { epoch: usize, feature: usize },
+    #[error("the shrunk feature covariance of {n_epochs} epochs × {n_features} features is not positive definite")]
+    NotPositiveDefinite { n_epochs: usize, n_features: usize },
+    #[error("trial {trial} resumes at epoch {index} after another trial: a trial's epochs must be contiguous")]
+    TrialsNotContiguous { trial: usize, index: usize },
+    #[error("the EM degenerated: {what}")]
+    Degenerate { what: String },
+    #[error("parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        name: &'static str,
+        value: String,
+        reason: String,
+    },
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+}
+
+pub(crate) type Result<T> = std::result::Result<T, UnsupervisedError>;
