@@ -237,17 +237,6 @@ pub enum StateProblem {
     Duplicate { first: usize, second: usize },
 }
 
-/// Reads a whole regular file ([`crate::check_file`] first: devices and pipes refused), mapping
-/// the OS error to [`IoError::Io`].
-pub(crate) fn read_file(path: &std::path::Path) -> Result<Vec<u8>, IoError> {
-    crate::check_file(path)?;
-    std::fs::read(path).map_err(|source| IoError::Io {
-        path: path.to_path_buf(),
-        action: "read",
-        source,
-    })
-}
-
 /// The formats [`crate::read`] knows, for messages.
 const KNOWN_FORMATS: &str =
     ".dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7)";

@@ -45,6 +45,7 @@ pub mod easy;
 pub mod edf;
 mod error;
 pub mod events;
+mod files;
 pub mod manifest;
 pub mod mat;
 pub mod montage;
@@ -62,7 +63,7 @@ pub use bci2000::{
     StateColumn, StateDef, States,
 };
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
-pub use dispatch::{check_file, read, RECORDING_EXTENSIONS};
+pub use dispatch::read;
 pub use easy::{
     read_easy, read_easy_with, write_easy, EasyInfo, EasyInfoFile, EasyLayout, EasyOptions,
     EasySfreqSource, EasyWriteOptions, EasyWriteSummary, InfoIndex,
@@ -73,6 +74,7 @@ pub use edf::{
 };
 pub use error::{bounded, IoError, StateProblem, MAX_ECHO_CHARS};
 pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
+pub use files::{check_file, RECORDING_EXTENSIONS};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,

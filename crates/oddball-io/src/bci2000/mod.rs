@@ -50,7 +50,7 @@ pub use write::{
     StateColumn,
 };
 
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::speller::Speller;
 use crate::units::{hz_factor, microvolts_per, split_number_unit};
 use crate::{Details, Format, IoError, Recording};

@@ -29,7 +29,7 @@ use oddball_signal::Event;
 
 pub use info::CsvInfo;
 
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::{Details, Format, IoError, Recording};
 
 /// Which columns are what, and how to turn them into µV samples and events.

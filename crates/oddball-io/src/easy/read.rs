@@ -6,7 +6,7 @@ use ndarray::Array2;
 use oddball_signal::Event;
 
 use crate::csv::{csv_err, marker_event, next_line};
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::{Details, Format, IoError, Recording};
 
 use super::info::*;

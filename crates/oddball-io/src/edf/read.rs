@@ -6,7 +6,7 @@ use std::path::Path;
 use ndarray::Array2;
 use oddball_signal::Event;
 
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::units::microvolts_per;
 use crate::{Details, Format, IoError, Recording};
 

@@ -40,7 +40,7 @@ use super::file::{MatArray, MatFile, MatValue, MatVariable};
 pub use super::info::{MatInfo, MatVarSummary};
 use super::parse::parse_mat_file;
 use crate::bci2000::STANDARD_64_CHANNELS;
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::speller::{CodeOrder, Speller};
 use crate::{Details, Format, IoError, Recording};
 

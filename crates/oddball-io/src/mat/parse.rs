@@ -12,7 +12,7 @@ use std::path::Path;
 use super::file::{
     MatArray, MatClass, MatFile, MatHeader, MatNumbers, MatType, MatValue, MatVariable,
 };
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::IoError;
 
 /// The header: 116 bytes of text, 8 of subsystem offset, 2 of version, 2 of endian indicator.

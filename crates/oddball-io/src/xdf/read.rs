@@ -6,7 +6,7 @@ use std::path::Path;
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
 
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::IoError;
 
 use super::chunk::*;

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use oddball_signal::Event;
 
-use crate::error::read_file;
+use crate::files::read_file;
 use crate::units::stream_microvolts_per;
 use crate::{Details, Format, IoError, Recording};
 
