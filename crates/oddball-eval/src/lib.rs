@@ -10,11 +10,13 @@
 //!   preset with its decision model;
 //! * [`benchmark`]: every preset on every subject of data sets, with MOABB's protocols, and
 //!   [`stats`] (the Wilcoxon signed-rank test) for the comparisons;
-//! * [`unsupervised`]: the EM decoder replayed over speller recordings without labels, scored.
+//! * [`unsupervised`]: the EM decoder replayed over speller recordings without labels, scored;
+//! * [`text`]: the reports as the command line prints them (tables, result rows, summaries).
 
 pub mod benchmark;
 pub mod dataset;
 pub mod evaluate;
 pub mod layout;
 pub mod stats;
+pub mod text;
 pub mod unsupervised;

@@ -7,7 +7,7 @@ use std::str::FromStr;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::pipeline::Preprocess;
-use oddball_eval::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
+use oddball_eval::benchmark::{self, BenchmarkParams, Progress, Protocol};
 use oddball_io::Manifest;
 
 use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
@@ -134,7 +134,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();
     let report = report?;
-    print_report(&report);
+    print!("{}", oddball_eval::text::benchmark(&report));
     if let Some(path) = &args.json {
         oddball_io::write_atomic(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
@@ -151,121 +151,6 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
-}
-
-fn print_report(report: &BenchmarkReport) {
-    let mut last = None;
-    for r in &report.results {
-        let key = (&r.dataset, &r.subject, &r.session, r.protocol);
-        if last != Some(key) {
-            println!(
-                "\n{} / subject {}{} ({}): {} epochs, {} targets{}",
-                r.dataset,
-                r.subject,
-                r.session
-                    .as_ref()
-                    .map(|s| format!(" / session {s}"))
-                    .unwrap_or_default(),
-                r.protocol,
-                r.n_epochs,
-                r.n_targets,
-                r.n_chars
-                    .map(|n| format!(", {n} characters"))
-                    .unwrap_or_default()
-            );
-            last = Some(key);
-        }
-        let chars = r
-            .chars_by_reps
-            .as_ref()
-            .map(|c| {
-                format!(
-                    "  chars right by reps: {}",
-                    c.iter()
-                        .map(|v| v.to_string())
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                )
-            })
-            .unwrap_or_default();
-        println!(
-            "  {:<12} AUC {:.3}  fit {:>7.3} s{}{}",
-            r.preset,
-            r.auc,
-            r.fit_s,
-            chars,
-            r.itr_bits_per_min
-                .map(|v| format!("  ITR {v:.1} bits/min"))
-                .unwrap_or_default()
-        );
-    }
-    println!("\nmean ± sd over subjects:");
-    for s in &report.summary {
-        println!(
-            "  {:<15} {:<12} AUC {:.3} ± {}  (n = {}){}",
-            s.protocol.name(),
-            s.preset,
-            s.auc_mean,
-            s.auc_sd
-                .map(|v| format!("{v:.3}"))
-                .unwrap_or_else(|| "  –  ".into()),
-            s.n,
-            s.char_accuracy_by_reps
-                .as_ref()
-                .map(|a| format!(
-                    "  chars % by reps: {}",
-                    a.iter()
-                        .map(|v| format!("{:.0}", 100.0 * v))
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                ))
-                .unwrap_or_default()
-        );
-    }
-    for protocol in Protocol::ALL {
-        let cs: Vec<_> = report
-            .comparisons
-            .iter()
-            .filter(|c| c.protocol == protocol)
-            .collect();
-        let Some(n) = cs.iter().map(|c| c.n).max() else {
-            continue;
-        };
-        let mut names: Vec<&str> = Vec::new();
-        for c in &cs {
-            if !names.contains(&c.a.as_str()) {
-                names.push(&c.a);
-            }
-        }
-        println!(
-            "\n{protocol}: p of the one-sided Wilcoxon signed-rank test that the row's AUC is \
-             larger than the column's (paired by subject, n = {n}):"
-        );
-        print!("  {:<12}", "");
-        for b in &names {
-            print!(" {b:>12}");
-        }
-        println!();
-        for a in &names {
-            print!("  {a:<12}");
-            for b in &names {
-                let cell = cs
-                    .iter()
-                    .find(|c| c.a == *a && c.b == *b)
-                    .map(|c| match c.pvalue {
-                        Some(p) => format!("{p:.3}"),
-                        None => "tie".into(),
-                    })
-                    .unwrap_or_else(|| "–".into());
-                print!(" {cell:>12}");
-            }
-            println!();
-        }
-    }
-    println!(
-        "\nwall time {:.1} s on {} thread(s)",
-        report.wall_s, report.threads
-    );
 }
 
 #[cfg(test)]

@@ -1,6 +1,5 @@
 //! `oddball inspect FILE…`: what a recording holds, and optionally its target vs non-target ERPs.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
@@ -41,7 +40,7 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
         let rec = crate::load::read_mapped(path, mapping.as_ref(), &read_options)?;
-        print!("{}", summary(&rec));
+        print!("{}", oddball_eval::text::recording(&rec));
         recordings.push(rec);
     }
     if let Some(plot) = &args.plot {
@@ -51,88 +50,6 @@ pub fn run(args: &InspectArgs) -> Result<()> {
         println!("wrote {}", plot.display());
     }
     Ok(())
-}
-
-/// The human-readable summary of one recording.
-pub fn summary(rec: &Recording) -> String {
-    let raw = &rec.raw;
-    let mut s = String::new();
-    let name = rec
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| rec.path.display().to_string());
-    let _ = writeln!(s, "{name}  ({:?})", rec.format);
-    let _ = writeln!(
-        s,
-        "  channels   {}: {}",
-        raw.n_channels(),
-        raw.ch_names().join(" ")
-    );
-    let _ = writeln!(s, "  sfreq      {} Hz", raw.sfreq());
-    let _ = writeln!(
-        s,
-        "  duration   {:.1} s ({} samples)",
-        raw.duration(),
-        raw.n_times()
-    );
-    let events = raw.events();
-    let codes: Vec<String> = events
-        .counts_by_code()
-        .iter()
-        .map(|(code, n)| format!("{code}×{n}"))
-        .collect();
-    let _ = writeln!(
-        s,
-        "  events     {} (per code: {})",
-        events.len(),
-        if codes.is_empty() {
-            "none".to_string()
-        } else {
-            codes.join(" ")
-        }
-    );
-    let unknown = events.len() - events.n_targets() - events.n_nontargets();
-    let _ = write!(
-        s,
-        "  targets    {} target, {} non-target",
-        events.n_targets(),
-        events.n_nontargets()
-    );
-    if unknown > 0 {
-        let _ = write!(s, ", {unknown} unlabelled");
-    }
-    let _ = writeln!(s);
-    if let Some(speller) = &rec.speller {
-        let decoded = speller.decode(events);
-        match &speller.text_to_spell {
-            Some(text) => {
-                let _ = writeln!(
-                    s,
-                    "  text       {text} (TextToSpell; decoded from the target flashes: {decoded})"
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    s,
-                    "  text       {decoded} (decoded from the target flashes)"
-                );
-            }
-        }
-        let _ = writeln!(
-            s,
-            "  speller    {}×{} matrix: {}",
-            speller.n_rows(),
-            speller.n_cols(),
-            speller
-                .matrix()
-                .iter()
-                .map(|r| r.concat())
-                .collect::<Vec<_>>()
-                .join(" / ")
-        );
-    }
-    s
 }
 
 /// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets:
