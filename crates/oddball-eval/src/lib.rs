@@ -4,7 +4,8 @@
 //!
 //! * [`layout`]: the one channel and rate policy of a run (a model's or the first training
 //!   recording's channels by name, its rate by polyphase resampling);
-//! * [`dataset`]: recordings read, labelled and cut into epochs;
+//! * [`dataset`]: recordings read, labelled, matched to a run's layout and cut into epochs;
+//! * [`erp`]: recordings' target and non-target epochs for their averages;
 //! * [`evaluate`]: presets fitted on training recordings and scored on test recordings or by
 //!   k-fold cross-validation (tuning nested), speller characters and the Wolpaw ITR; training a
 //!   preset with its decision model;
@@ -15,6 +16,7 @@
 
 pub mod benchmark;
 pub mod dataset;
+pub mod erp;
 pub mod evaluate;
 pub mod layout;
 pub mod stats;

@@ -1,8 +1,9 @@
 //! The text of the harness's reports, as the command line prints it: the tuning tables, the
 //! result rows of `evaluate` under their header, what a training run says it fits, the
-//! benchmark's tables, the unsupervised replay's summary and a recording's summary. Every
-//! function returns a `String` (whole lines, each ending in a newline) and prints nothing;
-//! [`Narration`] turns a run's [`Progress`] into the lines to say as it goes.
+//! benchmark's tables, the unsupervised replay's summary, a recording's summary and the note
+//! that a file was resampled. Every function returns a `String` (whole lines, each ending in a
+//! newline) and prints nothing; [`Narration`] turns a run's [`Progress`] into the lines to say
+//! as it goes.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -12,6 +13,7 @@ use oddball_io::Recording;
 
 use crate::benchmark::{BenchmarkReport, Protocol};
 use crate::evaluate::{PipelineResult, Progress, Trained};
+use crate::layout::Resampled;
 use crate::unsupervised::UnsupervisedResult;
 
 /// How cross-validation folds were made.
@@ -338,6 +340,16 @@ fn comparisons(s: &mut String, report: &BenchmarkReport, protocol: Protocol) {
         }
         s.push('\n');
     }
+}
+
+/// The note that `run` was resampled to the rate of `of` (a [`Layout`](crate::layout::Layout)).
+pub fn resampled(run: &Path, r: Resampled, of: &str) -> String {
+    format!(
+        "{}: resampled from {} Hz to {} Hz (polyphase) to match {of}\n",
+        run.display(),
+        r.from,
+        r.to
+    )
 }
 
 /// What a recording holds: its format, channels, rate, duration, events by code, targets, and

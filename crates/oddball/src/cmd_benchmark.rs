@@ -8,6 +8,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::pipeline::Preprocess;
 use oddball_eval::benchmark::{self, BenchmarkParams, Progress, Protocol};
+use oddball_eval::text;
 use oddball_io::Manifest;
 
 use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
@@ -122,19 +123,14 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
         }
         Progress::Loaded { .. } | Progress::Done { .. } => bar.inc(1),
-        Progress::Resampled { run, resampled, of } => bar.suspend(|| {
-            eprintln!(
-                "{}: resampled from {} Hz to {} Hz (polyphase) to match {of}",
-                run.display(),
-                resampled.from,
-                resampled.to
-            )
-        }),
+        Progress::Resampled { run, resampled, of } => {
+            bar.suspend(|| eprint!("{}", text::resampled(run, resampled, of)))
+        }
     };
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();
     let report = report?;
-    print!("{}", oddball_eval::text::benchmark(&report));
+    print!("{}", text::benchmark(&report));
     if let Some(path) = &args.json {
         oddball_io::write_atomic(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", path.display()))?;
