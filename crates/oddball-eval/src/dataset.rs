@@ -134,7 +134,8 @@ pub fn read_mapped(
     Ok(rec)
 }
 
-fn read(path: &Path, options: &ReadOptions) -> Result<Recording, DatasetError> {
+/// Reads a recording with `options` (as read, not yet labelled).
+pub fn read(path: &Path, options: &ReadOptions) -> Result<Recording, DatasetError> {
     oddball_io::read_with(path, options).map_err(|source| DatasetError::Read {
         path: path.to_path_buf(),
         source: Box::new(source),

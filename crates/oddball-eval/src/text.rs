@@ -1,19 +1,21 @@
 //! The text of the harness's reports, as the command line prints it: the tuning tables, the
 //! result rows of `evaluate` under their header, what a training run says it fits, the
-//! benchmark's tables, the unsupervised replay's summary, a recording's summary and the note
-//! that a file was resampled. Every function returns a `String` (whole lines, each ending in a
-//! newline) and prints nothing; [`Narration`] turns a run's [`Progress`] into the lines to say
-//! as it goes.
+//! benchmark's tables, the unsupervised replay's summary, a re-decided session file, a
+//! recording's summary and the note that a file was resampled. Every function returns a
+//! `String` (whole lines, each ending in a newline) and prints nothing; [`Narration`] turns a
+//! run's [`Progress`] into the lines to say as it goes.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use oddball_decode::model_selection::tuning::TuningReport;
 use oddball_io::Recording;
+use oddball_session::report::redecision_line;
 
 use crate::benchmark::{BenchmarkReport, Protocol};
 use crate::evaluate::{PipelineResult, Progress, Trained};
 use crate::layout::Resampled;
+use crate::sessions::Redecided;
 use crate::unsupervised::UnsupervisedResult;
 
 /// How cross-validation folds were made.
@@ -90,6 +92,19 @@ pub fn result_row(r: &PipelineResult) -> String {
             .as_ref()
             .map(|t| format!("  [{}]", t.chosen))
             .unwrap_or_default(),
+    )
+}
+
+/// Why `evaluate --plot` draws no accuracy-vs-repetitions plot: it cross-validated (no test
+/// files), or its test files are not spellers.
+pub fn no_accuracy_plot(cross_validation: bool) -> String {
+    format!(
+        "no accuracy-vs-repetitions plot: {} (it needs speller test files)\n",
+        if cross_validation {
+            "cross-validation has no test files"
+        } else {
+            "the test files are not spellers"
+        }
     )
 }
 
@@ -340,6 +355,15 @@ fn comparisons(s: &mut String, report: &BenchmarkReport, protocol: Protocol) {
         }
         s.push('\n');
     }
+}
+
+/// A re-decided session file: its path, a line per decision and the summary.
+pub fn redecided(r: &Redecided) -> String {
+    let mut s = format!("{}:\n", r.result.file.display());
+    for d in &r.result.decisions {
+        let _ = writeln!(s, "{}", redecision_line(d, &r.bulbs));
+    }
+    s + &r.result.summary_line() + "\n"
 }
 
 /// The note that `run` was resampled to the rate of `of` (a [`Layout`](crate::layout::Layout)).

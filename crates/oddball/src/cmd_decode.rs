@@ -8,8 +8,11 @@ use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
 use oddball_eval::text::{self, Narration};
+use oddball_eval::{dataset, sessions, unsupervised};
+use oddball_io::ReadOptions;
+use oddball_session::record::is_session;
 
-use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
+use crate::load::{load_epochs, load_model, EventArgs, Layout};
 use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
 use oddball_decode::preset::Preset;
 
@@ -109,16 +112,15 @@ pub struct EvaluateArgs {
     pub events: EventArgs,
 }
 
-/// A progress bar over `len` fits on stderr; indicatif hides it when stderr is not a terminal
-/// (or `TERM` is unset or `dumb`), so logs and pipes stay clean.
-fn progress(len: u64, what: &str) -> ProgressBar {
+/// A progress bar of `len` steps on stderr drawn by `template`; indicatif hides it when stderr
+/// is not a terminal (or `TERM` is unset or `dumb`), so logs and pipes stay clean.
+pub fn bar(len: u64, template: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
     pb.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} fits {elapsed} (eta {eta})")
+        ProgressStyle::with_template(template)
             .expect("a valid template")
             .progress_chars("=> "),
     );
-    pb.set_message(what.to_string());
     pb
 }
 
@@ -140,7 +142,12 @@ impl Report {
 
     fn on(&mut self, p: Progress<'_>) {
         if let Progress::Plan { fits, .. } = p {
-            self.bar = Some(progress(fits as u64, &self.what));
+            let b = bar(
+                fits as u64,
+                "{msg} [{bar:30}] {pos}/{len} fits {elapsed} (eta {eta})",
+            );
+            b.set_message(self.what.clone());
+            self.bar = Some(b);
         }
         match (p, &self.bar) {
             (Progress::Preset(name), Some(b)) => b.set_message(name.to_string()),
@@ -163,27 +170,23 @@ impl Report {
 
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
-    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[])?)?;
+    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[], None)?.0)?;
     let t0 = std::time::Instant::now();
-    let name = args.pipeline.name();
+    let (name, folds) = (args.pipeline.name(), args.tune.then_some(args.folds));
     let mut report = Report::new(
         name,
         Narration::training(name, "zero-phase band-passed epochs"),
     );
-    let trained = evaluate::train(
-        args.pipeline,
-        &set,
-        args.tune.then_some(args.folds),
-        &mut |p| report.on(p),
-    );
+    let trained = evaluate::train(args.pipeline, &set, folds, &mut |p| report.on(p));
     report.finish();
     let trained = trained?;
     let ch_names = set.epochs().ch_names().to_vec();
     // The zero-phase epochs go before the causal ones come (one set in memory at a time).
     drop(set);
     // What a session runs: the same settings on the causally band-passed epochs.
-    let live_pre = pre.as_causal();
-    let live_set = TrainingSet::pool(load_epochs(&args.files, &live_pre, &args.events, &[])?)?;
+    let causal = pre.as_causal();
+    let live_set =
+        TrainingSet::pool(load_epochs(&args.files, &causal, &args.events, &[], None)?.0)?;
     let mut report = Report::new(
         name,
         Narration::training(name, "causally band-passed epochs (as a session runs it)"),
@@ -191,11 +194,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     let live = evaluate::train_with(
         &trained.params,
         &live_set,
-        if args.tune {
-            args.folds
-        } else {
-            evaluate::DECISION_FOLDS
-        },
+        folds.unwrap_or(evaluate::DECISION_FOLDS),
         &mut |p| report.on(p),
     );
     report.finish();
@@ -204,12 +203,7 @@ pub fn run_train(args: &TrainArgs) -> Result<()> {
     // Said once the model is written; the time is the training's.
     let seconds = t0.elapsed().as_secs_f64();
     let said = text::trained(name, &trained, &live, args.files.len(), seconds, &args.out);
-    let mut live_model = Model::new(live_pre, live.sfreq, ch_names.clone(), live.pipeline);
-    live_model.decision = Some(live.decision);
-    let mut model = Model::new(pre, trained.sfreq, ch_names, trained.pipeline);
-    model.tuning = trained.tuning;
-    model.decision = Some(trained.decision);
-    model.live = Some(Box::new(live_model));
+    let model = evaluate::session_model(pre, ch_names, trained, live);
     oddball_io::write_atomic(&args.out, model.to_json())
         .with_context(|| format!("writing {}", args.out.display()))?;
     print!("{said}");
@@ -223,33 +217,26 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
     if let Some(path) = &args.model {
         let model = load_model(path)?;
         if let Some(first) = args.test.first() {
-            let rec = crate::load::read(first)?;
-            if oddball_session::record::is_session(&rec) {
+            if is_session(&dataset::read(first, &ReadOptions::default())?) {
                 return evaluate_sessions(args, &model, path);
             }
         }
         // The data is matched to the model (channels by name, rate) before any filtering.
         let layout = Layout::of_model(&model, path);
-        let (test, _) = load_epochs_in(
+        let (test, _) = load_epochs(
             &args.test,
             &model.preprocess,
             &args.events,
             &args.test_text,
             Some(&layout),
         )?;
-        for rec in &test {
-            model
-                .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
-                .with_context(|| format!("scoring {} with {}", rec.name, path.display()))?;
-        }
-        let mut r = evaluate::score_test(&model.pipeline, 0.0, &test)?;
-        r.tuning = model.tuning.clone();
+        let r = evaluate::score_model(&model, &path.display().to_string(), &test)?;
         print!("{}{}", text::RESULT_HEADER, text::result_row(&r));
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let (train, layout) = load_epochs_in(&args.train, &pre, &args.events, &[], None)?;
-    let (test, _) = load_epochs_in(
+    let (train, layout) = load_epochs(&args.train, &pre, &args.events, &[], None)?;
+    let (test, _) = load_epochs(
         &args.test,
         &pre,
         &args.events,
@@ -275,59 +262,29 @@ fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
             oddball_plot::accuracy::draw_accuracy(path, results)?;
             println!("wrote {}", path.display());
         } else {
-            println!(
-                "no accuracy-vs-repetitions plot: {} (it needs speller test files)",
-                if args.test.is_empty() {
-                    "cross-validation has no test files"
-                } else {
-                    "the test files are not spellers"
-                }
-            );
+            print!("{}", text::no_accuracy_plot(args.test.is_empty()));
         }
     }
     write_json(args, results)
 }
 
-fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
-    if let Some(path) = &args.out {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(results)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+fn write_json(args: &EvaluateArgs, results: &(impl serde::Serialize + ?Sized)) -> Result<()> {
+    match &args.out {
+        Some(path) => crate::load::write_out(path, serde_json::to_string_pretty(results)?),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Re-evaluates oddball session files (`oddball demo` writes `session.dat`) with a model:
 /// every online decision recomputed from the raw EEG, compared with the recorded one.
 fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> Result<()> {
-    use oddball_session::record::{read_session, reevaluate};
-    use oddball_session::report::{redecision_line, SessionResult};
-
     let mut results = Vec::new();
     for path in &args.test {
-        let rec = crate::load::read(path)?;
-        let saved = read_session(&rec).with_context(|| format!("reading {}", path.display()))?;
-        let decisions = reevaluate(&rec, &saved, model).with_context(|| {
-            format!(
-                "re-evaluating {} with {}",
-                path.display(),
-                model_path.display()
-            )
-        })?;
-        println!("{}:", path.display());
-        for d in &decisions {
-            println!("{}", redecision_line(d, &saved.bulbs));
-        }
-        let result = SessionResult::new(path.clone(), decisions);
-        println!("{}", result.summary_line());
-        results.push(result);
+        let r = sessions::redecide(path, model, model_path)?;
+        print!("{}", text::redecided(&r));
+        results.push(r.result);
     }
-    if let Some(path) = &args.out {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(&results)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
-    }
-    Ok(())
+    write_json(args, &results)
 }
 
 /// Where an unsupervised replay's EM starts (`--em-start`).
@@ -339,33 +296,21 @@ pub enum EmStart {
 
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    use oddball_decode::unsupervised::{P300Template, UnsupervisedParams};
-    use oddball_eval::unsupervised::evaluate_unsupervised;
-
     let pre = Preprocess::peer();
-    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
-    let sfreq = test.first().map_or(0.0, |r| r.epochs.sfreq());
-    let params = UnsupervisedParams::for_sfreq(sfreq)?;
-    let template = match args.em_start {
-        EmStart::Template => Some(P300Template::default().matched(&pre, sfreq)?),
-        EmStart::Random => None,
-    };
-    let mut bar: Option<ProgressBar> = None;
-    let r = evaluate_unsupervised(&params, &test, template.as_ref(), &mut |k, n| {
-        let b = bar.get_or_insert_with(|| {
-            let b = ProgressBar::new(n as u64);
-            b.set_style(
-                ProgressStyle::with_template(
+    let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
+    let template = args.em_start == EmStart::Template;
+    let mut shown: Option<ProgressBar> = None;
+    let r = unsupervised::replay(&pre, &test, template, &mut |k, n| {
+        shown
+            .get_or_insert_with(|| {
+                bar(
+                    n as u64,
                     "unsupervised [{bar:30}] {pos}/{len} characters {elapsed}",
                 )
-                .expect("a valid template")
-                .progress_chars("=> "),
-            );
-            b
-        });
-        b.set_position(k as u64 + 1);
+            })
+            .set_position(k as u64 + 1);
     });
-    if let Some(b) = bar {
+    if let Some(b) = shown {
         b.finish_and_clear();
     }
     let r = r?;

@@ -8,7 +8,7 @@ use oddball_eval::dataset::{self, DatasetError};
 use oddball_eval::evaluate::EpochedRecording;
 pub use oddball_eval::layout::Layout;
 use oddball_eval::layout::LayoutError;
-use oddball_io::{EventMapping, ReadOptions, Recording};
+use oddball_io::{EventMapping, ReadOptions};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
 /// texts.
@@ -87,11 +87,6 @@ impl EventArgs {
     }
 }
 
-/// Reads a recording.
-pub fn read(path: &Path) -> Result<Recording> {
-    oddball_io::read(path).with_context(|| format!("reading {}", path.display()))
-}
-
 /// A library error with the flags that would fix it named, as the message says them.
 fn with_flags(e: DatasetError) -> anyhow::Error {
     match e {
@@ -117,18 +112,8 @@ fn with_flags(e: DatasetError) -> anyhow::Error {
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
 /// recorded without labels) and epochs each recording ([`dataset::load_epochs`]); a recording
 /// whose events carry no labels is an error saying how to label them. Every file's channels
-/// are matched by name to the first's ([`Layout`]).
+/// are matched by name to `layout`'s (else to the first file's, returned).
 pub fn load_epochs(
-    paths: &[PathBuf],
-    pre: &Preprocess,
-    events: &EventArgs,
-    texts: &[String],
-) -> Result<Vec<EpochedRecording>> {
-    load_epochs_in(paths, pre, events, texts, None).map(|(e, _)| e)
-}
-
-/// [`load_epochs`] with every file matched to `layout` (else to the first file's), returned.
-pub fn load_epochs_in(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
@@ -157,6 +142,13 @@ pub fn load_epochs_in(
         eprint!("{}", oddball_eval::text::resampled(p, r, of))
     })
     .map_err(with_flags)
+}
+
+/// Writes `text` to `path` (atomically) and says so.
+pub fn write_out(path: &Path, text: String) -> Result<()> {
+    oddball_io::write_atomic(path, text).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
 }
 
 /// Reads a saved model.
