@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::pipeline::Preprocess;
 use oddball_eval::benchmark::{self, BenchmarkParams, Progress, Protocol};
 use oddball_eval::text;
 use oddball_io::Manifest;
 
+use crate::load::write_out;
 use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
 
 /// `--protocol a,b` or `all`.
@@ -21,17 +21,7 @@ impl FromStr for ProtocolList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        if s.trim() == "all" {
-            return Ok(Self(Protocol::ALL.to_vec()));
-        }
-        let mut out = Vec::new();
-        for p in s.split(',') {
-            let p: Protocol = p.parse().map_err(|e| format!("{e}, or all"))?;
-            if !out.contains(&p) {
-                out.push(p);
-            }
-        }
-        Ok(Self(out))
+        crate::preset_arg::list(s, &Protocol::ALL, str::parse).map(Self)
     }
 }
 
@@ -74,21 +64,8 @@ pub struct BenchmarkArgs {
 }
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
-    // Everything checked before any EEG is read: output files' folders, manifests, the plan.
-    for out in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty());
-        if let Some(dir) = dir {
-            anyhow::ensure!(
-                dir.is_dir(),
-                "{}: the folder {} does not exist",
-                out.display(),
-                dir.display()
-            );
-        }
-    }
-    if let Some(plot) = &args.plot {
-        oddball_plot::PlotFormat::from_path(plot)?;
-    }
+    // Everything checked before any EEG is read: the output files (their folders and the
+    // plot's format, when the command line is parsed), the threads, the manifests, the plan.
     if args.threads == Some(0) {
         anyhow::bail!("--threads must be at least 1");
     }
@@ -111,12 +88,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .context("starting the worker threads")?;
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})")
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
+    let bar = crate::cmd_decode::bar(0, "{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})");
     let on = |p: Progress<'_>| match p {
         Progress::Plan { subjects, units } => {
             bar.set_length((subjects + units) as u64);
@@ -132,14 +104,10 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let report = report?;
     print!("{}", text::benchmark(&report));
     if let Some(path) = &args.json {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(&report)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_out(path, serde_json::to_string_pretty(&report)?)?;
     }
     if let Some(path) = &args.csv {
-        oddball_io::write_atomic(path, benchmark::to_csv(&report.results))
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_out(path, benchmark::to_csv(&report.results))?;
     }
     if let Some(path) = &args.plot {
         oddball_plot::benchmark::draw_benchmark(path, &report, None)
