@@ -23,14 +23,14 @@ pub enum SessionFileError {
     Session {
         path: PathBuf,
         #[source]
-        source: SessionError,
+        source: Box<SessionError>,
     },
     #[error("re-evaluating {} with {}", path.display(), model.display())]
     Reevaluate {
         path: PathBuf,
         model: PathBuf,
         #[source]
-        source: SessionError,
+        source: Box<SessionError>,
     },
 }
 
@@ -51,13 +51,13 @@ pub fn redecide(
     let rec = dataset::read(path, &ReadOptions::default())?;
     let saved = read_session(&rec).map_err(|source| SessionFileError::Session {
         path: path.to_path_buf(),
-        source,
+        source: Box::new(source),
     })?;
     let decisions =
         reevaluate(&rec, &saved, model).map_err(|source| SessionFileError::Reevaluate {
             path: path.to_path_buf(),
             model: model_path.to_path_buf(),
-            source,
+            source: Box::new(source),
         })?;
     Ok(Redecided {
         result: SessionResult::new(path.to_path_buf(), decisions),

@@ -449,3 +449,43 @@ pub fn recording(rec: &Recording) -> String {
     }
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn result(pipeline: &str) -> PipelineResult {
+        PipelineResult {
+            pipeline: pipeline.to_string(),
+            auc: 0.8771,
+            auc_folds: vec![0.8771],
+            speller_accuracy: Some(vec![0.5, 1.0]),
+            speller_choices: Some(36),
+            speller_n_chars: Some(2),
+            speller_text: Some("HI".into()),
+            reps_for_all_correct: Some(2),
+            itr_at_best: None,
+            fit_s: 0.25,
+            score_epochs_per_s: 1000.0,
+            tuning: None,
+            tuning_per_fold: None,
+        }
+    }
+
+    #[test]
+    fn rows_come_under_one_header() {
+        let mut n = Narration::evaluating();
+        let (a, b) = (result("lda"), result("riemann"));
+        let first = n.on(&Progress::Scored(&a));
+        assert_eq!(
+            first,
+            format!(
+                "{RESULT_HEADER}lda        AUC 0.877  fit   0.250 s       1000 epochs/s  chars % \
+                 by reps: 50 100  picks HI  all right from 2 reps\n"
+            )
+        );
+        let second = n.on(&Progress::Scored(&b));
+        assert!(second.starts_with("riemann    AUC 0.877"), "{second}");
+        assert_eq!(n.on(&Progress::Fit), "");
+    }
+}

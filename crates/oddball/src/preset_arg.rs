@@ -35,7 +35,7 @@ impl FromStr for PipelineList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        list(s, &Preset::ALL, |name| preset(name.trim())).map(Self)
+        list(s, Preset::ALL, |name| preset(name.trim())).map(Self)
     }
 }
 
