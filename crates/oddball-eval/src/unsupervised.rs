@@ -77,9 +77,10 @@ pub fn replay(
 ) -> Result<UnsupervisedResult, ReplayError> {
     let sfreq = recs.first().map_or(0.0, |r| r.epochs.sfreq());
     let params = UnsupervisedParams::for_sfreq(sfreq)?;
-    let template = match template {
-        true => Some(P300Template::default().matched(pre, sfreq)?),
-        false => None,
+    let template = if template {
+        Some(P300Template::default().matched(pre, sfreq)?)
+    } else {
+        None
     };
     evaluate_unsupervised(&params, recs, template.as_ref(), on_character)
 }

@@ -1,5 +1,5 @@
-//! `oddball benchmark`: the arguments, the progress bar, the tables and the files. The
-//! evaluation itself is `oddball_eval::benchmark`'s.
+//! `oddball benchmark`: the arguments, the progress bar and the files. The evaluation itself is
+//! `oddball_eval::benchmark`'s, the tables printed `oddball_eval::text`'s.
 
 use std::path::PathBuf;
 use std::str::FromStr;

@@ -1,5 +1,6 @@
-//! `oddball train` and `oddball evaluate`: the arguments, the files and what is printed. The
-//! fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s.
+//! `oddball train` and `oddball evaluate`: the arguments, the progress bars, the files, and
+//! printing. The fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s
+//! (and its `unsupervised` and `sessions`), the text printed is `oddball_eval::text`'s.
 
 use std::path::{Path, PathBuf};
 

@@ -1,5 +1,6 @@
 //! The `--pipeline` argument: presets parsed (by [`Preset`]'s one `FromStr`) when the command
-//! line is parsed, one default for every command, and the help text listing them.
+//! line is parsed, one default for every command, and the help text listing them; [`list`]
+//! parses it (and `--protocol`) as `all` or a comma-separated list.
 
 use std::str::FromStr;
 
