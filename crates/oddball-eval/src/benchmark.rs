@@ -386,42 +386,24 @@ fn load_subject(
     on: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<Vec<EpochedRecording>, BenchmarkError> {
     let subj = &m.subjects[s];
-    let mut layout: Option<Layout> = None;
-    subj.runs()
-        .map(|run| {
-            let how = Labelling {
-                mapping: m.events.as_ref(),
-                text: subj.text_of(run),
-                speller: m.speller.as_ref(),
-                read: m.read.as_ref(),
-            };
-            let rec = dataset::read_labelled(run, how)?;
-            let rec = match &layout {
-                Some(l) => {
-                    let (rec, resampled) =
-                        l.fit(rec).map_err(|e| DatasetError::Layout(Box::new(e)))?;
-                    if let Some(resampled) = resampled {
-                        on(Progress::Resampled {
-                            run,
-                            resampled,
-                            of: &l.of,
-                        });
-                    }
-                    rec
-                }
-                None => {
-                    layout = Some(Layout::of_recording(&rec));
-                    rec
-                }
-            };
-            dataset::epoch(rec, pre)
-        })
-        .collect::<Result<_, _>>()
-        .map_err(|source| BenchmarkError::Dataset {
-            dataset: m.name.clone(),
-            subject: subj.id.clone(),
-            source: Box::new(source),
-        })
+    let runs = subj.runs().map(|run| {
+        let how = Labelling {
+            mapping: m.events.as_ref(),
+            text: subj.text_of(run),
+            speller: m.speller.as_ref(),
+            read: m.read.as_ref(),
+        };
+        (run.as_path(), how)
+    });
+    dataset::load_epochs(runs, pre, None, None, &mut |run, resampled, of| {
+        on(Progress::Resampled { run, resampled, of })
+    })
+    .map(|(recs, _)| recs)
+    .map_err(|source| BenchmarkError::Dataset {
+        dataset: m.name.clone(),
+        subject: subj.id.clone(),
+        source: Box::new(source),
+    })
 }
 
 /// The recordings of `runs` among a subject's loaded runs.

@@ -4,7 +4,8 @@
 //! manifest's `[speller]`), and cut epochs with the [`Preprocess`] of the model.
 //!
 //! A recording with events of which none says target or non-target is an error that says how
-//! to label them (an event mapping, or the spelled text).
+//! to label them (an event mapping, or the spelled text). [`load_epochs`] does it for every
+//! file of a run, each matched to the run's one [`Layout`].
 
 use std::path::{Path, PathBuf};
 
@@ -15,6 +16,7 @@ use oddball_signal::SignalError;
 use thiserror::Error;
 
 use crate::evaluate::EpochedRecording;
+use crate::layout::{Layout, Resampled};
 use oddball_decode::preprocess::Preprocess;
 
 /// Why a recording could not become labelled epochs; every variant names the file.
@@ -65,6 +67,14 @@ pub enum DatasetError {
     /// A run's channels or rate could not be matched to its subject's first run's.
     #[error(transparent)]
     Layout(Box<crate::layout::LayoutError>),
+    /// Resampling a recording to the rate asked for failed.
+    #[error("resampling {} to {to} Hz", path.display())]
+    Resample {
+        path: PathBuf,
+        to: f64,
+        #[source]
+        source: SignalError,
+    },
     #[error("epoching {}", path.display())]
     Epoch {
         path: PathBuf,
@@ -110,13 +120,39 @@ pub fn speller_of(spec: &SpellerSpec) -> Result<Speller, String> {
     Ok(speller)
 }
 
-/// Reads and labels a recording (see [`Labelling`]); not yet epoched.
-pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, DatasetError> {
-    let options = how.read.cloned().unwrap_or_default();
-    let mut rec = oddball_io::read_with(path, &options).map_err(|source| DatasetError::Read {
+/// Reads a recording with `options` and applies `mapping`, if any: its events may stay
+/// unlabelled (what a look at a file needs, not an evaluation).
+pub fn read_mapped(
+    path: &Path,
+    mapping: Option<&EventMapping>,
+    options: &ReadOptions,
+) -> Result<Recording, DatasetError> {
+    let mut rec = read(path, options)?;
+    if let Some(m) = mapping {
+        map_events(&mut rec, path, m)?;
+    }
+    Ok(rec)
+}
+
+/// Reads a recording with `options` (as read, not yet labelled).
+pub fn read(path: &Path, options: &ReadOptions) -> Result<Recording, DatasetError> {
+    oddball_io::read_with(path, options).map_err(|source| DatasetError::Read {
+        path: path.to_path_buf(),
+        source: Box::new(source),
+    })
+}
+
+fn map_events(rec: &mut Recording, path: &Path, m: &EventMapping) -> Result<(), DatasetError> {
+    rec.map_events(m).map_err(|source| DatasetError::Label {
         path: path.to_path_buf(),
         source: Box::new(source),
     })?;
+    Ok(())
+}
+
+/// Reads and labels a recording (see [`Labelling`]); not yet epoched.
+pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, DatasetError> {
+    let mut rec = read(path, &how.read.cloned().unwrap_or_default())?;
     if let Some(spec) = how.speller {
         let speller = speller_of(spec).map_err(|what| DatasetError::Speller {
             path: path.to_path_buf(),
@@ -139,10 +175,7 @@ pub fn read_labelled(path: &Path, how: Labelling<'_>) -> Result<Recording, Datas
         }
     }
     if let Some(m) = how.mapping {
-        rec.map_events(m).map_err(|source| DatasetError::Label {
-            path: path.to_path_buf(),
-            source: Box::new(source),
-        })?;
+        map_events(&mut rec, path, m)?;
     }
     if let Some(text) = how.text {
         rec.label_from_text(text)
@@ -187,6 +220,48 @@ pub fn epoch(rec: Recording, pre: &Preprocess) -> Result<EpochedRecording, Datas
         speller,
         epochs,
     })
+}
+
+/// Reads and labels each run (a path and its [`Labelling`]), resamples it to `resample` Hz when
+/// given, matches it to `layout` (else to the first run's, which is returned) and epochs it with
+/// `pre`; `on_resampled(path, resampled, layout.of)` hears of every run resampled to the
+/// layout's rate.
+pub fn load_epochs<'a>(
+    runs: impl IntoIterator<Item = (&'a Path, Labelling<'a>)>,
+    pre: &Preprocess,
+    resample: Option<f64>,
+    layout: Option<&Layout>,
+    on_resampled: &mut dyn FnMut(&Path, Resampled, &str),
+) -> Result<(Vec<EpochedRecording>, Option<Layout>), DatasetError> {
+    let mut layout = layout.cloned();
+    let mut epoched = Vec::new();
+    for (path, how) in runs {
+        let mut rec = read_labelled(path, how)?;
+        if let Some(to) = resample.filter(|&f| (rec.raw.sfreq() - f).abs() > 1e-9 * f) {
+            rec.raw = oddball_signal::resample::resample_raw(&rec.raw, to).map_err(|source| {
+                DatasetError::Resample {
+                    path: path.to_path_buf(),
+                    to,
+                    source,
+                }
+            })?;
+        }
+        let rec = match &layout {
+            Some(l) => {
+                let (rec, resampled) = l.fit(rec).map_err(|e| DatasetError::Layout(Box::new(e)))?;
+                if let Some(r) = resampled {
+                    on_resampled(path, r, &l.of);
+                }
+                rec
+            }
+            None => {
+                layout = Some(Layout::of_recording(&rec));
+                rec
+            }
+        };
+        epoched.push(epoch(rec, pre)?);
+    }
+    Ok((epoched, layout))
 }
 
 #[cfg(test)]

@@ -22,10 +22,12 @@ use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModelParams};
 use oddball_decode::metrics::{
     character_of_flashes, roc_auc, speller_accuracy_by_repetitions, Itr, ScoredFlash,
 };
+use oddball_decode::model::Model;
 use oddball_decode::model_selection::tuning::{cv_folds, tune_cached, Folds, TuningReport};
 use oddball_decode::model_selection::{cross_val_predict, cross_val_scores};
 use oddball_decode::pipeline::FrontCache;
 use oddball_decode::pipeline::{Pipeline, PipelineParams};
+use oddball_decode::preprocess::Preprocess;
 use oddball_decode::preset::Preset;
 use oddball_decode::DecodeError;
 
@@ -47,6 +49,14 @@ pub enum EvaluateError {
     Tuning {
         preset: Preset,
         fold: Option<usize>,
+        #[source]
+        source: DecodeError,
+    },
+    /// A test recording does not have the model's channels or rate.
+    #[error("scoring {recording} with {model}")]
+    Layout {
+        recording: String,
+        model: String,
         #[source]
         source: DecodeError,
     },
@@ -338,6 +348,24 @@ pub fn train(
     let mut trained = fit_with_decision(&params, &mut cache, epochs, y, groups, &folds, on)?;
     trained.tuning = tuning;
     Ok(trained)
+}
+
+/// The model `oddball train` writes: `trained` (fitted on epochs cut by `pre`, zero-phase) with
+/// its tuning and decision model, carrying as its live model `live` (the same settings fitted
+/// on the causally band-passed epochs, `pre.as_causal()`), which a session runs.
+pub fn session_model(
+    pre: Preprocess,
+    ch_names: Vec<String>,
+    trained: Trained,
+    live: Trained,
+) -> Model {
+    let mut live_model = Model::new(pre.as_causal(), live.sfreq, ch_names.clone(), live.pipeline);
+    live_model.decision = Some(live.decision);
+    let mut model = Model::new(pre, trained.sfreq, ch_names, trained.pipeline);
+    model.tuning = trained.tuning;
+    model.decision = Some(trained.decision);
+    model.live = Some(Box::new(live_model));
+    model
 }
 
 /// Fits `params` (already chosen) on all epochs of `recs` with its decision model from
@@ -700,6 +728,24 @@ pub fn score_test(
         result.speller_accuracy = Some(acc);
     }
     Ok(result)
+}
+
+/// Scores the test recordings with a saved `model` (named `name` in errors) as [`score_test`]
+/// does, each recording first checked to have its channels and rate; the result carries the
+/// model's tuning.
+pub fn score_model(model: &Model, name: &str, test: &[EpochedRecording]) -> Result<PipelineResult> {
+    for rec in test {
+        model
+            .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
+            .map_err(|source| EvaluateError::Layout {
+                recording: rec.name.clone(),
+                model: name.to_string(),
+                source,
+            })?;
+    }
+    let mut r = score_test(&model.pipeline, 0.0, test)?;
+    r.tuning = model.tuning.clone();
+    Ok(r)
 }
 
 /// The first repetition count (1-based) from which the accuracy stays at 100 % up to the last

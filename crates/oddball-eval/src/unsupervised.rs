@@ -7,10 +7,11 @@ use serde::Serialize;
 
 use crate::evaluate::{labels, pooled_accuracy, score_speller, EpochedRecording, EvaluateError};
 use oddball_decode::metrics::{character_of_flashes, roc_auc};
-use oddball_decode::pipeline::EpochSource;
+use oddball_decode::pipeline::{EpochSource, Preprocess};
 use oddball_decode::unsupervised::{
-    replay_from, Constraint, MatchedTemplate, UnsupervisedError, UnsupervisedParams,
+    replay_from, Constraint, MatchedTemplate, P300Template, UnsupervisedError, UnsupervisedParams,
 };
+use oddball_decode::DecodeError;
 
 /// Why an unsupervised replay could not run or be scored.
 #[derive(Debug, thiserror::Error)]
@@ -34,6 +35,8 @@ pub enum ReplayError {
     Evaluate(#[from] EvaluateError),
     #[error(transparent)]
     Signal(#[from] SignalError),
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
 }
 
 /// AUC of one recording's epochs under the final model.
@@ -61,6 +64,25 @@ pub struct UnsupervisedResult {
     /// Log-likelihood of the final model (penalised), and which initialisation it came from.
     pub objective: f64,
     pub init: String,
+}
+
+/// [`evaluate_unsupervised`] with the decoder's settings for the recordings' rate; with
+/// `template`, every refit's EM also starts from the scores of a P300 template seen through
+/// `pre`'s band-pass (the epochs' preprocessing), as a session without calibration starts.
+pub fn replay(
+    pre: &Preprocess,
+    recs: &[EpochedRecording],
+    template: bool,
+    on_character: &mut dyn FnMut(usize, usize),
+) -> Result<UnsupervisedResult, ReplayError> {
+    let sfreq = recs.first().map_or(0.0, |r| r.epochs.sfreq());
+    let params = UnsupervisedParams::for_sfreq(sfreq)?;
+    let template = if template {
+        Some(P300Template::default().matched(pre, sfreq)?)
+    } else {
+        None
+    };
+    evaluate_unsupervised(&params, recs, template.as_ref(), on_character)
 }
 
 /// Plays `recs` (speller recordings, every flash epoched) one after the other as one session

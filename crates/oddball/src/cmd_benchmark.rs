@@ -1,15 +1,16 @@
-//! `oddball benchmark`: the arguments, the progress bar, the tables and the files. The
-//! evaluation itself is `oddball_eval::benchmark`'s.
+//! `oddball benchmark`: the arguments, the progress bar and the files. The evaluation itself is
+//! `oddball_eval::benchmark`'s, the tables printed `oddball_eval::text`'s.
 
 use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use oddball_decode::pipeline::Preprocess;
-use oddball_eval::benchmark::{self, BenchmarkParams, BenchmarkReport, Progress, Protocol};
+use oddball_eval::benchmark::{self, BenchmarkParams, Progress, Protocol};
+use oddball_eval::text;
 use oddball_io::Manifest;
 
+use crate::load::write_out;
 use crate::preset_arg::{list_help, PipelineList, DEFAULT_PIPELINE};
 
 /// `--protocol a,b` or `all`.
@@ -20,17 +21,7 @@ impl FromStr for ProtocolList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        if s.trim() == "all" {
-            return Ok(Self(Protocol::ALL.to_vec()));
-        }
-        let mut out = Vec::new();
-        for p in s.split(',') {
-            let p: Protocol = p.parse().map_err(|e| format!("{e}, or all"))?;
-            if !out.contains(&p) {
-                out.push(p);
-            }
-        }
-        Ok(Self(out))
+        crate::preset_arg::list(s, &Protocol::ALL, str::parse).map(Self)
     }
 }
 
@@ -73,21 +64,8 @@ pub struct BenchmarkArgs {
 }
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
-    // Everything checked before any EEG is read: output files' folders, manifests, the plan.
-    for out in [&args.json, &args.csv, &args.plot].into_iter().flatten() {
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty());
-        if let Some(dir) = dir {
-            anyhow::ensure!(
-                dir.is_dir(),
-                "{}: the folder {} does not exist",
-                out.display(),
-                dir.display()
-            );
-        }
-    }
-    if let Some(plot) = &args.plot {
-        oddball_plot::PlotFormat::from_path(plot)?;
-    }
+    // Everything checked before any EEG is read: the output files (their folders and the
+    // plot's format, when the command line is parsed), the threads, the manifests, the plan.
     if args.threads == Some(0) {
         anyhow::bail!("--threads must be at least 1");
     }
@@ -110,40 +88,26 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .context("starting the worker threads")?;
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})")
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
+    let bar = crate::cmd_decode::bar(0, "{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})");
     let on = |p: Progress<'_>| match p {
         Progress::Plan { subjects, units } => {
             bar.set_length((subjects + units) as u64);
             bar.set_message(format!("reading {subjects} subjects, {units} evaluations"));
         }
         Progress::Loaded { .. } | Progress::Done { .. } => bar.inc(1),
-        Progress::Resampled { run, resampled, of } => bar.suspend(|| {
-            eprintln!(
-                "{}: resampled from {} Hz to {} Hz (polyphase) to match {of}",
-                run.display(),
-                resampled.from,
-                resampled.to
-            )
-        }),
+        Progress::Resampled { run, resampled, of } => {
+            bar.suspend(|| eprint!("{}", text::resampled(run, resampled, of)))
+        }
     };
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();
     let report = report?;
-    print_report(&report);
+    print!("{}", text::benchmark(&report));
     if let Some(path) = &args.json {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(&report)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_out(path, serde_json::to_string_pretty(&report)?)?;
     }
     if let Some(path) = &args.csv {
-        oddball_io::write_atomic(path, benchmark::to_csv(&report.results))
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+        write_out(path, benchmark::to_csv(&report.results))?;
     }
     if let Some(path) = &args.plot {
         oddball_plot::benchmark::draw_benchmark(path, &report, None)
@@ -151,121 +115,6 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         println!("wrote {}", path.display());
     }
     Ok(())
-}
-
-fn print_report(report: &BenchmarkReport) {
-    let mut last = None;
-    for r in &report.results {
-        let key = (&r.dataset, &r.subject, &r.session, r.protocol);
-        if last != Some(key) {
-            println!(
-                "\n{} / subject {}{} ({}): {} epochs, {} targets{}",
-                r.dataset,
-                r.subject,
-                r.session
-                    .as_ref()
-                    .map(|s| format!(" / session {s}"))
-                    .unwrap_or_default(),
-                r.protocol,
-                r.n_epochs,
-                r.n_targets,
-                r.n_chars
-                    .map(|n| format!(", {n} characters"))
-                    .unwrap_or_default()
-            );
-            last = Some(key);
-        }
-        let chars = r
-            .chars_by_reps
-            .as_ref()
-            .map(|c| {
-                format!(
-                    "  chars right by reps: {}",
-                    c.iter()
-                        .map(|v| v.to_string())
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                )
-            })
-            .unwrap_or_default();
-        println!(
-            "  {:<12} AUC {:.3}  fit {:>7.3} s{}{}",
-            r.preset,
-            r.auc,
-            r.fit_s,
-            chars,
-            r.itr_bits_per_min
-                .map(|v| format!("  ITR {v:.1} bits/min"))
-                .unwrap_or_default()
-        );
-    }
-    println!("\nmean ± sd over subjects:");
-    for s in &report.summary {
-        println!(
-            "  {:<15} {:<12} AUC {:.3} ± {}  (n = {}){}",
-            s.protocol.name(),
-            s.preset,
-            s.auc_mean,
-            s.auc_sd
-                .map(|v| format!("{v:.3}"))
-                .unwrap_or_else(|| "  –  ".into()),
-            s.n,
-            s.char_accuracy_by_reps
-                .as_ref()
-                .map(|a| format!(
-                    "  chars % by reps: {}",
-                    a.iter()
-                        .map(|v| format!("{:.0}", 100.0 * v))
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                ))
-                .unwrap_or_default()
-        );
-    }
-    for protocol in Protocol::ALL {
-        let cs: Vec<_> = report
-            .comparisons
-            .iter()
-            .filter(|c| c.protocol == protocol)
-            .collect();
-        let Some(n) = cs.iter().map(|c| c.n).max() else {
-            continue;
-        };
-        let mut names: Vec<&str> = Vec::new();
-        for c in &cs {
-            if !names.contains(&c.a.as_str()) {
-                names.push(&c.a);
-            }
-        }
-        println!(
-            "\n{protocol}: p of the one-sided Wilcoxon signed-rank test that the row's AUC is \
-             larger than the column's (paired by subject, n = {n}):"
-        );
-        print!("  {:<12}", "");
-        for b in &names {
-            print!(" {b:>12}");
-        }
-        println!();
-        for a in &names {
-            print!("  {a:<12}");
-            for b in &names {
-                let cell = cs
-                    .iter()
-                    .find(|c| c.a == *a && c.b == *b)
-                    .map(|c| match c.pvalue {
-                        Some(p) => format!("{p:.3}"),
-                        None => "tie".into(),
-                    })
-                    .unwrap_or_else(|| "–".into());
-                print!(" {cell:>12}");
-            }
-            println!();
-        }
-    }
-    println!(
-        "\nwall time {:.1} s on {} thread(s)",
-        report.wall_s, report.threads
-    );
 }
 
 #[cfg(test)]

@@ -1,15 +1,19 @@
-//! `oddball train` and `oddball evaluate`: the arguments, the files and what is printed. The
-//! fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s.
+//! `oddball train` and `oddball evaluate`: the arguments, the progress bars, the files, and
+//! printing. The fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s
+//! (and its `unsupervised` and `sessions`), the text printed is `oddball_eval::text`'s.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use oddball_decode::model_selection::tuning::TuningReport;
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
+use oddball_eval::text::{self, Narration};
+use oddball_eval::{dataset, sessions, unsupervised};
+use oddball_io::ReadOptions;
+use oddball_session::record::is_session;
 
-use crate::load::{load_epochs, load_epochs_in, load_model, EventArgs, Layout};
+use crate::load::{load_epochs, load_model, EventArgs, Layout};
 use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
 use oddball_decode::preset::Preset;
 
@@ -109,111 +113,52 @@ pub struct EvaluateArgs {
     pub events: EventArgs,
 }
 
-/// A progress bar over `len` fits on stderr; indicatif hides it when stderr is not a terminal
-/// (or `TERM` is unset or `dumb`), so logs and pipes stay clean.
-fn progress(len: u64, what: &str) -> ProgressBar {
+/// A progress bar of `len` steps on stderr drawn by `template`; indicatif hides it when stderr
+/// is not a terminal (or `TERM` is unset or `dumb`), so logs and pipes stay clean.
+pub fn bar(len: u64, template: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
     pb.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} fits {elapsed} (eta {eta})")
+        ProgressStyle::with_template(template)
             .expect("a valid template")
             .progress_chars("=> "),
     );
-    pb.set_message(what.to_string());
     pb
 }
 
-/// What a run reports: the progress bar, the tuning tables and the result rows (under their
-/// header), and for training what its fits are for.
+/// What a run reports: the progress bar, and above it what [`Narration`] says.
 struct Report {
     what: String,
     bar: Option<ProgressBar>,
-    /// Training: what the fits are fitted on, said with their number before they start.
-    training: Option<String>,
-    header_printed: bool,
+    text: Narration,
 }
 
 impl Report {
-    fn new(what: &str) -> Self {
+    fn new(what: &str, text: Narration) -> Self {
         Self {
             what: what.to_string(),
             bar: None,
-            training: None,
-            header_printed: false,
-        }
-    }
-
-    /// A training run's report: `on` says on what epochs it fits.
-    fn training(what: &str, on: &str) -> Self {
-        Self {
-            training: Some(on.to_string()),
-            ..Self::new(what)
-        }
-    }
-
-    /// Prints above the bar.
-    fn say(&self, f: impl FnOnce()) {
-        match &self.bar {
-            Some(b) => b.suspend(f),
-            None => f(),
+            text,
         }
     }
 
     fn on(&mut self, p: Progress<'_>) {
-        match p {
-            Progress::Plan {
-                fits,
-                cross_validation,
-            } => {
-                self.bar = Some(progress(fits as u64, &self.what));
-                if let Some(on) = &self.training {
-                    let what = &self.what;
-                    self.say(|| {
-                        println!(
-                            "training {what} on {on}: {fits} cross-validation fits for its \
-                             decision model, then one fit on all epochs"
-                        )
-                    });
-                }
-                if let Some(f) = cross_validation {
-                    self.say(|| {
-                        println!(
-                            "{}-fold cross-validation on the training data ({})",
-                            f.n_folds(),
-                            fold_note(f.grouped())
-                        )
-                    });
-                }
-            }
-            Progress::Preset(name) => {
-                if let Some(b) = &self.bar {
-                    b.set_message(name.to_string());
-                }
-            }
-            Progress::Fit => {
-                if let Some(b) = &self.bar {
-                    b.inc(1);
-                }
-            }
-            Progress::Tuned {
-                preset,
-                fold,
-                report,
-            } => self.say(|| match fold {
-                Some((k, n)) => {
-                    println!("fold {k}/{n}:");
-                    print_tuning(preset.name(), report, "  ");
-                }
-                None => print_tuning(preset.name(), report, ""),
-            }),
-            Progress::Scored(r) => {
-                let header = !std::mem::replace(&mut self.header_printed, true);
-                self.say(|| {
-                    if header {
-                        print_header();
-                    }
-                    print_row(r)
-                })
-            }
+        if let Progress::Plan { fits, .. } = p {
+            let b = bar(
+                fits as u64,
+                "{msg} [{bar:30}] {pos}/{len} fits {elapsed} (eta {eta})",
+            );
+            b.set_message(self.what.clone());
+            self.bar = Some(b);
+        }
+        match (p, &self.bar) {
+            (Progress::Preset(name), Some(b)) => b.set_message(name.to_string()),
+            (Progress::Fit, Some(b)) => b.inc(1),
+            _ => {}
+        }
+        let text = self.text.on(&p);
+        match &self.bar {
+            Some(b) if !text.is_empty() => b.suspend(|| print!("{text}")),
+            _ => print!("{text}"),
         }
     }
 
@@ -224,101 +169,45 @@ impl Report {
     }
 }
 
-fn fold_note(grouped: bool) -> &'static str {
-    if grouped {
-        "folds keep speller characters whole"
-    } else {
-        "folds stratified by label"
-    }
-}
-
-/// The tuning table: every candidate's cross-validated AUC, the chosen one marked.
-fn print_tuning(name: &str, r: &TuningReport, indent: &str) {
-    println!(
-        "{indent}tuning {name}: {}-fold CV on the training data ({}), mean epoch AUC",
-        r.n_folds,
-        fold_note(r.grouped)
-    );
-    for c in &r.candidates {
-        let folds: Vec<String> = c.fold_auc.iter().map(|a| format!("{a:.3}")).collect();
-        println!(
-            "{indent}  {} {:<28} CV AUC {:.3}  (folds {})",
-            if c.label == r.chosen { "*" } else { " " },
-            c.label,
-            c.cv_auc,
-            folds.join(" ")
-        );
-    }
-    println!("{indent}  chosen: {}", r.chosen);
-}
-
 pub fn run_train(args: &TrainArgs) -> Result<()> {
     let pre = Preprocess::peer();
-    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[])?)?;
+    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[], None)?.0)?;
     let t0 = std::time::Instant::now();
-    let mut report = Report::training(args.pipeline.name(), "zero-phase band-passed epochs");
-    let trained = evaluate::train(
-        args.pipeline,
-        &set,
-        args.tune.then_some(args.folds),
-        &mut |p| report.on(p),
+    let (name, folds) = (args.pipeline.name(), args.tune.then_some(args.folds));
+    let mut report = Report::new(
+        name,
+        Narration::training(name, "zero-phase band-passed epochs"),
     );
+    let trained = evaluate::train(args.pipeline, &set, folds, &mut |p| report.on(p));
     report.finish();
     let trained = trained?;
     let ch_names = set.epochs().ch_names().to_vec();
     // The zero-phase epochs go before the causal ones come (one set in memory at a time).
     drop(set);
     // What a session runs: the same settings on the causally band-passed epochs.
-    let live_pre = pre.as_causal();
-    let live_set = TrainingSet::pool(load_epochs(&args.files, &live_pre, &args.events, &[])?)?;
-    let mut report = Report::training(
-        args.pipeline.name(),
-        "causally band-passed epochs (as a session runs it)",
+    let causal = pre.as_causal();
+    let live_set =
+        TrainingSet::pool(load_epochs(&args.files, &causal, &args.events, &[], None)?.0)?;
+    let mut report = Report::new(
+        name,
+        Narration::training(name, "causally band-passed epochs (as a session runs it)"),
     );
     let live = evaluate::train_with(
         &trained.params,
         &live_set,
-        if args.tune {
-            args.folds
-        } else {
-            evaluate::DECISION_FOLDS
-        },
+        folds.unwrap_or(evaluate::DECISION_FOLDS),
         &mut |p| report.on(p),
     );
     report.finish();
     let live = live.context("fitting the live (causal) model")?;
     drop(live_set);
-    let mut live_model = Model::new(live_pre, live.sfreq, ch_names.clone(), live.pipeline);
-    live_model.decision = Some(live.decision);
-    let mut model = Model::new(pre, trained.sfreq, ch_names, trained.pipeline);
-    model.tuning = trained.tuning;
-    model.decision = Some(trained.decision);
-    model.live = Some(Box::new(live_model));
+    // Said once the model is written; the time is the training's.
+    let seconds = t0.elapsed().as_secs_f64();
+    let said = text::trained(name, &trained, &live, args.files.len(), seconds, &args.out);
+    let model = evaluate::session_model(pre, ch_names, trained, live);
     oddball_io::write_atomic(&args.out, model.to_json())
         .with_context(|| format!("writing {}", args.out.display()))?;
-    println!(
-        "trained {}{} on {} epochs ({} targets) from {} file(s) in {:.3} s (the final fit {:.3} s); wrote {}",
-        args.pipeline,
-        model
-            .tuning
-            .as_ref()
-            .map(|t| format!(" ({})", t.chosen))
-            .unwrap_or_default(),
-        trained.n_epochs,
-        trained.n_targets,
-        args.files.len(),
-        t0.elapsed().as_secs_f64(),
-        trained.fit_s,
-        args.out.display()
-    );
-    println!(
-        "decision models from {}-fold cross-validated scores: zero-phase band-pass AUC {:.3} (d' {:.2}); causal, as a session runs it, AUC {:.3} (d' {:.2})",
-        trained.cv_folds,
-        trained.cv_auc,
-        trained.decision.scores.d_prime(),
-        live.cv_auc,
-        live.decision.scores.d_prime()
-    );
+    print!("{said}");
     Ok(())
 }
 
@@ -329,34 +218,26 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
     if let Some(path) = &args.model {
         let model = load_model(path)?;
         if let Some(first) = args.test.first() {
-            let rec = crate::load::read(first)?;
-            if oddball_session::record::is_session(&rec) {
+            if is_session(&dataset::read(first, &ReadOptions::default())?) {
                 return evaluate_sessions(args, &model, path);
             }
         }
         // The data is matched to the model (channels by name, rate) before any filtering.
         let layout = Layout::of_model(&model, path);
-        let (test, _) = load_epochs_in(
+        let (test, _) = load_epochs(
             &args.test,
             &model.preprocess,
             &args.events,
             &args.test_text,
             Some(&layout),
         )?;
-        for rec in &test {
-            model
-                .check_layout(rec.epochs.ch_names(), rec.epochs.sfreq())
-                .with_context(|| format!("scoring {} with {}", rec.name, path.display()))?;
-        }
-        let mut r = evaluate::score_test(&model.pipeline, 0.0, &test)?;
-        r.tuning = model.tuning.clone();
-        print_header();
-        print_row(&r);
+        let r = evaluate::score_model(&model, &path.display().to_string(), &test)?;
+        print!("{}{}", text::RESULT_HEADER, text::result_row(&r));
         return finish(args, &[r]);
     }
     let pre = Preprocess::peer();
-    let (train, layout) = load_epochs_in(&args.train, &pre, &args.events, &[], None)?;
-    let (test, _) = load_epochs_in(
+    let (train, layout) = load_epochs(&args.train, &pre, &args.events, &[], None)?;
+    let (test, _) = load_epochs(
         &args.test,
         &pre,
         &args.events,
@@ -369,7 +250,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
         tune: args.tune,
     };
     let train = TrainingSet::pool(train)?;
-    let mut report = Report::new("evaluate");
+    let mut report = Report::new("evaluate", Narration::evaluating());
     let results = evaluate::evaluate(&params, &train, &test, &mut |p| report.on(p));
     report.finish();
     finish(args, &results?)
@@ -382,113 +263,29 @@ fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
             oddball_plot::accuracy::draw_accuracy(path, results)?;
             println!("wrote {}", path.display());
         } else {
-            println!(
-                "no accuracy-vs-repetitions plot: {} (it needs speller test files)",
-                if args.test.is_empty() {
-                    "cross-validation has no test files"
-                } else {
-                    "the test files are not spellers"
-                }
-            );
+            print!("{}", text::no_accuracy_plot(args.test.is_empty()));
         }
     }
     write_json(args, results)
 }
 
-fn write_json(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
-    if let Some(path) = &args.out {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(results)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+fn write_json(args: &EvaluateArgs, results: &(impl serde::Serialize + ?Sized)) -> Result<()> {
+    match &args.out {
+        Some(path) => crate::load::write_out(path, serde_json::to_string_pretty(results)?),
+        None => Ok(()),
     }
-    Ok(())
-}
-
-/// The legend of [`print_row`]'s columns.
-fn print_header() {
-    println!(
-        "pipeline   epoch ROC-AUC, mean fit time, scoring speed  [speller test files: characters \
-         right by repetitions, picks, best Wolpaw ITR]"
-    );
-}
-
-/// One preset's result: epoch AUC, fit time, scoring speed, and for speller test files the
-/// characters right by repetitions, the picks and the best ITR.
-fn print_row(r: &PipelineResult) {
-    let acc = r
-        .speller_accuracy
-        .as_ref()
-        .map(|a| {
-            a.iter()
-                .map(|v| format!("{:.0}", v * 100.0))
-                .collect::<Vec<_>>()
-                .join(" ")
-        })
-        .unwrap_or_default();
-    println!(
-        "{:<10} AUC {:.3}  fit {:>7.3} s  {:>9.0} epochs/s{}{}{}{}{}",
-        r.pipeline,
-        r.auc,
-        r.fit_s,
-        r.score_epochs_per_s,
-        if acc.is_empty() {
-            String::new()
-        } else {
-            format!("  chars % by reps: {acc}")
-        },
-        r.speller_text
-            .as_ref()
-            .map(|t| format!("  picks {t}"))
-            .unwrap_or_default(),
-        r.reps_for_all_correct
-            .map(|n| format!("  all right from {n} reps"))
-            .unwrap_or_default(),
-        r.itr_at_best
-            .map(|i| format!(
-                "  best ITR {:.1} bits/min ({:.0} % right, {:.1} s a character)",
-                i.bits_per_minute,
-                100.0 * i.accuracy,
-                i.seconds_per_selection
-            ))
-            .unwrap_or_default(),
-        r.tuning
-            .as_ref()
-            .map(|t| format!("  [{}]", t.chosen))
-            .unwrap_or_default(),
-    );
 }
 
 /// Re-evaluates oddball session files (`oddball demo` writes `session.dat`) with a model:
 /// every online decision recomputed from the raw EEG, compared with the recorded one.
 fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> Result<()> {
-    use oddball_session::record::{read_session, reevaluate};
-    use oddball_session::report::{redecision_line, SessionResult};
-
     let mut results = Vec::new();
     for path in &args.test {
-        let rec = crate::load::read(path)?;
-        let saved = read_session(&rec).with_context(|| format!("reading {}", path.display()))?;
-        let decisions = reevaluate(&rec, &saved, model).with_context(|| {
-            format!(
-                "re-evaluating {} with {}",
-                path.display(),
-                model_path.display()
-            )
-        })?;
-        println!("{}:", path.display());
-        for d in &decisions {
-            println!("{}", redecision_line(d, &saved.bulbs));
-        }
-        let result = SessionResult::new(path.clone(), decisions);
-        println!("{}", result.summary_line());
-        results.push(result);
+        let r = sessions::redecide(path, model, model_path)?;
+        print!("{}", text::redecided(&r));
+        results.push(r.result);
     }
-    if let Some(path) = &args.out {
-        oddball_io::write_atomic(path, serde_json::to_string_pretty(&results)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
-    }
-    Ok(())
+    write_json(args, &results)
 }
 
 /// Where an unsupervised replay's EM starts (`--em-start`).
@@ -500,57 +297,25 @@ pub enum EmStart {
 
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    use oddball_decode::unsupervised::{P300Template, UnsupervisedParams};
-    use oddball_eval::unsupervised::evaluate_unsupervised;
-
     let pre = Preprocess::peer();
-    let test = load_epochs(&args.test, &pre, &args.events, &args.test_text)?;
-    let sfreq = test.first().map_or(0.0, |r| r.epochs.sfreq());
-    let params = UnsupervisedParams::for_sfreq(sfreq)?;
-    let template = match args.em_start {
-        EmStart::Template => Some(P300Template::default().matched(&pre, sfreq)?),
-        EmStart::Random => None,
-    };
-    let mut bar: Option<ProgressBar> = None;
-    let r = evaluate_unsupervised(&params, &test, template.as_ref(), &mut |k, n| {
-        let b = bar.get_or_insert_with(|| {
-            let b = ProgressBar::new(n as u64);
-            b.set_style(
-                ProgressStyle::with_template(
+    let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
+    let template = args.em_start == EmStart::Template;
+    let mut shown: Option<ProgressBar> = None;
+    let r = unsupervised::replay(&pre, &test, template, &mut |k, n| {
+        shown
+            .get_or_insert_with(|| {
+                bar(
+                    n as u64,
                     "unsupervised [{bar:30}] {pos}/{len} characters {elapsed}",
                 )
-                .expect("a valid template")
-                .progress_chars("=> "),
-            );
-            b
-        });
-        b.set_position(k as u64 + 1);
+            })
+            .set_position(k as u64 + 1);
     });
-    if let Some(b) = bar {
+    if let Some(b) = shown {
         b.finish_and_clear();
     }
     let r = r?;
-    let right = |v: &[u8]| v.iter().map(|&b| b as usize).sum::<usize>();
-    let acc: Vec<String> = r
-        .posthoc_chars_by_reps
-        .iter()
-        .map(|a| format!("{:.0}", a * 100.0))
-        .collect();
-    println!(
-        "unsupervised: {} characters, no labels seen; online {}/{} ({}), post hoc {} (chars % by reps: {}), final model AUC {:.3} ({})",
-        r.n_characters,
-        right(&r.online_correct),
-        r.n_characters,
-        r.online_text,
-        r.posthoc_text,
-        acc.join(" "),
-        r.auc,
-        r.auc_by_recording
-            .iter()
-            .map(|a| format!("{} {:.3}", a.recording, a.auc))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    print!("{}", text::unsupervised(&r));
     if let Some(path) = &args.out {
         let v = serde_json::json!({ "unsupervised": r });
         std::fs::write(path, serde_json::to_string_pretty(&v)?)

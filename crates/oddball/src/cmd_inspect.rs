@@ -1,15 +1,9 @@
 //! `oddball inspect FILE…`: what a recording holds, and optionally its target vs non-target ERPs.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
-use oddball_io::Recording;
-use oddball_signal::detrend::DetrendKind;
-use oddball_signal::epochs::EpochsParams;
-use oddball_signal::filter::{Band, ButterworthParams};
-use oddball_signal::preprocess::{Filtering, PreprocessParams};
-use oddball_signal::Epochs;
+use anyhow::Result;
+use oddball_eval::erp::ErpParams;
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
@@ -40,150 +34,20 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     let read_options = args.events.read_options()?;
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let rec = crate::load::read_mapped(path, mapping.as_ref(), &read_options)?;
-        print!("{}", summary(&rec));
+        let rec = oddball_eval::dataset::read_mapped(path, mapping.as_ref(), &read_options)?;
+        print!("{}", oddball_eval::text::recording(&rec));
         recordings.push(rec);
     }
     if let Some(plot) = &args.plot {
-        let (target, nontarget) = erp_epochs(recordings, args)?;
-        let band = format!("{}–{} Hz", args.l_freq, args.h_freq);
-        oddball_plot::erp::draw_erp(plot, &target, &nontarget, &band)?;
+        let erp = ErpParams {
+            l_freq: args.l_freq,
+            h_freq: args.h_freq,
+            tmin: args.tmin,
+            tmax: args.tmax,
+        };
+        let (target, nontarget) = erp.epochs(recordings)?;
+        oddball_plot::erp::draw_erp(plot, &target, &nontarget, &erp.band())?;
         println!("wrote {}", plot.display());
     }
     Ok(())
-}
-
-/// The human-readable summary of one recording.
-pub fn summary(rec: &Recording) -> String {
-    let raw = &rec.raw;
-    let mut s = String::new();
-    let name = rec
-        .path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| rec.path.display().to_string());
-    let _ = writeln!(s, "{name}  ({:?})", rec.format);
-    let _ = writeln!(
-        s,
-        "  channels   {}: {}",
-        raw.n_channels(),
-        raw.ch_names().join(" ")
-    );
-    let _ = writeln!(s, "  sfreq      {} Hz", raw.sfreq());
-    let _ = writeln!(
-        s,
-        "  duration   {:.1} s ({} samples)",
-        raw.duration(),
-        raw.n_times()
-    );
-    let events = raw.events();
-    let codes: Vec<String> = events
-        .counts_by_code()
-        .iter()
-        .map(|(code, n)| format!("{code}×{n}"))
-        .collect();
-    let _ = writeln!(
-        s,
-        "  events     {} (per code: {})",
-        events.len(),
-        if codes.is_empty() {
-            "none".to_string()
-        } else {
-            codes.join(" ")
-        }
-    );
-    let unknown = events.len() - events.n_targets() - events.n_nontargets();
-    let _ = write!(
-        s,
-        "  targets    {} target, {} non-target",
-        events.n_targets(),
-        events.n_nontargets()
-    );
-    if unknown > 0 {
-        let _ = write!(s, ", {unknown} unlabelled");
-    }
-    let _ = writeln!(s);
-    if let Some(speller) = &rec.speller {
-        let decoded = speller.decode(events);
-        match &speller.text_to_spell {
-            Some(text) => {
-                let _ = writeln!(
-                    s,
-                    "  text       {text} (TextToSpell; decoded from the target flashes: {decoded})"
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    s,
-                    "  text       {decoded} (decoded from the target flashes)"
-                );
-            }
-        }
-        let _ = writeln!(
-            s,
-            "  speller    {}×{} matrix: {}",
-            speller.n_rows(),
-            speller.n_cols(),
-            speller
-                .matrix()
-                .iter()
-                .map(|r| r.concat())
-                .collect::<Vec<_>>()
-                .join(" / ")
-        );
-    }
-    s
-}
-
-/// Band-passed, baseline-corrected epochs of all recordings, split into targets and non-targets:
-/// windows into the recordings, each filtered in its own memory (no copy of the samples).
-fn erp_epochs(recordings: Vec<Recording>, args: &InspectArgs) -> Result<(Epochs, Epochs)> {
-    let (first_path, first_names, first_sfreq) = (
-        recordings[0].path.clone(),
-        recordings[0].raw.ch_names().to_vec(),
-        recordings[0].raw.sfreq(),
-    );
-    let params = PreprocessParams {
-        band: ButterworthParams {
-            order: 4,
-            band: Band::Bandpass {
-                l_freq: args.l_freq,
-                h_freq: args.h_freq,
-            },
-        },
-        filtering: Filtering::ZeroPhase {
-            detrend: Some(DetrendKind::Linear),
-        },
-        epochs: EpochsParams::new(args.tmin, args.tmax).with_baseline(args.tmin.min(0.0), 0.0),
-    };
-    let mut target = Vec::new();
-    let mut nontarget = Vec::new();
-    for rec in recordings {
-        let raw = rec.raw;
-        if raw.ch_names() != first_names || raw.sfreq() != first_sfreq {
-            bail!(
-                "{} has other channels or another sampling rate than {}: plot them one at a time",
-                rec.path.display(),
-                first_path.display()
-            );
-        }
-        let (epochs, _) = params.epochs_owned(raw)?;
-        let idx = |want: bool| -> Vec<usize> {
-            (0..epochs.n_epochs())
-                .filter(|&i| epochs.events()[i].target == Some(want))
-                .collect()
-        };
-        target.push(epochs.select(&idx(true)));
-        nontarget.push(epochs.select(&idx(false)));
-    }
-    let target = Epochs::concatenate(&target)?;
-    let nontarget = Epochs::concatenate(&nontarget)?;
-    if target.is_empty() || nontarget.is_empty() {
-        bail!(
-            "no ERP to plot: {} target and {} non-target epochs (the files must flag targets)",
-            target.n_epochs(),
-            nontarget.n_epochs()
-        );
-    }
-    Ok((target, nontarget))
 }

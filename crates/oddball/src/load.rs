@@ -4,11 +4,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_eval::dataset;
+use oddball_eval::dataset::{self, DatasetError};
 use oddball_eval::evaluate::EpochedRecording;
 pub use oddball_eval::layout::Layout;
 use oddball_eval::layout::LayoutError;
-use oddball_io::{EventMapping, ReadOptions, Recording};
+use oddball_io::{EventMapping, ReadOptions};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
 /// texts.
@@ -71,9 +71,7 @@ impl EventArgs {
             _ => Ok(None),
         }
     }
-}
 
-impl EventArgs {
     /// The reading options, checked.
     pub fn read_options(&self) -> Result<ReadOptions> {
         let o = ReadOptions {
@@ -89,69 +87,33 @@ impl EventArgs {
     }
 }
 
-/// Reads a recording.
-pub fn read(path: &Path) -> Result<Recording> {
-    oddball_io::read(path).with_context(|| format!("reading {}", path.display()))
-}
-
-/// Reads a recording with the reading options and applies the event mapping, if any.
-pub fn read_mapped(
-    path: &Path,
-    mapping: Option<&EventMapping>,
-    options: &ReadOptions,
-) -> Result<Recording> {
-    let mut rec = oddball_io::read_with(path, options)
-        .with_context(|| format!("reading {}", path.display()))?;
-    if let Some(m) = mapping {
-        rec.map_events(m)
-            .with_context(|| format!("labelling the events of {}", path.display()))?;
-    }
-    Ok(rec)
-}
-
-/// `rec` matched to `layout` ([`Layout::fit`]): errors say which flags name a file's channels,
-/// a resampling is noted on stderr.
-fn fit_layout(layout: &Layout, rec: Recording) -> Result<Recording> {
-    match layout.fit(rec) {
-        Ok((rec, resampled)) => {
-            if let Some(r) = resampled {
-                eprintln!(
-                    "{}: resampled from {} Hz to {} Hz (polyphase) to match {}",
-                    rec.path.display(),
-                    r.from,
-                    r.to,
-                    layout.of
-                );
-            }
-            Ok(rec)
-        }
-        Err(LayoutError::Channels {
-            recording,
-            of,
-            source,
-        }) => Err(anyhow::Error::new(source).context(format!(
-            "matching the channels of {recording} to those of {of}; name the file's channels \
-             with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc) or --channels"
-        ))),
-        Err(e) => Err(e.into()),
+/// A library error with the flags that would fix it named, as the message says them.
+fn with_flags(e: DatasetError) -> anyhow::Error {
+    match e {
+        DatasetError::Resample { path, to, source } => anyhow::Error::new(source).context(format!(
+            "resampling {} to --resample {to} Hz",
+            path.display()
+        )),
+        DatasetError::Layout(l) => match *l {
+            LayoutError::Channels {
+                recording,
+                of,
+                source,
+            } => anyhow::Error::new(source).context(format!(
+                "matching the channels of {recording} to those of {of}; name the file's \
+                 channels with --montage FILE (an EEGLAB .loc, e.g. eeg64.loc) or --channels"
+            )),
+            l => l.into(),
+        },
+        e => e.into(),
     }
 }
 
 /// Reads, labels (see [`EventArgs`]; `texts`: the spelled text of each file, for speller runs
-/// recorded without labels) and epochs each recording ([`oddball_eval::dataset`]); a
-/// recording whose events carry no labels is an error saying how to label them. Every file's
-/// channels are matched by name to the first's ([`Layout`]).
+/// recorded without labels) and epochs each recording ([`dataset::load_epochs`]); a recording
+/// whose events carry no labels is an error saying how to label them. Every file's channels
+/// are matched by name to `layout`'s (else to the first file's, returned).
 pub fn load_epochs(
-    paths: &[PathBuf],
-    pre: &Preprocess,
-    events: &EventArgs,
-    texts: &[String],
-) -> Result<Vec<EpochedRecording>> {
-    load_epochs_in(paths, pre, events, texts, None).map(|(e, _)| e)
-}
-
-/// [`load_epochs`] with every file matched to `layout` (else to the first file's), returned.
-pub fn load_epochs_in(
     paths: &[PathBuf],
     pre: &Preprocess,
     events: &EventArgs,
@@ -167,37 +129,26 @@ pub fn load_epochs_in(
     }
     let mapping = events.mapping()?;
     let read = events.read_options()?;
-    let mut layout = layout.cloned();
-    let epochs = paths
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let how = dataset::Labelling {
-                mapping: mapping.as_ref(),
-                text: texts.get(i).map(String::as_str),
-                speller: None,
-                read: Some(&read),
-            };
-            let mut rec = dataset::read_labelled(p, how)?;
-            if let Some(f) = events.resample {
-                if (rec.raw.sfreq() - f).abs() > 1e-9 * f {
-                    rec.raw =
-                        oddball_signal::resample::resample_raw(&rec.raw, f).with_context(|| {
-                            format!("resampling {} to --resample {f} Hz", p.display())
-                        })?;
-                }
-            }
-            rec = match &layout {
-                Some(l) => fit_layout(l, rec)?,
-                None => {
-                    layout = Some(Layout::of_recording(&rec));
-                    rec
-                }
-            };
-            Ok(dataset::epoch(rec, pre)?)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok((epochs, layout))
+    let runs = paths.iter().enumerate().map(|(i, p)| {
+        let how = dataset::Labelling {
+            mapping: mapping.as_ref(),
+            text: texts.get(i).map(String::as_str),
+            speller: None,
+            read: Some(&read),
+        };
+        (p.as_path(), how)
+    });
+    dataset::load_epochs(runs, pre, events.resample, layout, &mut |p, r, of| {
+        eprint!("{}", oddball_eval::text::resampled(p, r, of))
+    })
+    .map_err(with_flags)
+}
+
+/// Writes `text` to `path` (atomically) and says so.
+pub fn write_out(path: &Path, text: String) -> Result<()> {
+    oddball_io::write_atomic(path, text).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
 }
 
 /// Reads a saved model.

@@ -1,5 +1,6 @@
 //! The `--pipeline` argument: presets parsed (by [`Preset`]'s one `FromStr`) when the command
-//! line is parsed, one default for every command, and the help text listing them.
+//! line is parsed, one default for every command, and the help text listing them; [`list`]
+//! parses it (and `--protocol`) as `all` or a comma-separated list.
 
 use std::str::FromStr;
 
@@ -35,18 +36,28 @@ impl FromStr for PipelineList {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        if s.trim() == "all" {
-            return Ok(Self(Preset::ALL.to_vec()));
-        }
-        let mut presets: Vec<Preset> = Vec::new();
-        for name in s.split(',').map(str::trim) {
-            let p = preset(name).map_err(|e| format!("{e}, or all"))?;
-            if !presets.contains(&p) {
-                presets.push(p);
-            }
-        }
-        Ok(Self(presets))
+        list(s, Preset::ALL, |name| preset(name.trim())).map(Self)
     }
+}
+
+/// `all`, or names comma-separated (each parsed by `one`): the items in the order given, each
+/// once.
+pub fn list<T: Copy + PartialEq>(
+    s: &str,
+    all: &[T],
+    one: impl Fn(&str) -> Result<T, String>,
+) -> Result<Vec<T>, String> {
+    if s.trim() == "all" {
+        return Ok(all.to_vec());
+    }
+    let mut items: Vec<T> = Vec::new();
+    for name in s.split(',') {
+        let p = one(name).map_err(|e| format!("{e}, or all"))?;
+        if !items.contains(&p) {
+            items.push(p);
+        }
+    }
+    Ok(items)
 }
 
 #[cfg(test)]
