@@ -6,7 +6,8 @@
 
 use ndarray::Array3;
 use oddball_decode::decision::{DecisionModel, DecisionRule, ScoreModel};
-use oddball_decode::pipeline::{Model, PipelineParams, Preprocess, PRESETS};
+use oddball_decode::pipeline::{Model, PipelineParams, Preprocess};
+use oddball_decode::preset::PRESETS;
 use oddball_decode::DecodeError;
 
 /// Synthetic epochs `(n_epochs, 4, 64)` at 64 Hz: a deterministic pseudo-random noise, a 10 Hz

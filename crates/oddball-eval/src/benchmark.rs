@@ -102,7 +102,7 @@ pub enum BenchmarkError {
     NoPresets,
     #[error("no protocols to run")]
     NoProtocols,
-    #[error("--folds {0}: cross-validation needs at least 2 folds")]
+    #[error("{0} folds: cross-validation needs at least 2")]
     Folds(usize),
     #[error("nothing to run: {}", .skipped.join("; "))]
     NothingToRun { skipped: Vec<String> },

@@ -27,7 +27,7 @@ pub enum ReplayError {
     },
     #[error("no recordings to replay")]
     Empty,
-    #[error("{recording}: character {character} has no single target row and column, so it cannot be scored (label the run, e.g. with --test-text)")]
+    #[error("{recording}: character {character} has no single target row and column, so it cannot be scored (label the run with the text it spelled)")]
     Unscorable { recording: String, character: usize },
     #[error(transparent)]
     Unsupervised(#[from] UnsupervisedError),

@@ -117,7 +117,7 @@ fn read_tabular(path: &Path, options: &ReadOptions) -> Result<Recording, IoError
     let unsupported = |what: &str| {
         IoError::Unsupported {
         path: path.to_path_buf(),
-        what: format!("{what} (reading options other than --channels and --montage apply to .csv and .mat files)"),
+        what: format!("{what} (reading options other than the channels kept and a montage apply to .csv and .mat files)"),
     }
     };
     if let Err(why) = options.check() {

@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use anyhow::{Context, Result};
 use oddball_decode::pipeline::Preprocess;
-use oddball_eval::benchmark::{self, BenchmarkParams, Progress, Protocol};
+use oddball_eval::benchmark::{self, BenchmarkError, BenchmarkParams, Progress, Protocol};
 use oddball_eval::text;
 use oddball_io::Manifest;
 
@@ -80,7 +80,12 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         folds: args.folds,
         preprocess: Preprocess::peer(),
     };
-    let plan = params.plan(&manifests)?;
+    let plan = params.plan(&manifests).map_err(|e| match e {
+        BenchmarkError::Folds(k) => {
+            anyhow::anyhow!("--folds {k}: cross-validation needs at least 2 folds")
+        }
+        e => e.into(),
+    })?;
     for s in &plan.skipped {
         println!("skipped: {s}");
     }

@@ -314,7 +314,12 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     if let Some(b) = shown {
         b.finish_and_clear();
     }
-    let r = r?;
+    let r = r.map_err(|e| match e {
+        e @ unsupervised::ReplayError::Unscorable { .. } => {
+            anyhow::anyhow!("{e}; give it with --test-text")
+        }
+        e => e.into(),
+    })?;
     print!("{}", text::unsupervised(&r));
     if let Some(path) = &args.out {
         let v = serde_json::json!({ "unsupervised": r });

@@ -29,7 +29,6 @@ use crate::features::pca::Pca;
 pub use crate::features::{FeatureParams, Features};
 pub use crate::model::{Model, MODEL_FORMAT_VERSION, READABLE_MODEL_VERSIONS};
 pub use crate::preprocess::{Preprocess, FLAT_UV};
-pub use crate::preset::{Preset, PRESETS};
 pub use crate::riemann::{XdawnCovFeatures, XdawnTangent};
 use crate::traits::FeatureData;
 use crate::DecodeError;
