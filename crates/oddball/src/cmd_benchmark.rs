@@ -93,7 +93,7 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
         .num_threads(args.threads.unwrap_or(0))
         .build()
         .context("starting the worker threads")?;
-    let bar = crate::cmd_decode::bar(0, "{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})");
+    let bar = crate::progress::bar(0, "{msg} [{bar:30}] {pos}/{len} {elapsed} (eta {eta})");
     let on = |p: Progress<'_>| match p {
         Progress::Plan { subjects, units } => {
             bar.set_length((subjects + units) as u64);

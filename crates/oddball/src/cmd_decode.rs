@@ -5,7 +5,9 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
+
+use crate::progress::bar;
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
 use oddball_eval::text::{self, Narration};
@@ -111,18 +113,6 @@ pub struct EvaluateArgs {
     pub out: Option<PathBuf>,
     #[command(flatten)]
     pub events: EventArgs,
-}
-
-/// A progress bar of `len` steps on stderr drawn by `template`; indicatif hides it when stderr
-/// is not a terminal (or `TERM` is unset or `dumb`), so logs and pipes stay clean.
-pub fn bar(len: u64, template: &str) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    pb.set_style(
-        ProgressStyle::with_template(template)
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
-    pb
 }
 
 /// What a run reports: the progress bar, and above it what [`Narration`] says.

@@ -27,6 +27,7 @@ mod cmd_simulate;
 mod cmd_task;
 mod load;
 mod preset_arg;
+mod progress;
 
 #[derive(Debug, Parser)]
 #[command(
