@@ -43,10 +43,9 @@ pub enum DatasetError {
     },
     #[error(
         "{} has {n_events} events but none is labelled target or non-target (its events: \
-         {events}); say which are with --target-events and --nontarget-events (codes or marker \
-         texts, e.g. --target-events 2 --nontarget-events 1) or an [events] table in a dataset \
-         manifest, or for a speller run give the text it spelled with --test-text (test_text \
-         in a manifest)",
+         {events}); say which events are targets and which non-targets (codes or marker texts; \
+         an [events] table in a dataset manifest), or for a speller run give the text it spelled \
+         (test_text in a manifest)",
         path.display()
     )]
     Unlabelled {

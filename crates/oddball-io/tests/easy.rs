@@ -215,7 +215,7 @@ fn options_change_events_info_and_rate() {
     };
     let e = read_easy_with(&path, &o).unwrap_err();
     assert!(
-        matches!(&e, IoError::Io { action: "read", path, .. } if path.ends_with("missing.info")),
+        matches!(&e, IoError::NotFound { path } if path.ends_with("missing.info")),
         "{e}"
     );
 }

@@ -137,6 +137,20 @@ fn stop_on_signals() {
     }
 }
 
+/// The flags that fix an error the libraries state as a fact (they name no flag).
+fn flag_hint(err: &anyhow::Error) -> Option<&'static str> {
+    let unlabelled = err.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<oddball_eval::dataset::DatasetError>(),
+            Some(oddball_eval::dataset::DatasetError::Unlabelled { .. })
+        )
+    });
+    unlabelled.then_some(
+        "with the command line: --target-events and --nontarget-events (codes or marker texts, \
+         e.g. --target-events 2 --nontarget-events 1), or --test-text for a speller run",
+    )
+}
+
 /// The exit status of a session that stopped before its end, what it had kept and written.
 const STOPPED: u8 = 3;
 
@@ -175,6 +189,9 @@ fn main() -> ExitCode {
                     eprintln!("  caused by: {text}");
                 }
                 previous = text;
+            }
+            if let Some(hint) = flag_hint(&err) {
+                eprintln!("  {hint}");
             }
             ExitCode::FAILURE
         }
