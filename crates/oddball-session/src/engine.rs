@@ -16,12 +16,12 @@
 //! 3. **Online**: per decision, a countdown, then rounds of four flashes. Flashes are shown (to
 //!    the subject and the epocher) when the stream reaches their onset; each epoch is scored as
 //!    soon as its last sample (600 ms after onset) has arrived; after each complete round the
-//!    [`DecisionRule`] decides, continues or abstains. A decision issues the bulb's command to the
+//!    [`DecisionRule`](oddball_decode::decision::DecisionRule) decides, continues or abstains. A decision issues the bulb's command to the
 //!    arm, which runs on the same clock as the EEG, one chunk at a time.
 //!
-//! Before every trial the presenter may hold the session ([`Presenter::hold`]: an operator's
+//! Before every trial the presenter may hold the session ([`Presenter::hold`](crate::roles::Presenter::hold): an operator's
 //! pause): the EEG and the arm run on, no trial starts. After every trial the observer hears
-//! each channel's rejected epochs ([`Observer::channel_faults`]).
+//! each channel's rejected epochs ([`Observer::channel_faults`](crate::roles::Observer::channel_faults)).
 //!
 //! Everything shown and decided is kept ([`SessionLog`]) so a session can be saved and
 //! re-evaluated offline to the same decisions ([`crate::record`]).

@@ -30,4 +30,4 @@ pub use protocol::{
     ChannelQuality, ClientMsg, Control, PanelConfig, ProtocolError, Role, ServerMsg,
     MAX_CLIENT_MESSAGE,
 };
-pub use server::{DrawnReport, PanelServer, PanelStats};
+pub use server::{DrawnReport, PanelServer, PanelStats, ORPHANED_PAUSE_S};
