@@ -282,6 +282,16 @@ impl ArmConfig {
 
     /// Reads and parses a TOML file.
     pub fn from_toml_path(path: &Path) -> Result<Self, ConfigError> {
+        // A device, pipe or socket (or a link to one) has no end to bound what reading costs.
+        if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            return Err(ConfigError::Read {
+                path: path.to_path_buf(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "not a regular file (a device, pipe or socket): refused",
+                ),
+            });
+        }
         let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
             path: path.to_path_buf(),
             source,

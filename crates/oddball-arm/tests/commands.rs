@@ -399,5 +399,11 @@ fn config_file_errors_name_the_file() {
     assert!(msg.contains("arm.toml") && msg.contains("x_max_m"), "{msg}");
     let missing = ArmConfig::from_toml_path(&dir.join("nope.toml")).unwrap_err();
     assert!(matches!(missing, ConfigError::Read { .. }));
+    // Issue #30: a device (here /dev/zero, whose content never ends) is refused, not read.
+    #[cfg(unix)]
+    {
+        let err = ArmConfig::from_toml_path(std::path::Path::new("/dev/zero")).unwrap_err();
+        assert!(err.to_string().contains("not a regular file"), "{err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

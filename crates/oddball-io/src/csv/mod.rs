@@ -344,6 +344,27 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
             })
             .collect(),
     };
+    // A channel named among the time or marker columns would feed the clock or the labels in
+    // as EEG (the probe's `--channels Marker,TP9` scored AUC 1.000 on its own labels).
+    for &j in &ch_idx {
+        if Some(j) == time_idx || Some(j) == marker_idx {
+            return Err(csv_err(
+                path,
+                1,
+                j + 1,
+                "channels",
+                format!(
+                    "EEG columns, not the {} column",
+                    if Some(j) == time_idx {
+                        "time"
+                    } else {
+                        "marker"
+                    }
+                ),
+                columns[j].clone(),
+            ));
+        }
+    }
     if ch_idx.is_empty() {
         return Err(csv_err(
             path,
@@ -372,8 +393,7 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
     if let Some(j) = marker_idx {
         role[j] = 2;
     }
-    // The same column may be a channel and the time/marker column when configured so: then it
-    // is read for both roles.
+    // (A channel is never the time or marker column: refused above.)
     let ch_of_col: Vec<Vec<usize>> = (0..columns.len())
         .map(|j| {
             ch_idx
@@ -587,6 +607,22 @@ mod tests {
         assert_eq!(o.sfreq, None);
         let o = CsvOptions::detect(&["Cz", "time"]);
         assert_eq!(o.time_column, None);
+    }
+
+    /// Issue #30: `--channels Marker,TP9` fed the labels in as EEG (AUC 1.000); a channel that
+    /// is the time or the marker column is refused, naming the column.
+    #[test]
+    fn channels_that_are_the_time_or_marker_column_are_refused() {
+        let text = "time,Cz,Pz,trigger\n0,1,2,0\n0.01,1,2,7\n0.02,1,2,0\n";
+        let mut o = CsvOptions::detect(&["time", "Cz", "Pz", "trigger"]);
+        for (pick, what) in [("trigger", "marker"), ("time", "time")] {
+            o.channels = Some(vec![pick.into(), "Cz".into()]);
+            let e = parse(text, &o).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("not the {what} column")) && e.contains(pick),
+                "{e}"
+            );
+        }
     }
 
     #[test]
