@@ -1,6 +1,7 @@
 //! A live session: EEG from a live stream (or the simulated subject paced by the wall clock),
 //! flashes drawn by the browser panel, markers stamped by the frames that drew them, decisions
-//! driving the arm, everything recorded to XDF as it runs; `summary.json` at the end.
+//! driving the arm, everything recorded to XDF as it runs; `decisions.csv` (as demo and task
+//! write it) and `summary.json` at the end.
 //!
 //! When the panel is served its address is said first (the subject view, then the operator
 //! view's), then a subject view is waited for before the first countdown.
@@ -242,6 +243,11 @@ impl Online {
             };
             steps = run.steps;
         }
+        // decisions.csv as demo and task write it (one row per decision).
+        report::write(
+            &self.out.join("decisions.csv"),
+            oddball_live::pilot::decisions_csv(&steps),
+        )?;
         if let Some(r) = session.channel_report() {
             writeln!(out, "{r}")?;
         }

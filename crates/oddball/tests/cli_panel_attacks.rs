@@ -231,6 +231,13 @@ fn session(
     }
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    // decisions.csv as demo writes it: a header and one row per decision.
+    let csv = std::fs::read_to_string(out.join("decisions.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        1 + summary["decisions"].as_array().unwrap().len(),
+        "{csv}"
+    );
     (summary, rest)
 }
 
