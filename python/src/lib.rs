@@ -441,7 +441,6 @@ methods_with_json!(
             Ok(out.into_pyarray(py))
         }
 
-        /// Channel-major weights.
         /// P(target) per row.
         fn predict_proba<'py>(
             &self,
@@ -455,6 +454,7 @@ methods_with_json!(
             Ok(out.into_pyarray(py))
         }
 
+        /// Channel-major weights (feature `ch · n_times + t`).
         #[getter]
         fn coef<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
             self.inner.coef().to_owned().into_pyarray(py)

@@ -135,12 +135,9 @@ def skip_item(toks, i):
     return i
 
 
-def attribute(toks, i):
-    """(text, index after) of the attribute `#[...]` / `#![...]` at toks[i]."""
-    j = i + 1
-    if toks[j] == "!":
-        j += 1
-    depth, k = 0, j
+def closing(toks, k):
+    """Index of the bracket that closes the one opened at toks[k] (len(toks) if none does)."""
+    depth = 0
     while k < len(toks):
         if toks[k] in OPEN:
             depth += 1
@@ -149,6 +146,15 @@ def attribute(toks, i):
             if depth == 0:
                 break
         k += 1
+    return k
+
+
+def attribute(toks, i):
+    """(text, index after) of the attribute `#[...]` / `#![...]` at toks[i]."""
+    j = i + 1
+    if toks[j] == "!":
+        j += 1
+    k = closing(toks, j)
     return " ".join(toks[j + 1:k]), k + 1
 
 
@@ -160,15 +166,7 @@ def macro_bodies(toks):
     while i + 2 < len(toks):
         if (is_ident(toks[i]) and toks[i] != "macro_rules" and toks[i + 1] == "!"
                 and toks[i + 2] in OPEN):
-            depth, k = 0, i + 2
-            while k < len(toks):
-                if toks[k] in OPEN:
-                    depth += 1
-                elif toks[k] in CLOSE:
-                    depth -= 1
-                    if depth == 0:
-                        break
-                k += 1
+            k = closing(toks, i + 2)
             for j in range(i + 3, k):
                 inside[j] = True
             i = k + 1

@@ -140,19 +140,27 @@ impl Demo {
             }
         }
         let mut replay_rule = None;
-        let mut prep = prepare(opts, &self.source, rule, opts.realtime, out, |r, _, _| {
-            replay_rule = Some(r.params.decoder.rule);
-            if rule != fixed {
-                let mut p = r.params.clone();
-                p.decoder.rule = fixed;
-                let d: Vec<_> = replay::replay(&r.test, &r.model, commands, &p)?
-                    .into_iter()
-                    .map(|(d, _)| d)
-                    .collect();
-                comparison = Some(scores(&d, &fixed));
-            }
-            Ok(())
-        })?;
+        let mut prep = prepare(
+            opts,
+            replay_files.as_ref(),
+            &self.source,
+            rule,
+            opts.realtime,
+            out,
+            |r, _, _| {
+                replay_rule = Some(r.params.decoder.rule);
+                if rule != fixed {
+                    let mut p = r.params.clone();
+                    p.decoder.rule = fixed;
+                    let d: Vec<_> = replay::replay(&r.test, &r.model, commands, &p)?
+                        .into_iter()
+                        .map(|(d, _)| d)
+                        .collect();
+                    comparison = Some(scores(&d, &fixed));
+                }
+                Ok(())
+            },
+        )?;
         // The rule calibration chose (optimised stopping), else the one given.
         let (rule, stopping) = match &prep.pilot {
             AnyPilot::Live(s) => (s.params().decoder.rule, s.stopping().copied()),

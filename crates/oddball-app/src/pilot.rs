@@ -16,19 +16,20 @@ use crate::error::{AppError, Result, SettingError};
 use crate::replayed::{calibrated_replay, ReplayFiles, Replayed};
 use crate::settings::{SessionSettings, SourceSettings};
 
-/// Calibrates a pilot: a replayed recording (offline, so only with the simulated source), or a
-/// session over `source`, its calibration paced by the wall clock when `paced`. Says the
+/// Calibrates a pilot: a replayed recording (`replayed`, the checked [`ReplayFiles::of`] the
+/// settings; offline, so only with the simulated source), or a session over `source`, its calibration paced by the wall clock when `paced`. Says the
 /// calibration on `out`; `on_replay` sees a replayed subject's recordings and source before they
 /// are used.
 pub fn prepare(
     settings: &SessionSettings,
+    replayed: Option<&ReplayFiles>,
     source: &SourceSettings,
     rule: DecisionRule,
     paced: bool,
     out: &mut dyn Write,
     on_replay: impl FnOnce(&Replayed, &ReplaySource, &mut dyn Write) -> Result<()>,
 ) -> Result<Prepared> {
-    if let Some(files) = ReplayFiles::of(settings)? {
+    if let Some(files) = replayed {
         if source.source != SourceSpec::Sim {
             return Err(SettingError::ReplayWithSource {
                 files: files.test.clone(),
@@ -36,7 +37,7 @@ pub fn prepare(
             }
             .into());
         }
-        let r = calibrated_replay(settings, &files, rule, out)?;
+        let r = calibrated_replay(settings, files, rule, out)?;
         let replay = ReplaySource::new(&r.test, &r.model, &r.params).map_err(|source| {
             AppError::Replaying {
                 names: files.test_names(),

@@ -129,7 +129,8 @@ impl TaskRun {
     ) -> Result<Prepared> {
         let opts = &self.settings;
         let (_, rule) = opts.rules()?;
-        match (ReplayFiles::of(opts)?, opts.preset()) {
+        let replayed = ReplayFiles::of(opts)?;
+        match (&replayed, opts.preset()) {
             (Some(files), _) => {
                 if self.panel.serve.is_some() {
                     return Err(SettingError::ServeReplay.into());
@@ -152,6 +153,7 @@ impl TaskRun {
         }
         let mut prep = prepare(
             opts,
+            replayed.as_ref(),
             &self.source,
             rule,
             opts.realtime,

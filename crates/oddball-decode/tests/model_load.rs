@@ -143,11 +143,10 @@ fn as_version(text: &str, version: u32) -> String {
     serde_json::to_string(&v).unwrap()
 }
 
-/// The presets left out of the frozen fixture: their models hold training rows and support vectors
-/// (about 0.5 MB of JSON each), too large for a fixture. Their layout was checked against bf0714e
-/// when the pipeline was opened up; fresh models of them round-trip in the tests above.
-/// The presets whose models the fixture froze (every preset of commit bf0714e but the paper's
-/// three); a preset added later has no model saved by earlier code.
+/// The presets whose models the fixture froze: every preset of commit bf0714e but the paper's
+/// three, whose models hold training rows and support vectors (about 0.5 MB of JSON each, too
+/// large for a fixture; fresh models of them round-trip in the tests above). A preset added later
+/// has no model saved by earlier code.
 const FROZEN: [&str; 6] = [
     "lda",
     "toeplitz-lda",

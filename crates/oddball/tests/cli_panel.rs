@@ -15,7 +15,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufReader, Read};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
@@ -37,26 +37,6 @@ fn one_browser_at_a_time() -> std::sync::MutexGuard<'static, ()> {
 
 fn root() -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
-}
-
-/// Reads a session's stdout up to its `panel: URL` and `operator view: URL` lines and returns
-/// the two addresses (each with its view's key).
-fn panel_url(stdout: &mut impl BufRead) -> (String, String) {
-    let mut head = String::new();
-    let mut subject = None;
-    for _ in 0..10 {
-        let mut line = String::new();
-        stdout.read_line(&mut line).unwrap();
-        head.push_str(&line);
-        if let Some(u) = line.trim().strip_prefix("panel: ") {
-            subject = Some(u.to_string());
-        }
-        if let (Some(s), Some(o)) = (&subject, line.trim().strip_prefix("operator view: ")) {
-            assert!(s.contains("?key=") && o.contains("?key="), "{head}");
-            return (s.clone(), o.to_string());
-        }
-    }
-    panic!("no panel lines in:\n{head}");
 }
 
 /// Drives the page at `url` with tools/panel-test/panel.mjs until `n` decisions (screenshot to
@@ -128,7 +108,7 @@ fn the_panel_flashes_decides_and_moves_the_arm_in_chromium() {
         .spawn()
         .expect("oddball online starts");
     let mut stdout = BufReader::new(online.stdout.take().unwrap());
-    let url = panel_url(&mut stdout);
+    let url = common::panel_urls(&mut stdout);
     let (_, rest) = drive(
         &chromium,
         &url,
@@ -216,7 +196,7 @@ fn the_panel_runs_the_fast_timing_with_on_times_and_gaps_within_a_frame_in_chrom
         .spawn()
         .expect("oddball online starts");
     let mut stdout = BufReader::new(online.stdout.take().unwrap());
-    let url = panel_url(&mut stdout);
+    let url = common::panel_urls(&mut stdout);
     let (page_out, rest) = drive(
         &chromium,
         &url,
@@ -281,7 +261,7 @@ fn the_panel_shows_a_tracking_task_and_its_target_in_chromium() {
         .spawn()
         .expect("oddball task starts");
     let mut stdout = BufReader::new(task.stdout.take().unwrap());
-    let url = panel_url(&mut stdout);
+    let url = common::panel_urls(&mut stdout);
     let (page_out, rest) = drive(
         &chromium,
         &url,
@@ -329,7 +309,7 @@ fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() 
         .spawn()
         .expect("oddball online starts");
     let mut stdout = BufReader::new(online.stdout.take().unwrap());
-    let url = panel_url(&mut stdout);
+    let url = common::panel_urls(&mut stdout);
     let shots = ["panel-subject.png", "panel-operator.png"].map(|s| root().join("target").join(s));
     for s in &shots {
         let _ = std::fs::remove_file(s);

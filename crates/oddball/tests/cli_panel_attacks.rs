@@ -8,30 +8,13 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use tungstenite::client::IntoClientRequest;
 use tungstenite::Message;
-
-/// The session's two addresses (each with its key) from its first stdout lines.
-fn panel_urls(stdout: &mut impl BufRead) -> (String, String) {
-    let (mut subject, mut head) = (None, String::new());
-    for _ in 0..10 {
-        let mut line = String::new();
-        stdout.read_line(&mut line).unwrap();
-        head.push_str(&line);
-        if let Some(u) = line.trim().strip_prefix("panel: ") {
-            subject = Some(u.to_string());
-        }
-        if let (Some(s), Some(o)) = (&subject, line.trim().strip_prefix("operator view: ")) {
-            return (s.clone(), o.to_string());
-        }
-    }
-    panic!("no panel lines in:\n{head}");
-}
 
 /// `http://ADDR/PATH?key=K` → (`ADDR`, `?key=K`).
 fn split(url: &str) -> (String, String) {
@@ -168,7 +151,7 @@ fn session(
         .spawn()
         .expect("oddball online starts");
     let mut stdout = BufReader::new(online.stdout.take().unwrap());
-    let (subject, operator) = panel_urls(&mut stdout);
+    let (subject, operator) = common::panel_urls(&mut stdout);
     let (addr, key) = split(&subject);
     let (_, operator_key) = split(&operator);
     let mut page = socket(&format!("ws://{addr}/ws{key}"), &[]).expect("the page connects");

@@ -167,3 +167,24 @@ pub fn write_xdf_with(path: &std::path::Path, spec: &CsvSpec) {
     w.flush_block().unwrap();
     w.finish().unwrap();
 }
+
+/// Reads a session's stdout up to its `panel: URL` and `operator view: URL` lines and returns
+/// the two addresses (each with its view's key).
+#[allow(dead_code)] // not every test binary serves the panel
+pub fn panel_urls(stdout: &mut impl std::io::BufRead) -> (String, String) {
+    let mut head = String::new();
+    let mut subject = None;
+    for _ in 0..10 {
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        head.push_str(&line);
+        if let Some(u) = line.trim().strip_prefix("panel: ") {
+            subject = Some(u.to_string());
+        }
+        if let (Some(s), Some(o)) = (&subject, line.trim().strip_prefix("operator view: ")) {
+            assert!(s.contains("?key=") && o.contains("?key="), "{head}");
+            return (s.clone(), o.to_string());
+        }
+    }
+    panic!("no panel lines in:\n{head}");
+}
