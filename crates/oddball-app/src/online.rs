@@ -85,12 +85,8 @@ impl Online {
         }
         report::create_dir(&self.out)?;
         let record_path = free_recording_path(&self.out);
-        let ran = self.run_with(&plan, source, markers, clock, &record_path, out);
-        if ran.is_err() && oddball_io::read(&record_path).is_ok_and(|r| r.raw.n_times() == 0) {
-            // A session that failed before any EEG leaves no empty recording.
-            let _ = std::fs::remove_file(&record_path);
-        }
-        ran
+        // A session that fails before any EEG leaves no empty recording (the recorder removes it).
+        self.run_with(&plan, source, markers, clock, &record_path, out)
     }
 
     fn run_with(

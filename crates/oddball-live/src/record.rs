@@ -19,10 +19,14 @@ use oddball_io::xdf::{XdfFormat, XdfStream, XdfWriter};
 
 use crate::LiveError;
 
-/// The live session's XDF recorder.
+/// The live session's XDF recorder. Dropped without [`Recorder::finish`] before any EEG sample
+/// was written (a session that failed to start), it removes its file: no empty recordings.
 #[derive(Debug)]
 pub struct Recorder {
-    writer: XdfWriter,
+    /// `None` once finished.
+    writer: Option<XdfWriter>,
+    /// EEG samples written.
+    n_times: u64,
     eeg: u32,
     markers: u32,
     decisions: u32,
@@ -64,7 +68,8 @@ impl Recorder {
         })?;
         writer.flush_block()?;
         Ok(Self {
-            writer,
+            writer: Some(writer),
+            n_times: 0,
             eeg,
             markers,
             decisions,
@@ -82,33 +87,51 @@ impl Recorder {
         let ts: Vec<f64> = (0..data.ncols())
             .map(|i| t0_ms / 1e3 + i as f64 / sfreq)
             .collect();
-        self.writer.push_numeric(self.eeg, &ts, data)?;
-        self.writer.flush_block()?;
+        let eeg = self.eeg;
+        let w = self.writer();
+        w.push_numeric(eeg, &ts, data)?;
+        w.flush_block()?;
+        self.n_times += data.ncols() as u64;
         Ok(())
     }
 
     pub fn marker(&mut self, text: &str, ms: f64) -> Result<(), LiveError> {
-        Ok(self
-            .writer
-            .push_strings(self.markers, &[ms / 1e3], &[text])?)
+        let markers = self.markers;
+        Ok(self.writer().push_strings(markers, &[ms / 1e3], &[text])?)
     }
 
     pub fn decision(&mut self, json: &str, ms: f64) -> Result<(), LiveError> {
+        let decisions = self.decisions;
         Ok(self
-            .writer
-            .push_strings(self.decisions, &[ms / 1e3], &[json])?)
+            .writer()
+            .push_strings(decisions, &[ms / 1e3], &[json])?)
     }
 
     pub fn arm(&mut self, ms: f64, state: [f64; 4]) -> Result<(), LiveError> {
         let data = Array2::from_shape_vec((4, 1), state.to_vec()).expect("4 × 1");
-        Ok(self
-            .writer
-            .push_numeric(self.arm, &[ms / 1e3], data.view())?)
+        let arm = self.arm;
+        Ok(self.writer().push_numeric(arm, &[ms / 1e3], data.view())?)
     }
 
     /// Writes the stream footers and closes the file.
-    pub fn finish(self) -> Result<(), LiveError> {
-        self.writer.finish()?;
+    pub fn finish(mut self) -> Result<(), LiveError> {
+        if let Some(w) = self.writer.take() {
+            w.finish()?;
+        }
         Ok(())
+    }
+
+    fn writer(&mut self) -> &mut XdfWriter {
+        self.writer
+            .as_mut()
+            .expect("a recorder is written until finished")
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if self.writer.take().is_some() && self.n_times == 0 {
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
 }
