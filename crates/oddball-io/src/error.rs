@@ -235,6 +235,15 @@ pub enum StateProblem {
     /// Two columns (0-based indices `first` and `second`) have the same name.
     #[error("given twice (columns {first} and {second})")]
     Duplicate { first: usize, second: usize },
+    /// Run `index` of a state given by runs is empty, starts before the end of the run before
+    /// it, or ends after the recording's `n_times` samples.
+    #[error("run {index} over samples [{start}, {end}) is empty, out of order, overlapping or beyond the recording's {n_times} samples")]
+    Run {
+        index: usize,
+        start: usize,
+        end: usize,
+        n_times: usize,
+    },
 }
 
 /// The formats [`crate::read`] knows, for messages.

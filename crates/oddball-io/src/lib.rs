@@ -52,21 +52,23 @@ pub mod montage;
 pub mod nic;
 pub mod read_options;
 mod recording;
+pub mod samples;
 pub mod speller;
 pub mod units;
 mod writing;
 pub mod xdf;
 
 pub use bci2000::{
-    read_bci2000, read_bci2000_with, stimulus_states, write_bci2000, Bci2000Header, Bci2000Info,
-    Bci2000Options, Bci2000WriteOptions, Bci2000WriteSummary, DataFormat, Parameter, Parameters,
-    StateColumn, StateDef, States,
+    read_bci2000, read_bci2000_with, stimulus_runs, stimulus_states, write_bci2000,
+    write_bci2000_blocks, Bci2000Header, Bci2000Info, Bci2000Options, Bci2000WriteOptions,
+    Bci2000WriteSummary, DataFormat, Parameter, Parameters, StateColumn, StateDef, StateRun,
+    StateRuns, States,
 };
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
 pub use dispatch::read;
 pub use easy::{
-    read_easy, read_easy_with, write_easy, EasyInfo, EasyInfoFile, EasyLayout, EasyOptions,
-    EasySfreqSource, EasyWriteOptions, EasyWriteSummary, InfoIndex,
+    read_easy, read_easy_with, write_easy, write_easy_blocks, EasyInfo, EasyInfoFile, EasyLayout,
+    EasyOptions, EasySfreqSource, EasyWriteOptions, EasyWriteSummary, InfoIndex,
 };
 pub use edf::{
     read_edf, read_edf_with, write_edf_plus, write_edf_plus_with, Annotation, EdfHeader, EdfInfo,
@@ -81,6 +83,7 @@ pub use mat::{
 };
 pub use read_options::{read_with, ReadOptions};
 pub use recording::{Details, Format, Recording};
+pub use samples::{SampleBlocks, SampleSpill, SpilledSamples};
 pub use speller::{CodeOrder, Speller, TextLabelError};
 pub use writing::{write_atomic, AtomicFile};
 pub use xdf::{

@@ -18,6 +18,7 @@ use std::path::{Path, PathBuf};
 
 use oddball_signal::Raw;
 
+use crate::samples::{for_each_block, SampleBlocks};
 use crate::IoError;
 
 /// A temporary file beside the target (the `tempfile` crate's, named `.<name>.<random>.tmp`,
@@ -222,35 +223,78 @@ pub(crate) fn check_writable(
     range_reason: &'static str,
     round_trip: impl Fn(f64) -> Option<f64>,
 ) -> Result<f64, IoError> {
+    check_writable_blocks(
+        path,
+        &raw.data().view(),
+        raw.ch_names(),
+        range_reason,
+        round_trip,
+    )
+}
+
+/// [`check_writable`] over samples read a block at a time (the first bad sample of the first
+/// block that has one, channel by channel).
+pub(crate) fn check_writable_blocks(
+    path: &Path,
+    samples: &dyn SampleBlocks,
+    ch_names: &[String],
+    range_reason: &'static str,
+    round_trip: impl Fn(f64) -> Option<f64>,
+) -> Result<f64, IoError> {
     let mut max_rounding = 0.0f64;
-    for (c, row) in raw.data().rows().into_iter().enumerate() {
-        for (t, &x) in row.iter().enumerate() {
-            let back = if x.is_finite() { round_trip(x) } else { None };
-            match back {
-                Some(b) => max_rounding = max_rounding.max((b - x).abs()),
-                None => {
-                    return Err(IoError::UnwritableSample {
-                        path: path.to_path_buf(),
-                        channel: raw.ch_names()[c].clone(),
-                        channel_index: c,
-                        sample: t,
-                        value: x,
-                        reason: if x.is_finite() {
-                            range_reason
-                        } else {
-                            "not a finite number"
-                        },
-                    })
+    for_each_block(
+        samples,
+        |start, block| {
+            for (c, row) in block.rows().into_iter().enumerate() {
+                for (t, &x) in row.iter().enumerate() {
+                    let back = if x.is_finite() { round_trip(x) } else { None };
+                    match back {
+                        Some(b) => max_rounding = max_rounding.max((b - x).abs()),
+                        None => {
+                            return Err(IoError::UnwritableSample {
+                                path: path.to_path_buf(),
+                                channel: ch_names[c].clone(),
+                                channel_index: c,
+                                sample: start + t,
+                                value: x,
+                                reason: if x.is_finite() {
+                                    range_reason
+                                } else {
+                                    "not a finite number"
+                                },
+                            })
+                        }
+                    }
                 }
             }
-        }
-    }
+            Ok(())
+        },
+        |source| read_error(path, source),
+    )?;
     Ok(max_rounding)
+}
+
+/// A failed read of the samples being written (a spilled session's temporary file).
+pub(crate) fn read_error(path: &Path, source: std::io::Error) -> IoError {
+    IoError::Io {
+        path: path.to_path_buf(),
+        action: "read the samples to write to",
+        source,
+    }
 }
 
 /// Refuses an empty recording (no channel or no sample): no format can be read back from it.
 pub(crate) fn check_not_empty(path: &Path, raw: &Raw, format: &str) -> Result<(), IoError> {
-    let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
+    check_not_empty_counts(path, raw.n_channels(), raw.n_times(), format)
+}
+
+/// [`check_not_empty`] for samples given by their counts.
+pub(crate) fn check_not_empty_counts(
+    path: &Path,
+    n_ch: usize,
+    n_times: usize,
+    format: &str,
+) -> Result<(), IoError> {
     if n_ch == 0 || n_times == 0 {
         return Err(IoError::Unsupported {
             path: path.to_path_buf(),

@@ -46,8 +46,8 @@ use oddball_signal::Event;
 pub use info::{Bci2000Header, Bci2000Info, DataFormat, StateDef, States};
 pub use params::{ParamCell, ParamValue, Parameter, Parameters};
 pub use write::{
-    encode_value, stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary,
-    StateColumn,
+    encode_value, stimulus_runs, stimulus_states, write_bci2000, write_bci2000_blocks,
+    Bci2000WriteOptions, Bci2000WriteSummary, StateColumn, StateRun, StateRuns,
 };
 
 use crate::files::read_file;

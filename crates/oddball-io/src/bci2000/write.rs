@@ -33,7 +33,8 @@ use oddball_signal::{Events, Raw};
 
 use super::params::parse_parameter_line;
 use crate::error::StateProblem;
-use crate::writing::{check_writable, TempFile};
+use crate::samples::{for_each_block, SampleBlocks};
+use crate::writing::{check_writable_blocks, read_error, TempFile};
 use crate::IoError;
 
 /// One state (a BCI2000 state-vector variable): one value per sample.
@@ -110,7 +111,58 @@ pub fn encode_value(s: &str) -> String {
     out
 }
 
-/// `StimulusCode` and `StimulusType` columns for `n_times` samples from `events`.
+/// One run of a state given by runs ([`StateRuns`]): `value` over the samples `[start, end)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StateRun {
+    pub start: usize,
+    pub end: usize,
+    pub value: u64,
+}
+
+/// One state given by its runs, 0 on every sample outside them: what a long recording's
+/// states cost grows with its events, not its samples ([`write_bci2000_blocks`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StateRuns {
+    /// Printable ASCII without whitespace, e.g. `TrialNumber`.
+    pub name: String,
+    /// Width in bits, 1..=32.
+    pub bits: u32,
+    /// Non-empty, in order, not overlapping, within the recording.
+    pub runs: Vec<StateRun>,
+}
+
+impl StateRuns {
+    pub fn new(name: impl Into<String>, bits: u32, runs: Vec<StateRun>) -> Self {
+        Self {
+            name: name.into(),
+            bits,
+            runs,
+        }
+    }
+
+    /// The state as one value per sample, for `n_times` samples.
+    pub fn to_column(&self, n_times: usize) -> StateColumn {
+        let mut values = vec![0u64; n_times];
+        for r in &self.runs {
+            for v in &mut values[r.start.min(n_times)..r.end.min(n_times)] {
+                *v = r.value;
+            }
+        }
+        StateColumn::new(self.name.clone(), self.bits, values)
+    }
+}
+
+/// `StimulusCode` and `StimulusType` columns for `n_times` samples from `events`
+/// ([`stimulus_runs`], one value per sample).
+pub fn stimulus_states(events: &Events, n_times: usize, duration: usize) -> Vec<StateColumn> {
+    stimulus_runs(events.as_slice(), n_times, duration)
+        .iter()
+        .map(|r| r.to_column(n_times))
+        .collect()
+}
+
+/// `StimulusCode` and `StimulusType` as runs for `n_times` samples from `events` (in order of
+/// onset).
 ///
 /// Each event's code is held for `duration` samples (at least 1) from its onset, clipped at the
 /// end of the recording and one sample before the next later onset, so that `StimulusCode`
@@ -121,37 +173,89 @@ pub fn encode_value(s: &str) -> String {
 /// `Some(true)` or `Some(false)`). Events at or after `n_times` are left out; of events at the
 /// same sample the later one wins; an event with code 0 marks nothing. `StimulusCode` has 8
 /// bits, or as many as the largest code needs.
-pub fn stimulus_states(events: &Events, n_times: usize, duration: usize) -> Vec<StateColumn> {
-    let mut code = vec![0u64; n_times];
-    let mut kind = vec![0u64; n_times];
-    let ev: Vec<_> = events.iter().filter(|e| e.onset < n_times).collect();
+pub fn stimulus_runs(
+    events: &[oddball_signal::Event],
+    n_times: usize,
+    duration: usize,
+) -> Vec<StateRuns> {
+    let mut ev: Vec<_> = events.iter().filter(|e| e.onset < n_times).collect();
+    ev.sort_by_key(|e| e.onset);
     let duration = duration.max(1);
-    for (i, e) in ev.iter().enumerate() {
+    let mut code: Vec<StateRun> = Vec::new();
+    let mut kind: Vec<StateRun> = Vec::new();
+    let mut i = 0;
+    while i < ev.len() {
+        // Of events at one sample, the later one wins.
+        let mut j = i;
+        while j + 1 < ev.len() && ev[j + 1].onset == ev[i].onset {
+            j += 1;
+        }
+        let e = ev[j];
         let mut end = e.onset.saturating_add(duration).min(n_times);
-        if let Some(next) = ev[i + 1..].iter().map(|f| f.onset).find(|&o| o > e.onset) {
+        if let Some(next) = ev.get(j + 1).map(|f| f.onset) {
             end = end.min(next - 1).max(e.onset + 1);
         }
-        let is_target = u64::from(e.target == Some(true));
-        for t in e.onset..end {
-            code[t] = u64::from(e.code);
-            kind[t] = is_target;
+        if e.code != 0 {
+            code.push(StateRun {
+                start: e.onset,
+                end,
+                value: u64::from(e.code),
+            });
         }
+        if e.target == Some(true) {
+            kind.push(StateRun {
+                start: e.onset,
+                end,
+                value: 1,
+            });
+        }
+        i = j + 1;
     }
     let max_code = ev.iter().map(|e| e.code).max().unwrap_or(0);
     let bits = (u32::BITS - max_code.leading_zeros()).max(8);
     vec![
-        StateColumn::new("StimulusCode", bits, code),
-        StateColumn::new("StimulusType", 1, kind),
+        StateRuns::new("StimulusCode", bits, code),
+        StateRuns::new("StimulusType", 1, kind),
     ]
+}
+
+/// A state's values, one per sample or by runs.
+#[derive(Clone, Copy)]
+enum Values<'a> {
+    Dense(&'a [u64]),
+    Runs(&'a [StateRun]),
+    /// `Running`, added when the caller gives none.
+    One,
 }
 
 /// A state's place in the state vector.
 struct Placed<'a> {
     name: &'a str,
     bits: u32,
-    values: &'a [u64],
+    values: Values<'a>,
     /// Bit offset from the start of the state vector.
     first_bit: usize,
+    /// The run a [`Values::Runs`] state is at, samples being visited in order.
+    cursor: usize,
+}
+
+impl Placed<'_> {
+    /// The value at sample `t`; `t` never decreases between calls.
+    fn value_at(&mut self, t: usize) -> u64 {
+        match self.values {
+            Values::Dense(v) => v[t],
+            Values::One => 1,
+            Values::Runs(runs) => {
+                while self.cursor < runs.len() && runs[self.cursor].end <= t {
+                    self.cursor += 1;
+                }
+                match runs.get(self.cursor) {
+                    Some(r) if r.start <= t => r.value,
+                    _ => 0,
+                }
+            }
+        }
+    }
 }
 
 /// Writes `raw` and `states` as a BCI2000 v1.1 `.dat` file with float32 samples in µV (see the
@@ -172,62 +276,135 @@ pub fn write_bci2000(
     options: &Bci2000WriteOptions,
 ) -> Result<Bci2000WriteSummary, IoError> {
     let path = path.as_ref();
+    let n_times = raw.n_times();
+    for s in states {
+        if s.values.len() != n_times {
+            return Err(IoError::InvalidState {
+                path: path.to_path_buf(),
+                state: s.name.clone(),
+                problem: StateProblem::Length {
+                    len: s.values.len(),
+                    n_times,
+                },
+            });
+        }
+    }
+    let states: Vec<_> = states
+        .iter()
+        .map(|s| (s.name.as_str(), s.bits, Values::Dense(&s.values)))
+        .collect();
+    write_core(
+        path,
+        &raw.data().view(),
+        raw.sfreq(),
+        raw.ch_names(),
+        states,
+        options,
+    )
+}
+
+/// [`write_bci2000`] for samples read a block at a time (a session's samples spilled to disk,
+/// [`crate::SampleSpill`]) and states given by runs: memory stays one block and the runs,
+/// however long the recording. A run that is empty, out of order, overlapping the one before or
+/// beyond the recording is refused ([`StateProblem::Run`]), before anything is written.
+pub fn write_bci2000_blocks(
+    path: impl AsRef<Path>,
+    samples: &dyn SampleBlocks,
+    sfreq: f64,
+    ch_names: &[String],
+    states: &[StateRuns],
+    options: &Bci2000WriteOptions,
+) -> Result<Bci2000WriteSummary, IoError> {
+    let path = path.as_ref();
+    let n_times = samples.n_times();
+    for s in states {
+        let mut prev_end = 0;
+        for (index, r) in s.runs.iter().enumerate() {
+            if r.start >= r.end || r.start < prev_end || r.end > n_times {
+                return Err(IoError::InvalidState {
+                    path: path.to_path_buf(),
+                    state: s.name.clone(),
+                    problem: StateProblem::Run {
+                        index,
+                        start: r.start,
+                        end: r.end,
+                        n_times,
+                    },
+                });
+            }
+            prev_end = r.end;
+        }
+    }
+    let states: Vec<_> = states
+        .iter()
+        .map(|s| (s.name.as_str(), s.bits, Values::Runs(&s.runs)))
+        .collect();
+    write_core(path, samples, sfreq, ch_names, states, options)
+}
+
+fn write_core(
+    path: &Path,
+    samples: &dyn SampleBlocks,
+    sfreq: f64,
+    ch_names: &[String],
+    states: Vec<(&str, u32, Values<'_>)>,
+    options: &Bci2000WriteOptions,
+) -> Result<Bci2000WriteSummary, IoError> {
     let unsupported = |what: String| IoError::Unsupported {
         path: path.to_path_buf(),
         what,
     };
-    crate::writing::check_not_empty(path, raw, "BCI2000")?;
-    let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
-    let sfreq = raw.sfreq();
-    if let Some(c) = raw.ch_names().iter().position(String::is_empty) {
+    let (n_ch, n_times) = (samples.n_channels(), samples.n_times());
+    crate::writing::check_not_empty_counts(path, n_ch, n_times, "BCI2000")?;
+    if let Some(c) = ch_names.iter().position(String::is_empty) {
         return Err(unsupported(format!(
             "channel {c} has an empty name (a BCI2000 reader would then rename every channel)"
         )));
     }
 
     // States: checked, then packed bit by bit in the given order (`Running` first if absent).
-    let add_running = !states.iter().any(|s| s.name == "Running");
-    let running = if add_running {
-        vec![1u64; n_times]
-    } else {
-        Vec::new()
-    };
-    let mut cols: Vec<(&str, u32, &[u64])> = Vec::with_capacity(states.len() + 1);
+    let add_running = !states.iter().any(|s| s.0 == "Running");
+    let mut cols: Vec<(&str, u32, Values<'_>)> = Vec::with_capacity(states.len() + 1);
     if add_running {
-        cols.push(("Running", 1, &running));
+        cols.push(("Running", 1, Values::One));
     }
     let mut seen: HashMap<&str, usize> = HashMap::new();
-    for (i, s) in states.iter().enumerate() {
+    for (i, &(name, bits, values)) in states.iter().enumerate() {
         let bad = |problem: StateProblem| IoError::InvalidState {
             path: path.to_path_buf(),
-            state: s.name.clone(),
+            state: name.to_string(),
             problem,
         };
-        if let Some(reason) = state_name_problem(&s.name) {
+        if let Some(reason) = state_name_problem(name) {
             return Err(bad(StateProblem::Name { reason }));
         }
-        if let Some(&first) = seen.get(s.name.as_str()) {
+        if let Some(&first) = seen.get(name) {
             return Err(bad(StateProblem::Duplicate { first, second: i }));
         }
-        seen.insert(&s.name, i);
-        if !(1..=32).contains(&s.bits) {
-            return Err(bad(StateProblem::Bits { bits: s.bits }));
+        seen.insert(name, i);
+        if !(1..=32).contains(&bits) {
+            return Err(bad(StateProblem::Bits { bits }));
         }
-        if s.values.len() != n_times {
-            return Err(bad(StateProblem::Length {
-                len: s.values.len(),
-                n_times,
-            }));
-        }
-        if let Some((sample, &value)) = s.values.iter().enumerate().find(|(_, &v)| v >> s.bits != 0)
-        {
+        let too_wide = match values {
+            Values::Dense(v) => v
+                .iter()
+                .enumerate()
+                .find(|(_, &v)| v >> bits != 0)
+                .map(|(sample, &value)| (sample, value)),
+            Values::Runs(runs) => runs
+                .iter()
+                .find(|r| r.value >> bits != 0)
+                .map(|r| (r.start, r.value)),
+            Values::One => None,
+        };
+        if let Some((sample, value)) = too_wide {
             return Err(bad(StateProblem::ValueTooWide {
                 sample,
                 value,
-                bits: s.bits,
+                bits,
             }));
         }
-        cols.push((&s.name, s.bits, &s.values));
+        cols.push((name, bits, values));
     }
     let mut placed = Vec::with_capacity(cols.len());
     let mut next_bit = 0usize;
@@ -237,17 +414,18 @@ pub fn write_bci2000(
             bits,
             values,
             first_bit: next_bit,
+            cursor: 0,
         });
         next_bit += bits as usize;
     }
     let sv_len = next_bit.div_ceil(8);
 
     // Samples: finite and within float32; the largest rounding is reported.
-    let data = raw.data();
-    let max_rounding = check_writable(path, raw, "beyond the float32 range", |x| {
-        let f = x as f32;
-        f.is_finite().then(|| f64::from(f))
-    })?;
+    let max_rounding =
+        check_writable_blocks(path, samples, ch_names, "beyond the float32 range", |x| {
+            let f = x as f32;
+            f.is_finite().then(|| f64::from(f))
+        })?;
 
     // Parameters.
     let extras = check_extra_parameters(path, &options.extra_parameters)?;
@@ -268,7 +446,7 @@ pub fn write_bci2000(
     params.push(format!(
         "{props} float SamplingRate= {sfreq}Hz // sample rate"
     ));
-    let names: Vec<String> = raw.ch_names().iter().map(|n| encode_value(n)).collect();
+    let names: Vec<String> = ch_names.iter().map(|n| encode_value(n)).collect();
     params.push(format!(
         "{props} list ChannelNames= {n_ch} {} // list of channel names",
         names.join(" ")
@@ -289,12 +467,14 @@ pub fn write_bci2000(
     // Header: everything after the first line, then the first line, whose length depends on
     // the `HeaderLen` it states (found by fixed-point iteration).
     let mut rest = String::from("[ State Vector Definition ]\r\n");
-    for p in &placed {
+    for p in &mut placed {
+        let first = p.value_at(0);
+        p.cursor = 0;
         rest.push_str(&format!(
             "{} {} {} {} {}\r\n",
             p.name,
             p.bits,
-            p.values[0],
+            first,
             p.first_bit / 8,
             p.first_bit % 8
         ));
@@ -333,22 +513,30 @@ pub fn write_bci2000(
     let mut w = BufWriter::with_capacity(1 << 16, file);
     w.write_all(header.as_bytes()).map_err(write_err)?;
     let mut record = vec![0u8; record_len];
-    for t in 0..n_times {
-        record.fill(0);
-        for (c, x) in data.column(t).iter().enumerate() {
-            record[4 * c..4 * c + 4].copy_from_slice(&(*x as f32).to_le_bytes());
-        }
-        let sv = &mut record[4 * n_ch..];
-        for p in &placed {
-            let shifted = p.values[t] << (p.first_bit % 8);
-            let first_byte = p.first_bit / 8;
-            let n_bytes = (p.first_bit % 8 + p.bits as usize).div_ceil(8);
-            for (k, b) in sv[first_byte..first_byte + n_bytes].iter_mut().enumerate() {
-                *b |= (shifted >> (8 * k)) as u8;
+    for_each_block(
+        samples,
+        |start, block| {
+            for (k, column) in block.columns().into_iter().enumerate() {
+                let t = start + k;
+                record.fill(0);
+                for (c, x) in column.iter().enumerate() {
+                    record[4 * c..4 * c + 4].copy_from_slice(&(*x as f32).to_le_bytes());
+                }
+                let sv = &mut record[4 * n_ch..];
+                for p in &mut placed {
+                    let shifted = p.value_at(t) << (p.first_bit % 8);
+                    let first_byte = p.first_bit / 8;
+                    let n_bytes = (p.first_bit % 8 + p.bits as usize).div_ceil(8);
+                    for (k, b) in sv[first_byte..first_byte + n_bytes].iter_mut().enumerate() {
+                        *b |= (shifted >> (8 * k)) as u8;
+                    }
+                }
+                w.write_all(&record).map_err(write_err)?;
             }
-        }
-        w.write_all(&record).map_err(write_err)?;
-    }
+            Ok(())
+        },
+        |source| read_error(path, source),
+    )?;
     let file = w.into_inner().map_err(|e| write_err(e.into_error()))?;
     crate::writing::sync(&file).map_err(write_err)?;
     drop(file);

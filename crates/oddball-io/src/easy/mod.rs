@@ -126,7 +126,7 @@ pub use types::{
     EasyInfo, EasyInfoFile, EasyLayout, EasyOptions, EasySfreqSource, InfoIndex, MAX_TIMESTAMP_MS,
     NIC_PACKET_LOSS_CODE, STANDARD_CHANNEL_COUNTS,
 };
-pub use write::{timestamp_ms, write_easy, EasyWriteOptions, EasyWriteSummary};
+pub use write::{timestamp_ms, write_easy, write_easy_blocks, EasyWriteOptions, EasyWriteSummary};
 
 #[cfg(test)]
 mod tests {

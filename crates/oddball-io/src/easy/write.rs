@@ -4,9 +4,10 @@ use std::fmt::Write as _;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use oddball_signal::Raw;
+use oddball_signal::{Event, Raw};
 
-use crate::writing::{check_writable, TempFile};
+use crate::samples::{for_each_block, SampleBlocks};
+use crate::writing::{check_writable_blocks, read_error, TempFile};
 use crate::IoError;
 
 use super::read::*;
@@ -84,14 +85,35 @@ pub fn write_easy(
     raw: &Raw,
     options: &EasyWriteOptions,
 ) -> Result<EasyWriteSummary, IoError> {
+    write_easy_blocks(
+        path,
+        &raw.data().view(),
+        raw.sfreq(),
+        raw.ch_names(),
+        raw.events().as_slice(),
+        options,
+    )
+}
+
+/// [`write_easy`] for samples read a block at a time (a session's samples spilled to disk,
+/// [`crate::SampleSpill`]) and their `events`: memory stays one block and the events, however
+/// long the recording.
+pub fn write_easy_blocks(
+    path: impl AsRef<Path>,
+    samples: &dyn SampleBlocks,
+    sfreq: f64,
+    ch_names: &[String],
+    events: &[Event],
+    options: &EasyWriteOptions,
+) -> Result<EasyWriteSummary, IoError> {
     let path = path.as_ref();
     let unsupported = |what: String| IoError::Unsupported {
         path: path.to_path_buf(),
         what,
     };
-    crate::writing::check_not_empty(path, raw, ".easy")?;
-    let (n_ch, n_times) = (raw.n_channels(), raw.n_times());
-    for (c, name) in raw.ch_names().iter().enumerate() {
+    let (n_ch, n_times) = (samples.n_channels(), samples.n_times());
+    crate::writing::check_not_empty_counts(path, n_ch, n_times, ".easy")?;
+    for (c, name) in ch_names.iter().enumerate() {
         if let Some(problem) = text_problem(name) {
             return Err(unsupported(format!(
                 "channel {c} name {name:?} {problem} (it goes on a .info line)"
@@ -110,7 +132,6 @@ pub fn write_easy(
             "a .easy path that is its own .info path (give the file another extension)".into(),
         ));
     }
-    let sfreq = raw.sfreq();
     let last = timestamp_ms(options.start_ms, n_times - 1, sfreq);
     if options.start_ms > MAX_TIMESTAMP_MS || last > MAX_TIMESTAMP_MS {
         return Err(unsupported(format!(
@@ -120,30 +141,37 @@ pub fn write_easy(
     }
 
     // Samples: finite and within int32 nV; the largest rounding is reported.
-    let data = raw.data();
     let nv = |x: f64| (x * 1000.0).round();
-    let max_rounding = check_writable(
+    let max_rounding = check_writable_blocks(
         path,
-        raw,
+        samples,
+        ch_names,
         "beyond ±2147483647 nV, the int32 range of .easy samples",
         |x| (nv(x).abs() <= f64::from(i32::MAX)).then(|| nv(x) / 1000.0),
     )?;
 
-    // Triggers: each event's code at its onset only (the later of two at one sample wins).
-    let mut trig = vec![0u32; n_times];
-    for e in raw.events() {
-        if let Some(t) = trig.get_mut(e.onset) {
-            *t = e.code;
+    // Triggers: each event's code at its onset only (the later of two at one sample wins), as
+    // (sample, code) in order.
+    let mut order: Vec<&Event> = events.iter().filter(|e| e.onset < n_times).collect();
+    order.sort_by_key(|e| e.onset);
+    let mut trig: Vec<(usize, u32)> = Vec::with_capacity(order.len());
+    for e in order {
+        match trig.last_mut() {
+            Some(last) if last.0 == e.onset => last.1 = e.code,
+            _ => trig.push((e.onset, e.code)),
         }
     }
-    let n_triggers = trig.iter().filter(|&&c| c != 0).count();
-    let readable = (0..n_times)
-        .filter(|&t| {
-            let c = trig[t];
-            c != 0 && c != NIC_PACKET_LOSS_CODE && (t == 0 || trig[t - 1] != c)
+    trig.retain(|&(_, c)| c != 0);
+    let n_triggers = trig.len();
+    let readable = trig
+        .iter()
+        .enumerate()
+        .filter(|&(i, &(t, c))| {
+            let held = i > 0 && trig[i - 1] == (t.wrapping_sub(1), c);
+            c != NIC_PACKET_LOSS_CODE && !held
         })
         .count();
-    let events_lost = raw.events().len().saturating_sub(readable);
+    let events_lost = events.len().saturating_sub(readable);
 
     // The .info (NIC 2's form).
     let mut info = String::new();
@@ -170,7 +198,7 @@ pub fn write_easy(
     let _ = writeln!(info, "EEG units: nV");
     let _ = writeln!(info, "Accelerometer data: OFF");
     let _ = writeln!(info, "EEG montage:");
-    for (k, name) in raw.ch_names().iter().enumerate() {
+    for (k, name) in ch_names.iter().enumerate() {
         let _ = writeln!(info, "\tChannel {}: {name}", k + 1);
     }
     if !options.extra_info.is_empty() {
@@ -191,16 +219,32 @@ pub fn write_easy(
     let mut w = BufWriter::with_capacity(1 << 16, file);
     let mut line = String::with_capacity(12 * (n_ch + 2));
     let mut bytes = 0u64;
-    for (t, code) in trig.iter().enumerate() {
-        line.clear();
-        for x in data.column(t) {
-            let _ = write!(line, "{}\t", nv(*x) as i32);
-        }
-        let _ = writeln!(line, "{code}\t{}", timestamp_ms(options.start_ms, t, sfreq));
-        w.write_all(line.as_bytes())
-            .map_err(|e| write_err(&easy_tmp.path, e))?;
-        bytes += line.len() as u64;
-    }
+    let mut next_trig = trig.iter().peekable();
+    for_each_block(
+        samples,
+        |start, block| {
+            for (k, column) in block.columns().into_iter().enumerate() {
+                let t = start + k;
+                line.clear();
+                for x in column {
+                    let _ = write!(line, "{}\t", nv(*x) as i32);
+                }
+                let code = match next_trig.peek() {
+                    Some(&&(at, c)) if at == t => {
+                        next_trig.next();
+                        c
+                    }
+                    _ => 0,
+                };
+                let _ = writeln!(line, "{code}\t{}", timestamp_ms(options.start_ms, t, sfreq));
+                w.write_all(line.as_bytes())
+                    .map_err(|e| write_err(&easy_tmp.path, e))?;
+                bytes += line.len() as u64;
+            }
+            Ok(())
+        },
+        |source| read_error(path, source),
+    )?;
     let file = w
         .into_inner()
         .map_err(|e| write_err(&easy_tmp.path, e.into_error()))?;
