@@ -153,6 +153,8 @@ impl Online {
         )?;
         subject.source_mut().start_now();
         let mut session = plan.session(subject).map_err(|e| plan_error(e, plan))?;
+        // The recorder writes every sample as it comes: the session keeps none (flat memory).
+        session.discard_samples();
         // The operator view's progress: "calibration decision 3 of 40", "decision 2 of 6".
         let calibrating = matches!(plan.start, Start::Calibrate { .. });
         let n_calibration = calibrating.then(|| session.params().calibration_trials());

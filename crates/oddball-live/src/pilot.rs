@@ -112,7 +112,7 @@ impl Prepared {
         session.subject_mut().end(end);
         let nic = matches!(session.subject().source(), AnySource::Nic(_));
         let paradigm = session.params().paradigm;
-        let (log, _, _) = session.finish();
+        let (log, _, _) = session.finish()?;
         if nic {
             save_session_easy(path, &log, &paradigm, 0).map(|_| ())
         } else {

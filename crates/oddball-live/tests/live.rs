@@ -57,11 +57,16 @@ fn a_live_session_on_schedule_equals_the_direct_session_and_records_it() {
     assert_eq!(a, b, "same decisions, posteriors, timing");
 
     let n = live.subject().position() as usize;
-    let (log, _, _) = live.finish();
+    let (log, _, _) = live.finish().unwrap();
     let rec = oddball_io::read(&path).unwrap();
     // The live subject's recorder is still open (not finished): whole blocks are on disk.
     assert_eq!(rec.raw.n_times(), n);
-    for (x, y) in rec.raw.data().iter().zip(log.raw.iter()) {
+    for (x, y) in rec
+        .raw
+        .data()
+        .iter()
+        .zip(log.samples.as_ref().unwrap().to_array().unwrap().iter())
+    {
         assert_eq!(*x, f64::from(*y as f32));
     }
     // Markers: a cue per trial, a flash per flash shown, a decision per online trial.
@@ -114,7 +119,7 @@ fn a_recorded_session_played_back_decides_the_same_and_stops_at_the_end_of_the_f
         .map(|&c| live.decide(Some(c)).unwrap())
         .collect();
     let n = live.subject().position() as usize;
-    let (recorded, _, _) = live.finish();
+    let (recorded, _, _) = live.finish().unwrap();
 
     let source = PlaybackSource::open(&path, clock).unwrap().unpaced();
     assert_eq!(source.n_times(), n);

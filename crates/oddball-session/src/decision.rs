@@ -5,7 +5,6 @@
 //!
 //! Nothing here imports another file of the crate but [`crate::paradigm`] and the error.
 
-use ndarray::Array2;
 use oddball_arm::Command;
 use serde::{Deserialize, Serialize};
 
@@ -154,12 +153,16 @@ impl CalibrationReport {
 }
 
 /// Everything a session showed, recorded and decided.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub struct SessionLog {
     pub sfreq: f64,
     pub ch_names: Vec<String>,
-    /// Raw samples as received, `(n_channels, n_times)`, µV.
-    pub raw: Array2<f64>,
+    /// Raw samples as received, `(n_channels, n_times)`, µV, on disk (read a block at a time,
+    /// or whole with [`oddball_io::SpilledSamples::to_array`]); `None` when the session kept
+    /// none ([`crate::engine::Session::discard_samples`]).
+    pub samples: Option<oddball_io::SpilledSamples>,
+    /// Samples the session took.
+    pub n_times: usize,
     pub flashes: Vec<ShownFlash>,
     pub trials: Vec<TrialRecord>,
 }

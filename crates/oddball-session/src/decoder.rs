@@ -113,12 +113,25 @@ pub struct AdaptationReport {
 }
 
 /// Settings of a session without calibration: the unsupervised decoder, refitted after every
-/// decision on every epoch so far, and how sure it must be to move the arm.
+/// decision on the epochs of the last `max_trials` trials, and how sure it must be to move the
+/// arm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct UncalibratedParams {
     pub decoder: UnsupervisedParams,
     /// A decision whose best bulb has a smaller posterior abstains (the arm stays still).
     pub abstain_below: f64,
+    /// The refits use the epochs of the last `max_trials` trials at most (older ones are
+    /// dropped): what the session holds, and each refit's time, stop growing with its length.
+    /// [`DEFAULT_MAX_TRIALS`] is about 50 minutes of the paper's timing.
+    #[serde(default = "default_max_trials")]
+    pub max_trials: usize,
+}
+
+/// The trials an uncalibrated session refits on at most, by default.
+pub const DEFAULT_MAX_TRIALS: usize = 300;
+
+fn default_max_trials() -> usize {
+    DEFAULT_MAX_TRIALS
 }
 
 impl UncalibratedParams {
@@ -127,6 +140,7 @@ impl UncalibratedParams {
         Ok(Self {
             decoder: UnsupervisedParams::for_sfreq(sfreq)?,
             abstain_below: 0.9,
+            max_trials: DEFAULT_MAX_TRIALS,
         })
     }
 
@@ -136,6 +150,13 @@ impl UncalibratedParams {
                 name: "abstain_below",
                 value: self.abstain_below.to_string(),
                 reason: "a probability in (0, 1]".into(),
+            });
+        }
+        if self.max_trials < 2 {
+            return Err(SessionError::InvalidParameter {
+                name: "max_trials",
+                value: self.max_trials.to_string(),
+                reason: "the refits need two trials at least".into(),
             });
         }
         Ok(())
@@ -218,6 +239,32 @@ impl Unlabelled {
             start_scores: Vec::new(),
             template: P300Template::default().matched(preprocess, sfreq)?,
         })
+    }
+}
+
+impl Unlabelled {
+    /// Drops the epochs of all but the last `max_trials` trials (trials arrive in order).
+    fn keep_last_trials(&mut self) {
+        let mut seen = 0;
+        let mut prev = None;
+        let mut cut = 0;
+        for (i, &t) in self.trials.iter().enumerate().rev() {
+            if prev != Some(t) {
+                seen += 1;
+                prev = Some(t);
+            }
+            if seen > self.params.max_trials {
+                cut = i + 1;
+                break;
+            }
+        }
+        if cut > 0 {
+            let p = self.rows.len() / self.trials.len();
+            self.rows.drain(..cut * p);
+            self.codes.drain(..cut);
+            self.trials.drain(..cut);
+            self.start_scores.drain(..cut);
+        }
     }
 }
 
@@ -387,6 +434,7 @@ impl OnlineDecoder {
         if u.codes.len() < 2 || u.trials.last() != Some(&trial) {
             return Ok(none(uniform));
         }
+        u.keep_last_trials();
         let n = u.codes.len();
         let x = ArrayView2::from_shape((n, u.rows.len() / n), &u.rows).map_err(|e| {
             SessionError::InvalidParameter {
@@ -435,5 +483,37 @@ impl OnlineDecoder {
         } else {
             Verdict::Abstain { posterior }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_uncalibrated_decoder_keeps_the_last_max_trials_trials() {
+        let mut params = UncalibratedParams::for_sfreq(500.0).unwrap();
+        params.max_trials = 3;
+        let mut u = Unlabelled::new(params, None, 4, &Preprocess::online(), 500.0).unwrap();
+        // Trials 0..6, each with 2 + trial epochs of 3 features.
+        for trial in 0..6usize {
+            for k in 0..2 + trial {
+                u.rows.extend([trial as f64, k as f64, 0.5]);
+                u.codes.push(1 + k as u32 % 4);
+                u.trials.push(trial);
+                u.start_scores.push(trial as f64);
+            }
+            u.keep_last_trials();
+            let first = trial.saturating_sub(2);
+            let n: usize = (first..=trial).map(|t| 2 + t).sum();
+            assert_eq!(u.trials.len(), n, "after trial {trial}");
+            assert_eq!((u.codes.len(), u.start_scores.len()), (n, n));
+            assert_eq!(u.rows.len(), 3 * n);
+            assert_eq!(u.trials[0], first);
+            assert_eq!(u.rows[0], first as f64);
+            assert_eq!(u.start_scores[0], first as f64);
+        }
+        params.max_trials = 1;
+        assert!(params.check().is_err());
     }
 }

@@ -26,13 +26,14 @@
 //! Everything shown and decided is kept ([`SessionLog`]) so a session can be saved and
 //! re-evaluated offline to the same decisions ([`crate::record`]).
 
-use ndarray::{Array2, Axis};
+use ndarray::Axis;
 use oddball_arm::{ArmSim, Command};
 use oddball_decode::decision::Verdict;
 use oddball_decode::pipeline::Model;
 use oddball_decode::preset::Preset;
 use oddball_decode::stopping::Expected;
 use oddball_decode::unsupervised::Unsupervised;
+use oddball_io::SampleSpill;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -134,7 +135,11 @@ pub struct Session<S: Subject> {
     subject: S,
     epocher: OnlineEpocher,
     rng: ChaCha8Rng,
-    raw: Vec<Vec<f64>>,
+    /// Every sample taken, spilled to disk as it comes (`None` once discarded,
+    /// [`Session::discard_samples`]).
+    samples: Option<SampleSpill>,
+    /// Samples taken so far.
+    n_times: usize,
     flashes: Vec<ShownFlash>,
     trials: Vec<TrialRecord>,
     calibration: Calibration,
@@ -170,7 +175,11 @@ impl<S: Subject> Session<S> {
         let ch_names = subject.ch_names().to_vec();
         Ok(Self {
             rng: ChaCha8Rng::seed_from_u64(params.decoder.seed),
-            raw: vec![Vec::new(); subject.ch_names().len()],
+            samples: Some(
+                SampleSpill::new(subject.ch_names().len())
+                    .map_err(SessionError::spill("create"))?,
+            ),
+            n_times: 0,
             params,
             subject,
             epocher,
@@ -326,7 +335,7 @@ impl<S: Subject> Session<S> {
     /// model's), before the session's first sample: models are matched to these names,
     /// calibration fits and the session's log carry them.
     pub fn name_channels(&mut self, names: Vec<String>) -> Result<(), SessionError> {
-        let taken = self.raw.first().map_or(0, Vec::len);
+        let taken = self.n_times;
         if taken > 0 {
             return Err(SessionError::TooLate {
                 what: "a montage",
@@ -375,7 +384,7 @@ impl<S: Subject> Session<S> {
                 have: self.ch_names.clone(),
             }
         })?;
-        let taken = self.raw.first().map_or(0, Vec::len);
+        let taken = self.n_times;
         if taken > 0 {
             return Err(SessionError::TooLate {
                 what: "a model",
@@ -445,7 +454,7 @@ impl<S: Subject> Session<S> {
     /// The accepted calibration epochs (band-passed, as the model saw them), events flagged.
     pub fn calibration_epochs(&self) -> Result<oddball_signal::Epochs, SessionError> {
         let cal = &self.calibration;
-        let x = cal.stacked(self.raw.len());
+        let x = cal.stacked(self.ch_names.len());
         let events = cal
             .flashes
             .iter()
@@ -605,34 +614,41 @@ impl<S: Subject> Session<S> {
         self.subject
     }
 
+    /// Keeps no samples from now on (a live session's recorder has them already): the log
+    /// [`Session::finish`] returns then has none.
+    pub fn discard_samples(&mut self) {
+        self.samples = None;
+    }
+
     /// Ends the session, returning its log, the model and the arm.
-    pub fn finish(self) -> (SessionLog, Option<Model>, Option<ArmSim>) {
-        let n_ch = self.raw.len();
-        let n_t = self.raw.first().map_or(0, Vec::len);
-        let mut raw = Array2::zeros((n_ch, n_t));
-        for (c, r) in self.raw.iter().enumerate() {
-            raw.row_mut(c)
-                .assign(&ndarray::ArrayView1::from(r.as_slice()));
-        }
-        (
+    pub fn finish(self) -> Result<(SessionLog, Option<Model>, Option<ArmSim>), SessionError> {
+        let samples = match self.samples {
+            Some(s) => Some(s.finish().map_err(SessionError::spill("write"))?),
+            None => None,
+        };
+        Ok((
             SessionLog {
                 sfreq: self.subject.sfreq(),
                 ch_names: self.ch_names,
-                raw,
+                samples,
+                n_times: self.n_times,
                 flashes: self.flashes,
                 trials: self.trials,
             },
             self.decoder.into_model(),
             self.arm,
-        )
+        ))
     }
 
     /// Renders one chunk, feeds the epocher, records, runs the arm; handles completed epochs.
     fn advance(&mut self, n: usize) -> Result<(), SessionError> {
         let data = self.subject.render(n)?;
-        for (r, row) in self.raw.iter_mut().zip(data.rows()) {
-            r.extend(row.iter());
+        if let Some(spill) = &mut self.samples {
+            spill
+                .push(data.view())
+                .map_err(SessionError::spill("write"))?;
         }
+        self.n_times += data.ncols();
         for d in self.subject.drawn() {
             self.retime(d)?;
         }

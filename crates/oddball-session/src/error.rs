@@ -67,11 +67,28 @@ pub enum SessionError {
     Unsupervised(#[from] oddball_decode::unsupervised::UnsupervisedError),
     #[error(transparent)]
     Io(#[from] oddball_io::IoError),
+    #[error("the session kept no samples (a live session's recording has them): nothing to save")]
+    NoSamples,
+    /// The session's samples could not be kept in their temporary file (in the system's
+    /// temporary directory: `TMPDIR` on Unix).
+    #[error("cannot {action} the session's samples in a temporary file in {}: {source}", std::env::temp_dir().display())]
+    Spill {
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
 }
 
 fn fit_text(max_step_m: &Option<f64>) -> String {
     match max_step_m {
         Some(m) => format!("; it fits with steps of at most {} mm", m * 1e3),
         None => "; it does not fit with any step from this start".into(),
+    }
+}
+
+impl SessionError {
+    /// A failed `action` on the session's sample store, for `map_err`.
+    pub(crate) fn spill(action: &'static str) -> impl Fn(std::io::Error) -> Self {
+        move |source| Self::Spill { action, source }
     }
 }

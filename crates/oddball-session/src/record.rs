@@ -24,10 +24,10 @@ use oddball_arm::Command;
 use oddball_decode::pipeline::Model;
 use oddball_io::xdf::session_markers;
 use oddball_io::{
-    stimulus_states, write_bci2000, Bci2000WriteOptions, Bci2000WriteSummary, Recording,
-    StateColumn,
+    stimulus_runs, write_bci2000_blocks, Bci2000WriteOptions, Bci2000WriteSummary, Recording,
+    StateRun, StateRuns,
 };
-use oddball_signal::{Event, Events, Raw};
+use oddball_signal::Event;
 use serde::{Deserialize, Serialize};
 
 use crate::decision::{complete_rounds, Phase, SessionLog, ShownFlash, TrialOutcome, TrialRecord};
@@ -41,34 +41,31 @@ pub fn save_session(
     log: &SessionLog,
     paradigm: &FourBulbParams,
 ) -> Result<Bci2000WriteSummary, SessionError> {
-    let n = log.raw.ncols();
-    let events = Events::new(
-        log.flashes
-            .iter()
-            .filter(|f| (f.onset as usize) < n)
-            .map(|f| Event::new(f.onset as usize, f.code).with_target(f.attended))
-            .collect(),
-    );
-    let raw = Raw::new(log.raw.clone(), log.sfreq, log.ch_names.clone(), events)?;
+    let samples = log.samples.as_ref().ok_or(SessionError::NoSamples)?;
+    let n = log.n_times;
+    let events: Vec<Event> = log
+        .flashes
+        .iter()
+        .filter(|f| (f.onset as usize) < n)
+        .map(|f| Event::new(f.onset as usize, f.code).with_target(f.attended))
+        .collect();
     let flash_samples = (paradigm.flash_s * log.sfreq).round() as usize;
-    let mut states = stimulus_states(raw.events(), n, flash_samples);
-    let mut trial_no = vec![0u64; n];
-    let mut target = vec![0u64; n];
-    let mut result = vec![0u64; n];
-    let mut calib = vec![0u64; n];
+    let mut states = stimulus_runs(&events, n, flash_samples);
+    let mut trial_no = Vec::new();
+    let mut target = Vec::new();
+    let mut result = Vec::new();
+    let mut calib = Vec::new();
     for (i, t) in log.trials.iter().enumerate() {
         let (a, b) = (t.start as usize, (t.end as usize).min(n));
-        for s in a..b {
-            trial_no[s] = i as u64 + 1;
-            target[s] = u64::from(t.intended.unwrap_or(0));
-            result[s] = u64::from(t.decided().unwrap_or(0));
-            calib[s] = u64::from(t.phase == Phase::Calibration);
-        }
+        push_run(&mut trial_no, a, b, i as u64 + 1);
+        push_run(&mut target, a, b, u64::from(t.intended.unwrap_or(0)));
+        push_run(&mut result, a, b, u64::from(t.decided().unwrap_or(0)));
+        push_run(&mut calib, a, b, u64::from(t.phase == Phase::Calibration));
     }
-    states.push(StateColumn::new("TrialNumber", 16, trial_no));
-    states.push(StateColumn::new("TargetCode", 8, target));
-    states.push(StateColumn::new("ResultCode", 8, result));
-    states.push(StateColumn::new("Calibration", 1, calib));
+    states.push(StateRuns::new("TrialNumber", 16, trial_no));
+    states.push(StateRuns::new("TargetCode", 8, target));
+    states.push(StateRuns::new("ResultCode", 8, result));
+    states.push(StateRuns::new("Calibration", 1, calib));
     let bulbs: Vec<&str> = paradigm.bulbs.iter().map(|c| c.name()).collect();
     let options = Bci2000WriteOptions {
         extra_parameters: vec![
@@ -92,7 +89,28 @@ pub fn save_session(
             ),
         ],
     };
-    Ok(write_bci2000(path, &raw, &states, &options)?)
+    Ok(write_bci2000_blocks(
+        path,
+        samples,
+        log.sfreq,
+        &log.ch_names,
+        &states,
+        &options,
+    )?)
+}
+
+/// Appends the run `value` over `[start, end)`; a run before it that reaches past `start` is
+/// cut there (the later trial wins), an empty one is left out.
+fn push_run(runs: &mut Vec<StateRun>, start: usize, end: usize, value: u64) {
+    if let Some(last) = runs.last_mut() {
+        last.end = last.end.min(start);
+        if last.start >= last.end {
+            runs.pop();
+        }
+    }
+    if start < end {
+        runs.push(StateRun { start, end, value });
+    }
 }
 
 /// One trial as read back from a file.
@@ -463,20 +481,19 @@ pub fn save_session_easy(
     paradigm: &FourBulbParams,
     start_ms: u64,
 ) -> Result<oddball_io::EasyWriteSummary, SessionError> {
-    let n = log.raw.ncols();
-    let events = Events::new(
-        log.flashes
-            .iter()
-            .filter(|f| (f.onset as usize) < n)
-            .map(|f| {
-                Event::new(
-                    f.onset as usize,
-                    f.code + if f.attended { EASY_ATTENDED_OFFSET } else { 0 },
-                )
-            })
-            .collect(),
-    );
-    let raw = Raw::new(log.raw.clone(), log.sfreq, log.ch_names.clone(), events)?;
+    let samples = log.samples.as_ref().ok_or(SessionError::NoSamples)?;
+    let n = log.n_times;
+    let events: Vec<Event> = log
+        .flashes
+        .iter()
+        .filter(|f| (f.onset as usize) < n)
+        .map(|f| {
+            Event::new(
+                f.onset as usize,
+                f.code + if f.attended { EASY_ATTENDED_OFFSET } else { 0 },
+            )
+        })
+        .collect();
     let mut extra = vec![
         (EASY_PARADIGM.to_string(), "four-bulb".to_string()),
         (
@@ -510,7 +527,14 @@ pub fn save_session_easy(
         extra_info: extra,
         ..Default::default()
     };
-    Ok(oddball_io::write_easy(path, &raw, &options)?)
+    Ok(oddball_io::write_easy_blocks(
+        path,
+        samples,
+        log.sfreq,
+        &log.ch_names,
+        &events,
+        &options,
+    )?)
 }
 
 fn read_session_easy(rec: &Recording) -> Result<SavedSession, SessionError> {

@@ -28,7 +28,7 @@ fn saved(dir: &Path) -> std::path::PathBuf {
     // A free tail of EEG after the last trial (for the many-lines test).
     s.idle(120.0).unwrap();
     let paradigm = s.params().paradigm;
-    let (log, _, _) = s.finish();
+    let (log, _, _) = s.finish().unwrap();
     let path = dir.join("s.easy");
     save_session_easy(&path, &log, &paradigm, 0).unwrap();
     path
