@@ -39,7 +39,7 @@ pub struct Online {
     pub commands: Vec<Command>,
     /// Calibrate live first (else the settings' model, or no calibration).
     pub calibrate: bool,
-    /// Play a recording back as fast as it is processed.
+    /// Play a recording back, or run the simulated subject, as fast as it is processed.
     pub fast: bool,
     /// The report folder.
     pub out: PathBuf,

@@ -163,6 +163,8 @@ pub struct ArmSim {
     transition: Transition,
     trace: PenTrace,
     samples: Vec<Sample>,
+    /// The joint angles at time 0.
+    start_q: Vector2<f64>,
 }
 
 /// Steps after which the cached sines and cosines are evaluated afresh with libm.
@@ -213,7 +215,13 @@ impl ArmSim {
             transition: Transition::hold(setup.start),
             trace,
             samples: Vec::new(),
+            start_q: q,
         })
+    }
+
+    /// The joint angles at time 0 (kept whether or not steps are recorded).
+    pub fn start_q(&self) -> Vector2<f64> {
+        self.start_q
     }
 
     /// Replaces the mechanical state (e.g. to start off the reference). Rejects non-finite
@@ -228,6 +236,9 @@ impl ArmSim {
         let trig = Trig::new(&state.q);
         let pen = self.plant.forward_kinematics_t(&trig);
         self.check_safety(&state, &pen)?;
+        if self.steps_done == 0 {
+            self.start_q = state.q;
+        }
         self.state = state;
         self.trig = trig;
         self.pen = pen;

@@ -407,3 +407,20 @@ fn config_file_errors_name_the_file() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An arm that records no steps (a session's, for hours) still knows where it started: the
+/// start's joint angles are the first recorded sample's when steps are recorded.
+#[test]
+fn the_start_configuration_is_kept_without_recorded_steps() {
+    let mut recorded = ArmSim::from_config(&ArmConfig::default()).unwrap();
+    recorded.set_recording(true);
+    let mut bare = ArmSim::from_config(&ArmConfig::default()).unwrap();
+    bare.set_recording(false);
+    for sim in [&mut recorded, &mut bare] {
+        sim.execute(0, Command::Up).unwrap();
+    }
+    assert!(bare.samples().is_empty());
+    assert_eq!(recorded.samples()[0].q, recorded.start_q());
+    assert_eq!(bare.start_q(), recorded.start_q());
+    assert!((bare.state().q - bare.start_q()).norm() > 1e-3);
+}

@@ -31,6 +31,15 @@ pub enum DecodeError {
     NonFinite { what: String },
     #[error("the model has not seen enough data: {what}")]
     TooFewSamples { what: String },
+    /// More training samples than a method can hold (a dense kernel matrix grows with their
+    /// square).
+    #[error("{what} fits at most {max} training epochs ({reason}); these data have {n}: use another pipeline (lda, toeplitz-lda, riemann) or fewer epochs")]
+    TooManySamples {
+        what: &'static str,
+        n: usize,
+        max: usize,
+        reason: String,
+    },
     #[error("model file: {reason}")]
     ModelFormat { reason: String },
     #[error("model format version {} cannot be read by this oddball (it reads versions 1 to {expected}; a newer oddball wrote it?)", match .found { Some(v) => v.to_string(), None => "(none given)".to_string() })]

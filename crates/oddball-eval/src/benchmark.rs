@@ -319,6 +319,13 @@ pub enum Progress<'a> {
 }
 
 /// Runs the plan of `params` on `manifests`.
+///
+/// Subjects are streamed: a subject's runs are read and epoched, its evaluations made, and
+/// its epochs dropped before the next subject is read, at most as many subjects at once as
+/// the thread pool has threads, so memory stays about one subject per thread however many
+/// subjects there are, and an error in the first subject is reported at once. Cross-subject
+/// evaluations need every subject of their data set at once (each is scored by a model of all
+/// the others): a data set's subjects are read together for them, then dropped.
 pub fn run(
     params: &BenchmarkParams,
     manifests: &[Manifest],
@@ -326,41 +333,63 @@ pub fn run(
 ) -> Result<BenchmarkReport, BenchmarkError> {
     let t0 = Instant::now();
     let plan = params.plan(manifests)?;
-    // Subjects any unit needs (cross-subject needs every subject of its data set).
-    let mut needed: Vec<(usize, usize)> = Vec::new();
-    for u in &plan.units {
-        let subjects: Vec<usize> = match u.protocol {
-            Protocol::CrossSubject => (0..manifests[u.dataset].subjects.len()).collect(),
-            _ => vec![u.subject],
-        };
-        for s in subjects {
-            if !needed.contains(&(u.dataset, s)) {
-                needed.push((u.dataset, s));
+    // Per-subject units, grouped by subject in plan order; cross-subject units by data set.
+    let mut own: Vec<((usize, usize), Vec<usize>)> = Vec::new();
+    let mut cross: Vec<(usize, Vec<usize>)> = Vec::new();
+    for (i, u) in plan.units.iter().enumerate() {
+        if u.protocol == Protocol::CrossSubject {
+            match cross.iter_mut().find(|(d, _)| *d == u.dataset) {
+                Some((_, units)) => units.push(i),
+                None => cross.push((u.dataset, vec![i])),
+            }
+        } else {
+            let key = (u.dataset, u.subject);
+            match own.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, units)) => units.push(i),
+                None => own.push((key, vec![i])),
             }
         }
     }
+    let reads = own.len()
+        + cross
+            .iter()
+            .map(|&(d, _)| manifests[d].subjects.len())
+            .sum::<usize>();
     on(Progress::Plan {
-        subjects: needed.len(),
+        subjects: reads,
         units: plan.units.len(),
     });
-    let loaded: BTreeMap<(usize, usize), Vec<EpochedRecording>> = needed
-        .par_iter()
-        .map(|&(d, s)| {
-            let recs = load_subject(&manifests[d], s, &params.preprocess, on)?;
-            on(Progress::Loaded {
-                dataset: &manifests[d].name,
-                subject: &manifests[d].subjects[s].id,
-            });
-            Ok(((d, s), recs))
-        })
-        .collect::<Result<_, BenchmarkError>>()?;
     let rows = Mutex::new(Vec::new());
-    plan.units.par_iter().enumerate().try_for_each(|(i, u)| {
-        let r = run_unit(params, manifests, &loaded, u)?;
-        on(Progress::Done { rows: &r });
-        rows.lock().expect("no panic holds the lock").push((i, r));
-        Ok::<(), BenchmarkError>(())
-    })?;
+    let load = |d: usize, s: usize| -> Result<_, BenchmarkError> {
+        let recs = load_subject(&manifests[d], s, &params.preprocess, on)?;
+        on(Progress::Loaded {
+            dataset: &manifests[d].name,
+            subject: &manifests[d].subjects[s].id,
+        });
+        Ok(((d, s), recs))
+    };
+    let run_units = |loaded: &BTreeMap<(usize, usize), Vec<EpochedRecording>>, units: &[usize]| {
+        units.par_iter().try_for_each(|&i| {
+            let r = run_unit(params, manifests, loaded, &plan.units[i])?;
+            on(Progress::Done { rows: &r });
+            rows.lock().expect("no panic holds the lock").push((i, r));
+            Ok::<(), BenchmarkError>(())
+        })
+    };
+    let threads = rayon::current_num_threads().max(1);
+    for batch in own.chunks(threads) {
+        batch.par_iter().try_for_each(|((d, s), units)| {
+            let loaded: BTreeMap<_, _> = std::iter::once(load(*d, *s)?).collect();
+            run_units(&loaded, units)
+        })?;
+    }
+    for (d, units) in &cross {
+        let loaded = (0..manifests[*d].subjects.len())
+            .into_par_iter()
+            .map(|s| load(*d, s))
+            .collect::<Result<BTreeMap<_, _>, BenchmarkError>>()?;
+        run_units(&loaded, units)?;
+    }
     let mut rows = rows.into_inner().expect("no panic holds the lock");
     rows.sort_by_key(|(i, _)| *i);
     let results: Vec<BenchmarkRow> = rows.into_iter().flat_map(|(_, r)| r).collect();

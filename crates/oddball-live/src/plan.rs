@@ -87,15 +87,16 @@ pub struct OpenedSession {
     pub rate_change: Option<RateChange>,
 }
 
-/// The arm every session drives, recording its trace, with `step_m` (`None`: the default
-/// arm's step).
+/// The arm every session drives, with `step_m` (`None`: the default arm's step): its pen trace
+/// is kept (a vertex per trace spacing moved), its per-step samples are not (a 1 kHz control
+/// step's sample each millisecond would grow a session of hours by gigabytes).
 pub fn recording_arm(step_m: Option<f64>) -> Result<ArmSim, ArmError> {
     let mut config = ArmConfig::default();
     if let Some(step) = step_m {
         config.reference.step_m = step;
     }
     let mut arm = ArmSim::from_config(&config)?;
-    arm.set_recording(true);
+    arm.set_recording(false);
     Ok(arm)
 }
 

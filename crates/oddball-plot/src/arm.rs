@@ -63,7 +63,8 @@ pub(crate) fn pen_trace_xz(sim: &ArmSim) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Joint angles at the given simulation times (the recorded samples nearest to them).
+/// Joint angles at the given simulation times: the recorded samples nearest to them; without
+/// recorded samples, the start's at time 0 and the current ones at any other time.
 pub fn configurations_at(sim: &ArmSim, times: &[f64]) -> Vec<(f64, Vector2<f64>)> {
     let samples = sim.samples();
     let dt = sim.settings().dt_s;
@@ -71,7 +72,12 @@ pub fn configurations_at(sim: &ArmSim, times: &[f64]) -> Vec<(f64, Vector2<f64>)
         .iter()
         .map(|&t| {
             let i = (t / dt).round() as usize;
-            (t, samples.get(i).map_or(sim.state().q, |s| s.q))
+            let q = match samples.get(i) {
+                Some(s) => s.q,
+                None if i == 0 => sim.start_q(),
+                None => sim.state().q,
+            };
+            (t, q)
         })
         .collect()
 }

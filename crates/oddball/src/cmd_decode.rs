@@ -5,9 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use indicatif::ProgressBar;
 
-use crate::progress::bar;
+use crate::progress::{bar, Bar};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
 use oddball_eval::text::{self, Narration};
@@ -118,7 +117,7 @@ pub struct EvaluateArgs {
 /// What a run reports: the progress bar, and above it what [`Narration`] says.
 struct Report {
     what: String,
-    bar: Option<ProgressBar>,
+    bar: Option<Bar>,
     text: Narration,
 }
 
@@ -290,7 +289,7 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     let pre = Preprocess::peer();
     let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
     let template = args.em_start == EmStart::Template;
-    let mut shown: Option<ProgressBar> = None;
+    let mut shown: Option<Bar> = None;
     let r = unsupervised::replay(&pre, &test, template, &mut |k, n| {
         shown
             .get_or_insert_with(|| {

@@ -41,8 +41,9 @@ pub struct OnlineArgs {
     /// Intended commands (a copy task: the panel cues each).
     #[arg(long, default_value = STROKE_G, value_parser = commands_arg, help = COMMANDS_HELP)]
     pub commands: std::vec::Vec<Command>,
-    /// With --source replay:FILE, play the file back as fast as it is processed instead of in
-    /// real time (re-running a recorded session with another model, say); not with --serve.
+    /// With --source replay:FILE or sim, run as fast as the EEG is processed instead of in real
+    /// time (re-running a recorded session with another model, say, or hours of a simulated
+    /// session in minutes); not with --serve.
     #[arg(long, conflicts_with = "serve")]
     pub fast: bool,
     #[command(flatten)]
@@ -68,8 +69,8 @@ pub fn run(args: &OnlineArgs) -> Result<Option<String>> {
     if args.session.realtime {
         bail!("--realtime paces a simulated demo or task: online runs in real time already (--fast plays a file back as fast as it goes)");
     }
-    if args.fast && !matches!(args.source.source, SourceSpec::Replay(_)) {
-        bail!("--fast plays back a file: it needs --source replay:FILE");
+    if args.fast && !matches!(args.source.source, SourceSpec::Replay(_) | SourceSpec::Sim) {
+        bail!("--fast plays back a file or runs the simulated subject: it needs --source replay:FILE or sim");
     }
     let online = Online {
         settings,

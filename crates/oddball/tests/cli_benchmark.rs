@@ -66,6 +66,13 @@ fn every_protocol_on_a_synthetic_dataset_writes_rows_summary_tests_and_files() {
         plot.to_str().unwrap(),
     ]);
     assert!(ok, "{err}\n{out}");
+    // stderr is a pipe here: progress comes as plain lines, the last one at 100%.
+    let last = err.lines().rev().find(|l| l.contains('/')).unwrap_or("");
+    assert!(
+        last.starts_with("reading ") && last.contains(" (100%) "),
+        "{err}"
+    );
+    assert!(common::without_progress(&err).trim().is_empty(), "{err}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let rows = v["results"].as_array().unwrap();

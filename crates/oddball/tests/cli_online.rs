@@ -202,8 +202,15 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
     assert!(!short.contains("replay: 20 of 20"), "{short}");
     let summary = std::fs::read_to_string(other.join("summary.json")).unwrap();
     assert!(summary.contains("\"ended\": \"the recording"), "{summary}");
-    // Errors: --fast without a file, a file that is not there.
-    let (ok, _, err) = common::oddball(&["online", "--model", m, "--fast"]);
+    // Errors: --fast with a live stream, a file that is not there.
+    let (ok, _, err) = common::oddball(&[
+        "online",
+        "--model",
+        m,
+        "--fast",
+        "--source",
+        "nic:127.0.0.1:9",
+    ]);
     assert!(!ok && err.contains("--fast plays back a file"), "{err}");
     let (ok, _, err) = common::oddball(&[
         "online",

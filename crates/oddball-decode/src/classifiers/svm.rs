@@ -49,6 +49,10 @@ pub enum Gamma {
     Value(f64),
 }
 
+/// The most training epochs an SVM fits: linfa-svm's solver keeps the dense kernel matrix,
+/// `8 n²` bytes (0.8 GB here; 27,000 epochs would need 5.8 GB and hours of SMO).
+pub const MAX_KERNEL_EPOCHS: usize = 10_000;
+
 /// Kernel of the SVM.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Kernel {
@@ -346,6 +350,17 @@ impl SvmParams {
     pub fn fit(&self, x: ArrayView2<f64>, y: &[bool]) -> Result<Svm> {
         self.validate()?;
         check_labels(x.nrows(), y)?;
+        if x.nrows() > MAX_KERNEL_EPOCHS {
+            return Err(DecodeError::TooManySamples {
+                what: "the SVM",
+                n: x.nrows(),
+                max: MAX_KERNEL_EPOCHS,
+                reason: format!(
+                    "its solver holds the n × n kernel matrix: {:.1} GB at {MAX_KERNEL_EPOCHS}",
+                    (MAX_KERNEL_EPOCHS * MAX_KERNEL_EPOCHS * 8) as f64 / 1e9
+                ),
+            });
+        }
         check_finite(x, "SVM training features")?;
         if x.ncols() == 0 {
             return Err(DecodeError::TooFewSamples {
@@ -595,5 +610,23 @@ mod tests {
         assert!(m.predict_proba(x.view()).is_err());
         assert!(m.decision_function(array![[1.0]].view()).is_err());
         assert!(SvmParams::default().fit(x.view(), &y[..10]).is_err());
+    }
+}
+
+#[cfg(test)]
+mod size_tests {
+    use super::*;
+
+    #[test]
+    fn more_epochs_than_a_dense_kernel_holds_are_refused_before_any_work() {
+        let n = MAX_KERNEL_EPOCHS + 1;
+        let x = Array2::<f64>::zeros((n, 1));
+        let y: Vec<bool> = (0..n).map(|i| i % 2 == 0).collect();
+        match SvmParams::default().fit(x.view(), &y) {
+            Err(DecodeError::TooManySamples { n: got, max, .. }) => {
+                assert_eq!((got, max), (n, MAX_KERNEL_EPOCHS))
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }

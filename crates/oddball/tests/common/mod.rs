@@ -188,3 +188,23 @@ pub fn panel_urls(stdout: &mut impl std::io::BufRead) -> (String, String) {
     }
     panic!("no panel lines in:\n{head}");
 }
+
+/// `stderr` without the plain progress lines a long command writes when stderr is not a
+/// terminal (`what: pos/len (pct%) h:mm:ss`): what is left are warnings and errors.
+pub fn without_progress(stderr: &str) -> String {
+    let is_progress = |l: &str| {
+        l.rsplit_once(": ").is_some_and(|(_, rest)| {
+            let parts: Vec<&str> = rest.split(' ').collect();
+            parts.len() == 3
+                && parts[0].split_once('/').is_some()
+                && parts[1].starts_with('(')
+                && parts[1].ends_with("%)")
+                && parts[2].split(':').count() == 3
+        })
+    };
+    stderr
+        .lines()
+        .filter(|l| !is_progress(l))
+        .map(|l| format!("{l}\n"))
+        .collect()
+}
