@@ -10,11 +10,10 @@ use oddball_arm::{Command, Vector2};
 use oddball_decode::stopping::Expected;
 use oddball_live::clock::Clock;
 use oddball_live::source::SourceSpec;
-use oddball_session::paradigm::FourBulbParams;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
     accuracy_over_time, accuracy_over_time_text, numbered, pen_report, report_text, row_text,
-    rule_name, scores, CalibrationSummary, PenReport, Row, Scores, Stretch,
+    rule_name, scores, CalibrationSummary, PenReport, Row, Scores, SessionFacts, Stretch,
 };
 use oddball_session::tasks::{run_copy, Pilot};
 use oddball_session::timing::{stopping_text, time_report, time_text, TimeReport};
@@ -47,11 +46,9 @@ pub struct DemoOutcome {
 
 #[derive(Debug, Serialize)]
 struct Summary<'a> {
-    subject: &'a str,
-    pipeline: &'a str,
-    seed: u64,
+    #[serde(flatten)]
+    facts: SessionFacts<'a>,
     commands: Vec<Command>,
-    calibration: CalibrationSummary,
     result: &'a Scores,
     #[serde(skip_serializing_if = "Option::is_none")]
     fixed_rounds_for_comparison: Option<&'a Scores>,
@@ -66,7 +63,6 @@ struct Summary<'a> {
     files: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     note: Option<String>,
-    paradigm: FourBulbParams,
     time_per_decision: TimeReport,
     #[serde(skip_serializing_if = "Option::is_none")]
     stopping_chosen: Option<Expected>,
@@ -204,8 +200,8 @@ impl Demo {
         let simulated_seconds = prep.pilot.time_s();
         let result = scores(rows, &rule);
         let time = time_report(rows, &paradigm);
-        let arm = prep.pilot.arm().clone();
-        let pen = pen_report(&arm, prep.pen_start, rows);
+        let arm = prep.pilot.arm();
+        let pen = pen_report(arm, prep.pen_start, rows);
         let over_time = accuracy_over_time(rows, 10);
         let posthoc = posthoc(&prep);
         let adaptation = adaptation(&prep);
@@ -223,7 +219,7 @@ impl Demo {
         let pen_png = self.out.join("pen_trace.png");
         drawn(
             &pen_png,
-            oddball_plot::arm::draw_pen_trace(&arm, &paths, &pen_png),
+            oddball_plot::arm::draw_pen_trace(arm, &paths, &pen_png),
         )?;
         let calibration = CalibrationSummary::from(&prep.calibration);
         let subject_label = prep.subject.clone();
@@ -242,11 +238,15 @@ impl Demo {
             files.push(f.to_string_lossy().into_owned());
         }
         let summary = Summary {
-            subject: &subject_label,
-            pipeline: opts.pipeline.name(),
-            seed: opts.seed,
+            facts: SessionFacts {
+                command: "demo",
+                subject: &subject_label,
+                pipeline: opts.pipeline.name(),
+                seed: opts.seed,
+                paradigm,
+                calibration,
+            },
             commands: commands.clone(),
-            calibration,
             result: &result,
             fixed_rounds_for_comparison: comparison.as_ref(),
             simulated_seconds,
@@ -256,7 +256,6 @@ impl Demo {
             posthoc_correct: posthoc.map(|(r, n)| [r, n]),
             files,
             note,
-            paradigm,
             time_per_decision: time,
             stopping_chosen: stopping,
         };

@@ -13,14 +13,16 @@ use oddball_arm::{planned_path, Command};
 use oddball_live::clock::Clock;
 use oddball_live::live::{EegSource, LiveSubject, MarkerSink, Summary};
 use oddball_live::online::{
-    coincidence, decision_line, free_recording_path, is_recording_end, recording_samples,
-    stop_reason, OnlineSummary,
+    coincidence, decision_line, free_recording_path, is_recording_end, stop_reason, OnlineRun,
+    OnlineSummary,
 };
 use oddball_live::panel::PanelConfig;
 use oddball_live::plan::{PlanError, SessionPlan};
 use oddball_live::record::Recorder;
-use oddball_live::source::AnySource;
+use oddball_live::source::{AnySource, SourceSpec};
+use oddball_session::decision::CalibrationReport;
 use oddball_session::decoder::Start;
+use oddball_session::report::{scores, SessionFacts};
 use oddball_session::roles::EegStream;
 use oddball_session::tasks::run_copy;
 
@@ -171,12 +173,16 @@ impl Online {
             &mut session,
             &mut crate::settings::calibration_progress(&mut *out),
         );
+        let mut calibration = None;
         match started {
-            Ok(Some(c)) => writeln!(
-                out,
-                "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
-                c.n_trials, c.n_epochs, c.cv_auc
-            )?,
+            Ok(Some(c)) => {
+                writeln!(
+                    out,
+                    "calibration: {} decisions, {} epochs, cross-validated AUC {:.3}",
+                    c.n_trials, c.n_epochs, c.cv_auc
+                )?;
+                calibration = Some(c);
+            }
             Ok(None) if uncalibrated => {
                 settings.say_transfer(out)?;
                 writeln!(out, "calibration: none: the decoder learns from the session (EM after every decision, no labels)")?;
@@ -254,8 +260,27 @@ impl Online {
             writeln!(out, "{r}")?;
         }
         let subject = session.subject_mut();
+        let source_name = self.source.source.to_string();
+        let subject_name = match (&self.source.source, settings.preset()) {
+            (SourceSpec::Sim, Some(preset)) => preset.to_string(),
+            _ => source_name.clone(),
+        };
+        let (_, rule) = settings.rules()?;
         let summary = OnlineSummary::new(
-            self.source.source.to_string(),
+            OnlineRun {
+                facts: SessionFacts {
+                    command: "online",
+                    subject: &subject_name,
+                    pipeline: settings.pipeline.name(),
+                    seed: settings.seed,
+                    paradigm,
+                    calibration: calibration
+                        .as_ref()
+                        .map_or_else(|| (&CalibrationReport::none()).into(), Into::into),
+                },
+                source: source_name.clone(),
+                result: scores(&steps, &rule),
+            },
             &steps,
             &subject.timing,
             &subject.decision_latency_ms,
@@ -287,6 +312,7 @@ impl Online {
         if let Some(h) = health {
             writeln!(out, "stream: {h}")?;
         }
+        let recorded = session.subject().recorded_samples().unwrap_or(0);
         // The recording's stream footers written and the file synced.
         session
             .into_subject()
@@ -298,9 +324,8 @@ impl Online {
         report::write_json(&self.out.join("summary.json"), &summary)?;
         writeln!(
             out,
-            "recording: {} ({} samples)",
+            "recording: {} ({recorded} samples)",
             record_path.display(),
-            recording_samples(record_path)
         )?;
         Ok(ended)
     }

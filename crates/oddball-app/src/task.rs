@@ -199,7 +199,13 @@ impl TaskRun {
         r: &T,
         out: &mut dyn Write,
     ) -> Result<Option<String>> {
-        let summary = prep.task_summary(task, self.settings.pipeline.name(), self.settings.seed, r);
+        let summary = prep.task_summary(
+            task,
+            self.settings.pipeline.name(),
+            self.settings.seed,
+            self.settings.paradigm(),
+            r,
+        );
         report::write_json(&self.out.join("summary.json"), &summary)?;
         report::save_session(
             prep,

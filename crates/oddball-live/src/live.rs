@@ -340,6 +340,11 @@ impl<S: EegSource> LiveSubject<S> {
         self
     }
 
+    /// EEG samples recorded so far (`None` without a recorder).
+    pub fn recorded_samples(&self) -> Option<u64> {
+        self.recorder.as_ref().map(Recorder::n_times)
+    }
+
     pub fn source(&self) -> &S {
         &self.source
     }

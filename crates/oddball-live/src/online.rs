@@ -5,23 +5,13 @@ use std::path::{Path, PathBuf};
 
 use oddball_session::decision::Decision;
 use oddball_session::decision::ShownFlash;
+use oddball_session::report::{numbered, Row, Scores, SessionFacts};
 use oddball_session::SessionError;
 use serde::Serialize;
 
 use crate::live::{EegSource, FlashTiming, Summary};
 use crate::source::AnySource;
 use crate::LiveError;
-
-/// One decision of a live session.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct DecisionRow {
-    pub index: usize,
-    pub intended: String,
-    pub decided: Option<String>,
-    pub rounds: usize,
-    pub confidence: f64,
-    pub seconds: f64,
-}
 
 /// A [`Summary`] of delays with its unit in the field names (ms).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -45,13 +35,16 @@ impl From<Summary> for TimingRow {
     }
 }
 
-/// `summary.json` of `oddball online`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct OnlineSummary {
+/// `summary.json` of `oddball online`: the facts every session's summary starts with, the
+/// result and the decisions as `demo` writes them, then what only a live session has (flash
+/// timing, the recording, a replay's coincidence, why it ended early).
+#[derive(Debug, Serialize)]
+pub struct OnlineSummary<'a> {
+    #[serde(flatten)]
+    pub facts: SessionFacts<'a>,
     pub source: String,
-    pub decisions: Vec<DecisionRow>,
-    pub correct: usize,
-    pub abstained: usize,
+    pub result: Scores,
+    pub decisions: Vec<Row<'a>>,
     pub flash_on_time: Option<TimingRow>,
     pub flash_onset_error: Option<TimingRow>,
     pub stamp_delay: Option<TimingRow>,
@@ -66,39 +59,31 @@ pub struct OnlineSummary {
     pub ended: Option<String>,
 }
 
-impl OnlineSummary {
+/// How a live session was run and what it scored, for its summary.
+#[derive(Debug)]
+pub struct OnlineRun<'a> {
+    pub facts: SessionFacts<'a>,
+    pub source: String,
+    /// The decisions' scores ([`oddball_session::report::scores`] under the session's rule).
+    pub result: Scores,
+}
+
+impl<'a> OnlineSummary<'a> {
     /// The summary of `steps` with the panel's `timing` and the decision latencies (ms).
     pub fn new(
-        source: String,
-        steps: &[Decision],
+        run: OnlineRun<'a>,
+        steps: &'a [Decision],
         timing: &FlashTiming,
         latency_ms: &[f64],
         recording: &Path,
         replay: Option<String>,
         ended: Option<String>,
     ) -> Self {
-        let decisions: Vec<DecisionRow> = steps
-            .iter()
-            .enumerate()
-            .map(|(i, s)| DecisionRow {
-                index: i + 1,
-                intended: s.intended.name().to_string(),
-                decided: s.decided.map(|c| c.name().to_string()),
-                rounds: s.rounds,
-                confidence: s.confidence,
-                seconds: s.seconds,
-            })
-            .collect();
-        let correct = decisions
-            .iter()
-            .filter(|r| r.decided.as_deref() == Some(r.intended.as_str()))
-            .count();
-        let abstained = decisions.iter().filter(|r| r.decided.is_none()).count();
         Self {
-            source,
-            decisions,
-            correct,
-            abstained,
+            facts: run.facts,
+            source: run.source,
+            result: run.result,
+            decisions: numbered(steps),
             flash_on_time: Summary::of(&timing.on_ms).map(Into::into),
             flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),
             stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
@@ -116,9 +101,9 @@ impl OnlineSummary {
     pub fn line(&self, n_commands: usize) -> String {
         let mut line = format!(
             "{}/{} decisions right, {} abstained",
-            self.correct,
+            self.result.correct,
             self.decisions.len(),
-            self.abstained
+            self.result.abstained
         );
         if self.ended.is_some() {
             line.push_str(&format!(
@@ -208,12 +193,4 @@ pub fn is_recording_end(e: &SessionError) -> bool {
 /// the engine's wrapper.
 pub fn stop_reason(e: &SessionError) -> String {
     LiveError::from_session(e).map_or_else(|| e.to_string(), |l| l.to_string())
-}
-
-/// The number of samples in the recording at `path`, or why it cannot be read.
-pub fn recording_samples(path: &Path) -> String {
-    match oddball_io::read(path) {
-        Ok(r) => r.raw.n_times().to_string(),
-        Err(e) => format!("unreadable: {e}"),
-    }
 }

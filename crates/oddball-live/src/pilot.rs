@@ -9,8 +9,10 @@ use oddball_arm::{ArmSim, Command, Vector2};
 use oddball_session::decision::CalibrationReport;
 use oddball_session::decision::Decision;
 use oddball_session::engine::Session;
+use oddball_session::paradigm::FourBulbParams;
 use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::REPLAY_NOTE;
+use oddball_session::report::{CalibrationSummary, SessionFacts};
 use oddball_session::roles::EegStream;
 use oddball_session::tasks::{Pilot, ReplayPilot};
 use oddball_session::SessionError;
@@ -121,14 +123,13 @@ impl Prepared {
     }
 }
 
-/// `summary.json` of a task: what ran, the calibration and the task's report.
+/// `summary.json` of a task: what ran (the facts every session's summary starts with), the
+/// task, and the task's report.
 #[derive(Debug, Serialize)]
 pub struct TaskSummary<'a, T> {
+    #[serde(flatten)]
+    pub facts: SessionFacts<'a>,
     pub task: &'static str,
-    pub subject: &'a str,
-    pub pipeline: &'a str,
-    pub seed: u64,
-    pub calibration: &'a CalibrationReport,
     /// What a replayed recording's decisions mean ([`REPLAY_NOTE`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<&'static str>,
@@ -136,20 +137,26 @@ pub struct TaskSummary<'a, T> {
 }
 
 impl Prepared {
-    /// The summary of the task `task` run by this pilot with `pipeline` and `seed`.
+    /// The summary of the task `task` (`draw`, `track`) run by this pilot with `pipeline`,
+    /// `seed` and `paradigm`.
     pub fn task_summary<'a, T>(
         &'a self,
         task: &'static str,
         pipeline: &'a str,
         seed: u64,
+        paradigm: FourBulbParams,
         report: &'a T,
     ) -> TaskSummary<'a, T> {
         TaskSummary {
+            facts: SessionFacts {
+                command: "task",
+                subject: &self.subject,
+                pipeline,
+                seed,
+                paradigm,
+                calibration: CalibrationSummary::from(&self.calibration),
+            },
             task,
-            subject: &self.subject,
-            pipeline,
-            seed,
-            calibration: &self.calibration,
             note: matches!(self.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
             report,
         }

@@ -82,6 +82,11 @@ impl Recorder {
         &self.path
     }
 
+    /// EEG samples written so far.
+    pub fn n_times(&self) -> u64 {
+        self.n_times
+    }
+
     /// A block of samples whose first is at `t0_ms`; ends the block (one write to disk).
     pub fn eeg(&mut self, t0_ms: f64, sfreq: f64, data: ArrayView2<f64>) -> Result<(), LiveError> {
         let ts: Vec<f64> = (0..data.ncols())

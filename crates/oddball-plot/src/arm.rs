@@ -153,20 +153,34 @@ pub(crate) fn xz_chart<'a, DB: DrawingBackend>(
 /// stroke (the spur of a G, the bar of an I) lies on the line of its own chord, and measured to
 /// that line its tip looked redundant and was dropped, leaving the drawn stroke millimetres
 /// short of where the pen went.
+#[cfg(test)]
 fn simplify(points: &[(f64, f64)], tolerance: f64) -> Vec<(f64, f64)> {
-    if points.len() < 3 {
-        return points.to_vec();
+    simplify_by(
+        points.len(),
+        |i| Vector2::new(points[i].0, points[i].1),
+        tolerance,
+    )
+}
+
+/// [`simplify`] of the `n` points `at(0)`, … `at(n − 1)`, read where they are (a session's
+/// pen trace is not copied to be drawn).
+fn simplify_by(n: usize, at: impl Fn(usize) -> Vector2<f64>, tolerance: f64) -> Vec<(f64, f64)> {
+    let xz = |i: usize| {
+        let p = at(i);
+        (p[0], p[1])
+    };
+    if n < 3 {
+        return (0..n).map(xz).collect();
     }
-    let v = |p: (f64, f64)| Vector2::new(p.0, p.1);
-    let mut keep = vec![false; points.len()];
+    let mut keep = vec![false; n];
     keep[0] = true;
-    keep[points.len() - 1] = true;
-    let mut stack = vec![(0, points.len() - 1)];
+    keep[n - 1] = true;
+    let mut stack = vec![(0, n - 1)];
     while let Some((a, b)) = stack.pop() {
-        let (pa, pb) = (v(points[a]), v(points[b]));
+        let (pa, pb) = (at(a), at(b));
         let mut worst = (0.0, a);
-        for (i, p) in points.iter().enumerate().take(b).skip(a + 1) {
-            let d = point_segment_distance(&v(*p), &pa, &pb);
+        for i in a + 1..b {
+            let d = point_segment_distance(&at(i), &pa, &pb);
             if d > worst.0 {
                 worst = (d, i);
             }
@@ -177,17 +191,14 @@ fn simplify(points: &[(f64, f64)], tolerance: f64) -> Vec<(f64, f64)> {
             stack.push((worst.1, b));
         }
     }
-    points
-        .iter()
-        .zip(keep)
-        .filter_map(|(p, k)| k.then_some(*p))
-        .collect()
+    (0..n).filter(|&i| keep[i]).map(xz).collect()
 }
 
 /// The pen trace as a picture draws it: the recorded positions simplified to `tolerance_m`
 /// (every recorded position lies within `tolerance_m` of the returned polyline).
 pub fn drawn_pen_trace(sim: &ArmSim, tolerance_m: f64) -> Vec<(f64, f64)> {
-    simplify(&pen_trace_xz(sim), tolerance_m)
+    let points = sim.trace().points();
+    simplify_by(points.len(), |i| points[i].p, tolerance_m)
 }
 
 /// Corner labels "0", "1", … with corners visited more than once labelled together ("0, 4").

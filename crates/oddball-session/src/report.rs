@@ -212,6 +212,21 @@ pub fn missed_decisions(
     out
 }
 
+/// What every session command's `summary.json` holds first, in one schema (`demo`, `task`,
+/// `online`): the command, who took part, the pipeline and seed, the paradigm's timing, and
+/// the calibration (`trials` 0 when the session did not calibrate).
+#[derive(Debug, Serialize)]
+pub struct SessionFacts<'a> {
+    /// `demo`, `task draw`, `task track` or `online`.
+    pub command: &'a str,
+    /// A simulated subject's preset, the replayed files, or the live source.
+    pub subject: &'a str,
+    pub pipeline: &'a str,
+    pub seed: u64,
+    pub paradigm: crate::paradigm::FourBulbParams,
+    pub calibration: CalibrationSummary,
+}
+
 /// The calibration report without its wall-clock fit time (the files must not depend on it).
 #[derive(Debug, Serialize)]
 pub struct CalibrationSummary {
