@@ -101,7 +101,7 @@ impl Bar {
     /// `msg: pos/len (pct%) h:mm:ss`.
     fn plain_line(&self, elapsed: Duration) -> String {
         let (pos, len) = (self.bar.position(), self.bar.length().unwrap_or(0));
-        let pct = if len > 0 { 100 * pos / len } else { 0 };
+        let pct = (100 * pos).checked_div(len).unwrap_or(0);
         let s = elapsed.as_secs();
         let msg = self.bar.message();
         let msg = if msg.is_empty() {
