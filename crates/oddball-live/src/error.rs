@@ -23,6 +23,16 @@ pub enum LiveError {
         n_times: usize,
         seconds: f64,
     },
+    /// A recording played back does not hold the session's flashes: fewer than half of the
+    /// `asked` flashes shown so far fall on a recorded flash of the same bulb (see
+    /// [`crate::playback`]).
+    #[error("the recording {} does not hold this session's flashes: {found} of the {asked} flashes shown so far fall on a flash of the same bulb in it (within ±{window_ms} ms), so its EEG holds no response to the others and nothing can be decided on it; replay a recording of this session set up as it was (the same seed, commands and model or calibration)", path.display())]
+    ReplayMismatch {
+        path: std::path::PathBuf,
+        found: usize,
+        asked: usize,
+        window_ms: f64,
+    },
     #[error("cannot connect to {addr}: {reason}")]
     Connect { addr: String, reason: String },
     #[error("the stream from {addr} dropped and {attempts} reconnection attempts failed")]

@@ -12,6 +12,10 @@
 //! The operator view's requests reach the session here: a pause holds it before its next trial
 //! ([`Presenter::hold`], marked `pause` and `resume` in the recording), an abort stops it at the
 //! next block of EEG with [`LiveError::Aborted`], which ends a session as cleanly as SIGTERM.
+//!
+//! A recording played back ([`crate::playback`]) draws each flash where the recording drew it
+//! ([`EegSource::recorded_flash`]) and holds where the recorded session held
+//! ([`EegSource::recorded_hold`]), so a session set up as the recorded one decides as it did.
 
 use std::time::{Duration, Instant};
 
@@ -55,6 +59,18 @@ pub trait EegSource: Send {
     fn start_now(&mut self) {}
     /// Samples lost, reconnections, stalls; `None` for simulated sources.
     fn health(&self) -> Option<String> {
+        None
+    }
+    /// A recording played back: how it drew the flash of stimulus `code` this session plans at
+    /// sample `planned` (its onset the recorded one, `None` when the recording never drew it),
+    /// or an error when the recording's flashes are not this session's. `None` for a live
+    /// source: the page (or the schedule) says.
+    fn recorded_flash(&mut self, _planned: u64, _code: u32) -> Result<Option<Drawn>, LiveError> {
+        Ok(None)
+    }
+    /// A recording played back: whether the recorded session held (paused) before its next
+    /// trial at sample `position`. `None` for a live source.
+    fn recorded_hold(&self, _position: u64) -> Option<bool> {
         None
     }
 }
@@ -253,6 +269,8 @@ pub struct LiveSubject<S: EegSource> {
     plan: (Option<usize>, Option<usize>),
     /// Held before the next trial at the operator's request.
     paused: bool,
+    /// Held before the next trial where a replayed recording held.
+    replay_held: bool,
     /// Epochs rejected per channel when the last trial ended (its own are the difference).
     faults_before: Vec<ChannelFaults>,
     announced: Vec<Announced>,
@@ -295,6 +313,7 @@ impl<S: EegSource> LiveSubject<S> {
             n_decisions: 0,
             plan: (None, None),
             paused: false,
+            replay_held: false,
             faults_before: Vec::new(),
             announced: Vec::new(),
             lit: Vec::new(),
@@ -560,6 +579,9 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
             at_ms: self.source.time_of(onset),
         };
         self.next_id += 1;
+        if let Some(d) = self.source.recorded_flash(onset, code)? {
+            return Ok(self.replayed(a, d)?);
+        }
         match (&self.panel, self.stamping) {
             (Some(panel), Stamping::Panel) => {
                 panel.send(&ServerMsg::Flash {
@@ -578,6 +600,9 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
         std::mem::take(&mut self.drawn)
     }
     fn hold(&mut self) -> Result<bool, SessionError> {
+        if self.replay_hold()? {
+            return Ok(true);
+        }
         let Some(panel) = &self.panel else {
             return Ok(false);
         };
@@ -726,6 +751,37 @@ impl<S: EegSource> Observer for LiveSubject<S> {
             }
         }
         Ok(())
+    }
+}
+
+/// A recording played back ([`crate::playback`]): its flashes and pauses are the recording's.
+impl<S: EegSource> LiveSubject<S> {
+    /// A flash as the replayed recording drew it: seen at its recorded onset, or never drawn
+    /// (its epoch lost, as it was when recorded). A page is not asked to draw or stamp it.
+    fn replayed(&mut self, a: Announced, d: Drawn) -> Result<(), LiveError> {
+        match d.onset {
+            Some(onset) => self.seen(a, onset, self.source.time_of(onset)),
+            None => {
+                self.timing.undrawn += 1;
+                self.drawn.push(d);
+                Ok(())
+            }
+        }
+    }
+
+    /// Holds where the replayed recording held, marking `pause` and `resume` at the sample.
+    fn replay_hold(&mut self) -> Result<bool, LiveError> {
+        let held = self.source.recorded_hold(self.position).unwrap_or(false);
+        if held != self.replay_held {
+            self.replay_held = held;
+            let text = if held {
+                session_markers::PAUSE
+            } else {
+                session_markers::RESUME
+            };
+            self.marker(text, self.source.time_of(self.position))?;
+        }
+        Ok(held)
     }
 }
 

@@ -163,9 +163,7 @@ pub fn coincidence(source: &AnySource, flashes: &[ShownFlash]) -> Option<String>
         shown.len()
     );
     if k < shown.len() {
-        line.push_str(
-            "; the others met EEG with no response to them (replay with the recording's seed and commands)",
-        );
+        line.push_str("; the others were never drawn in the recording (their epochs lost)");
     }
     Some(line)
 }

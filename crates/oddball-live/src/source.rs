@@ -386,6 +386,16 @@ impl EegSource for AnySource {
     fn health(&self) -> Option<String> {
         each!(self, s => s.health())
     }
+    fn recorded_flash(
+        &mut self,
+        planned: u64,
+        code: u32,
+    ) -> Result<Option<oddball_session::roles::Drawn>, LiveError> {
+        each!(self, s => s.recorded_flash(planned, code))
+    }
+    fn recorded_hold(&self, position: u64) -> Option<bool> {
+        each!(self, s => s.recorded_hold(position))
+    }
 }
 
 #[cfg(test)]

@@ -189,19 +189,25 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
             .contains("replay: 20 of 20 flashes of this session fall on a flash of the same bulb"),
         "{replayed}"
     );
-    // Another seed and one command more: the flashes mostly miss the file's, and the file ends
-    // before the second decision: a clean stop with the summary written, exit status 3 (stopped
-    // before its end), no error.
-    let (ok, short, err) = replay("4", "up,left", &other);
+    // One command more: the file ends before the second decision: a clean stop with the
+    // summary written, exit status 3 (stopped before its end), no error.
+    let (ok, short, err) = replay("3", "up,left", &other);
     assert!(!ok && !err.contains("error"), "{err}");
     assert!(short.contains("ended after"), "{short}");
     assert!(
         short.contains("(1 of 2 made before the session stopped)"),
         "{short}"
     );
-    assert!(!short.contains("replay: 20 of 20"), "{short}");
     let summary = std::fs::read_to_string(other.join("summary.json")).unwrap();
     assert!(summary.contains("\"ended\": \"the recording"), "{summary}");
+    // Another seed: its flashes are not the file's. Refused before anything is decided on EEG
+    // that holds no response to them (issue #30: such a replay decided with p 1.000).
+    let (ok, wrong, err) = replay("4", "up", &out.join("wrong"));
+    assert!(
+        !ok && err.contains("does not hold this session's flashes"),
+        "{err}"
+    );
+    assert!(decisions(&wrong).is_empty(), "{wrong}");
     // Errors: --fast with a live stream, a file that is not there.
     let (ok, _, err) = common::oddball(&[
         "online",

@@ -5,6 +5,14 @@
 //! is allocated; an error names the byte offset and the element at fault. Inside a compressed
 //! element the offset is the element's own offset in the file, and the field text gives the
 //! byte within the decompressed data.
+//!
+//! The layout is read as `scipy.io.loadmat` reads it (checked on the fixtures of
+//! `tools/golden/mat/make_padding.py`): an element's data is padded to a multiple of 8 bytes
+//! counted from the data's own start; a small data element (1 to 4 bytes, its byte count in the
+//! upper half of the tag's first word) holds its data in the tag, 8 bytes in all; a top-level
+//! variable ends where its byte count ends, with no padding after it (none follows compressed
+//! data, so the variable after a compressed one may start at any offset). Bytes where scipy
+//! expects the next variable's tag and finds padding are an error here too, at that byte.
 
 use std::io::Read;
 use std::path::Path;
@@ -203,11 +211,15 @@ impl<'a> Buf<'a> {
         if end > self.bytes.len() {
             return Err(self.truncated(at, &format!("{what} ({}, {len} bytes)", mi_name(mi)), end));
         }
-        // Elements are padded to 8 bytes, except compressed ones (MATLAB writes them unpadded).
+        // Data is padded to a multiple of 8 bytes counted from its own start (scipy's
+        // `seek(8 - byte_count % 8)`): after an unpadded miCOMPRESSED element a variable starts
+        // at any offset, and its elements keep that offset's alignment. Compressed data is not
+        // padded (MATLAB and scipy write none). The padding of a matrix's last element may lie
+        // beyond the matrix's byte count; nothing is read there.
         let next = if mi == MI_COMPRESSED {
             end
         } else {
-            end.div_ceil(8).saturating_mul(8).min(self.bytes.len())
+            end.saturating_add((8 - len % 8) % 8).min(self.bytes.len())
         };
         Ok(Element {
             mi,
@@ -345,7 +357,10 @@ pub(crate) fn parse(b: &[u8], path: &Path) -> Result<MatFile, IoError> {
             }
         };
         variables.push(var);
-        at = e.next;
+        // The next variable starts where this one's byte count ends, padded or not (scipy's
+        // `next_position`): a count that leaves out padding written after it is an error at the
+        // padding, as in scipy.
+        at = e.start + e.len;
     }
     Ok(MatFile { header, variables })
 }

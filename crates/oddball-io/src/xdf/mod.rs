@@ -79,13 +79,25 @@
 //!   [`IoError::Truncated`](crate::IoError::Truncated) when [`XdfOptions::allow_truncated`] is off). A file cut between
 //!   chunks cannot be told from a complete one by its bytes, except that its streams have no
 //!   StreamFooter ([`XdfInfo::finished`]).
+//! * **Corrupt, not cut**: a chunk whose Length runs past the file's end is a cut only if its
+//!   bytes could be the start of that chunk; the file is refused
+//!   ([`IoError::InvalidField`](crate::IoError::InvalidField), the Length's byte) when a Boundary
+//!   chunk's 16 bytes follow (the file goes on: the live writer puts one every
+//!   [`BOUNDARY_INTERVAL_S`] of data), when a Samples chunk's samples end before the file does
+//!   or hold a byte no sample can, when a ClockOffset or Boundary chunk claims another length than
+//!   its fixed one, or when the chunk names a stream without StreamHeader. So bytes overwritten
+//!   in the middle of a recording never read as a recording cut short. In a finished file, each
+//!   StreamFooter's `sample_count` must match the samples read (±1, LabRecorder's footers were
+//!   one short until 2025): a Samples chunk whose tag was corrupted into an unknown one (skipped)
+//!   is found there. See `cut.rs`.
 //! * **Errors** ([`IoError::InvalidField`](crate::IoError::InvalidField) with the byte offset from the file start and the
 //!   field): a wrong magic code, NumLengthBytes other than 1/4/8, a Length below 2, a chunk whose
 //!   content does not fill its Length exactly, TimeStampBytes other than 0/8, a Samples,
 //!   ClockOffset or StreamFooter chunk for a stream without StreamHeader, a second StreamHeader
 //!   or StreamFooter for one stream, a Boundary chunk without the Boundary bytes, XML that is not
 //!   well-formed, a header without `channel_count` (1 to 10 000), `nominal_srate` (finite, ≥ 0) or
-//!   a known `channel_format`. Counts are checked against the bytes left in their chunk before
+//!   a known `channel_format`, a StreamFooter `sample_count` other than the samples read (±1),
+//!   a corrupt chunk taken for a cut one (above). Counts are checked against the bytes left in their chunk before
 //!   anything is allocated (a NumSamples of 10¹² in a small chunk is an error). Chunks with
 //!   unknown tags are skipped and counted ([`XdfFile::n_unknown_chunks`]). Numbers are kept as
 //!   `f64` (int64 values beyond 2⁵³ lose their last digits); invalid UTF-8 in string samples is
@@ -97,10 +109,11 @@
 //! [`XdfFormat`], [`XdfStream`]), the binary layer (`chunk.rs`: varlen integers, chunks,
 //! values), the XML of headers and footers (`xml.rs`, read with the `roxmltree` crate), the
 //! writers (`writer.rs`), reading chunks into streams and StreamHeaders into [`XdfStreamInfo`]
-//! (`read.rs`), what a recording keeps ([`XdfInfo`], `info.rs`) and making a
+//! (`read.rs`), telling a cut file from a corrupt one (`cut.rs`), what a recording keeps ([`XdfInfo`], `info.rs`) and making a
 //! [`Recording`](crate::Recording) (`recording.rs`: EEG stream, clocks, markers).
 
 mod chunk;
+mod cut;
 mod info;
 mod read;
 mod recording;

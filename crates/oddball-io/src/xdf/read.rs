@@ -10,6 +10,7 @@ use crate::files::read_file;
 use crate::IoError;
 
 use super::chunk::*;
+use super::cut::{check_cut_chunk, check_footer_count};
 use super::types::*;
 use super::xml::*;
 
@@ -106,12 +107,14 @@ impl XdfFile {
 }
 
 pub(super) struct Acc {
-    info: XdfStreamInfo,
+    pub(super) info: XdfStreamInfo,
     timestamps: Vec<f64>,
     numeric: Vec<f64>,
     strings: Vec<Vec<String>>,
     last_ts: f64,
     tdiff: f64,
+    /// File offset of the StreamFooter's `sample_count` text, when it has one.
+    pub(super) footer_count_at: Option<usize>,
 }
 
 pub(super) struct Ctx<'a> {
@@ -248,12 +251,13 @@ pub(super) fn parse_stream_header(
     })
 }
 
+/// A StreamFooter, and the file offset of its `sample_count` text when it has one.
 pub(super) fn parse_footer(
     ctx: &Ctx<'_>,
     id: u32,
     xml: &[u8],
     base: usize,
-) -> Result<XdfFooter, IoError> {
+) -> Result<(XdfFooter, Option<usize>), IoError> {
     let (text, root) = ctx.xml(xml, base, "StreamFooter")?;
     let num = |name: &str| -> Result<Option<f64>, IoError> {
         match root.child(name) {
@@ -281,12 +285,16 @@ pub(super) fn parse_footer(
             )
         })?),
     };
-    Ok(XdfFooter {
-        first_timestamp,
-        last_timestamp,
-        sample_count,
-        xml: text,
-    })
+    let count_at = root.child("sample_count").map(|n| base + n.text_offset);
+    Ok((
+        XdfFooter {
+            first_timestamp,
+            last_timestamp,
+            sample_count,
+            xml: text,
+        },
+        count_at,
+    ))
 }
 
 /// Parses a Samples chunk's content (after the stream id, which starts at file offset `base`).
@@ -493,6 +501,9 @@ pub fn parse_xdf_file(bytes: &[u8], path: &Path) -> Result<XdfFile, IoError> {
             ));
         }
         if length > (len - header_end) as u64 {
+            // A chunk the file's end cuts: a recorder stopped while writing it, unless its
+            // bytes say the file goes on past it (then its Length is corrupt).
+            check_cut_chunk(&ctx, bytes, start, header_end, length, &index, &accs)?;
             out.truncated = true;
             out.truncated_at = Some(start as u64);
             break;
@@ -560,6 +571,7 @@ pub fn parse_xdf_file(bytes: &[u8], path: &Path) -> Result<XdfFile, IoError> {
                     strings: Vec::new(),
                     last_ts: 0.0,
                     tdiff,
+                    footer_count_at: None,
                 });
             }
             TAG_SAMPLES => {
@@ -605,7 +617,9 @@ pub fn parse_xdf_file(bytes: &[u8], path: &Path) -> Result<XdfFile, IoError> {
                         format!("a second one for stream {id}"),
                     ));
                 }
-                accs[k].info.footer = Some(parse_footer(&ctx, id, &content[4..], cbase + 4)?);
+                let (footer, count_at) = parse_footer(&ctx, id, &content[4..], cbase + 4)?;
+                accs[k].info.footer = Some(footer);
+                accs[k].footer_count_at = count_at;
             }
             _ => out.n_unknown_chunks += 1,
         }
@@ -613,6 +627,9 @@ pub fn parse_xdf_file(bytes: &[u8], path: &Path) -> Result<XdfFile, IoError> {
         pos = end;
     }
 
+    for acc in &accs {
+        check_footer_count(&ctx, acc)?;
+    }
     for acc in accs {
         let Acc {
             mut info,

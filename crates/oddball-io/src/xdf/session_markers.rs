@@ -8,9 +8,15 @@
 //! | `flash C target` / `flash C nontarget` | bulb `C` drawn; attended or not |
 //! | `cue C calibration` / `cue C` | a calibration / an online trial starts, attending `C` (0: none) |
 //! | `decision C`, `abstain`, `end` | a trial's outcome, the session's end |
+//! | `pause`, `resume` | the session held before its next trial (an operator's pause), and went on |
 //!
 //! The live marker stream (LSL) carries the same texts without the flag and the phase
 //! (`flash C`, `cue C`), which is what other programs following it expect.
+
+/// The recorded text of a hold before the next trial (an operator's pause).
+pub const PAUSE: &str = "pause";
+/// The recorded text of the end of a hold: the next trial starts.
+pub const RESUME: &str = "resume";
 
 /// The recorded text of a flash of bulb `code`, attended or not.
 pub fn flash_marker(code: u32, attended: bool) -> String {
