@@ -22,6 +22,8 @@ fn config() -> PanelConfig {
         targets_m: vec![],
         plan_m: vec![],
         title: "test".into(),
+        undrawn_after_ms: 200.0,
+        frames_every_ms: 250.0,
     }
 }
 
