@@ -5,8 +5,9 @@
 //! has it before it must draw it. The page stamps the frame that drew it; that stamp, mapped to
 //! the EEG's sample clock, becomes the flash's marker (and is sent on the marker stream and
 //! recorded). A flash the page never drew within [`UNDRAWN_AFTER_MS`] of its planned onset (no
-//! page, a page that disconnected or stalled) loses its epoch: a decision never rests on
-//! flashes nobody saw, and with none at all the session abstains and the arm holds still.
+//! page, a page that disconnected or stalled), by the clock or by the EEG taken, whichever is
+//! further on, loses its epoch: a decision never rests on flashes nobody saw, and with none at
+//! all the session abstains and the arm holds still.
 //! Without a panel ([`Stamping::Schedule`]) flashes count as drawn on schedule.
 //!
 //! The operator view's requests reach the session here: a pause holds it before its next trial
@@ -20,8 +21,9 @@
 //! ([`LiveSubject::presentation_faults`]; [`crate::panel::monitor`]).
 //!
 //! Calibration does not train on garbage, by two rules and nothing more:
-//! * an undrawn flash (no stamp within [`UNDRAWN_AFTER_MS`], or a stamp refused) never gives an
-//!   epoch, in calibration as online: the engine drops it before its epoch completes. The
+//! * an undrawn flash (no stamp within [`UNDRAWN_AFTER_MS`]; or a stamp refused: implausible,
+//!   or sent by a page that had said it was hidden) never gives an epoch, in calibration as
+//!   online: the engine drops it before its epoch completes. The
 //!   page skips a flash it would draw that late rather than draw it, and lights one bulb at a
 //!   time, so a page that comes back from the background does not fire a burst of old
 //!   flashes;
@@ -520,8 +522,11 @@ impl<S: EegSource> LiveSubject<S> {
         });
     }
 
-    /// Takes the page's stamps; declares flashes past their deadline undrawn.
-    fn collect_stamps(&mut self) -> Result<(), LiveError> {
+    /// Takes the page's stamps; declares flashes past their deadline undrawn: more than
+    /// [`UNDRAWN_AFTER_MS`] ago by the clock, or by the EEG about to be taken (`upcoming`
+    /// samples more: a source faster than real time, a file played back `--fast`, must not
+    /// complete an epoch whose flash no page stamped yet).
+    fn collect_stamps(&mut self, upcoming: u64) -> Result<(), LiveError> {
         let Some(panel) = &self.panel else {
             return Ok(());
         };
@@ -532,6 +537,7 @@ impl<S: EegSource> LiveSubject<S> {
                     id,
                     on_ms,
                     received_ms,
+                    hidden,
                     ..
                 } => {
                     let Some(k) = self.announced.iter().position(|a| a.id == id) else {
@@ -539,7 +545,8 @@ impl<S: EegSource> LiveSubject<S> {
                         continue;
                     };
                     let a = self.announced.remove(k);
-                    if !plausible_stamp(a.at_ms, on_ms) {
+                    // A page that said it was hidden drew nothing anyone saw.
+                    if hidden || !plausible_stamp(a.at_ms, on_ms) {
                         self.timing.refused_stamps += 1;
                         self.undrawn(a);
                         continue;
@@ -566,7 +573,10 @@ impl<S: EegSource> LiveSubject<S> {
         if self.lit.len() > 64 {
             self.lit.drain(..32);
         }
-        let now = self.clock.now_ms();
+        let now = self
+            .clock
+            .now_ms()
+            .max(self.source.time_of(self.position + upcoming));
         let (gone, kept): (Vec<Announced>, Vec<Announced>) = self
             .announced
             .iter()
@@ -649,7 +659,7 @@ impl<S: EegSource> EegStream for LiveSubject<S> {
             return Err(LiveError::Aborted.into());
         }
         self.source.wait(n)?;
-        self.collect_stamps()?;
+        self.collect_stamps(n as u64)?;
         let data = self.source.take(n)?;
         if let Some(rec) = &mut self.recorder {
             let t0 = self.source.time_of(self.position);
@@ -840,7 +850,10 @@ impl<S: EegSource> Observer for LiveSubject<S> {
             let target = t.intended.or(t.decided());
             if let Some(a) = self.scope.as_mut().and_then(|s| s.trial_done(target)) {
                 p.send(&ServerMsg::Average {
-                    trial: self.n_trials,
+                    trial: match t.phase {
+                        Phase::Calibration => self.n_calibration,
+                        Phase::Online => self.n_decisions,
+                    },
                     phase: match t.phase {
                         Phase::Calibration => "calibration".into(),
                         Phase::Online => "online".into(),

@@ -346,7 +346,8 @@ pub enum ServerMsg {
         state: Vec<SignalState>,
     },
     /// The last trial's average epoch per channel (µV): the flashes of `target` (the cued bulb,
-    /// else the decided one) and of the others (operator view only).
+    /// else the decided one) and of the others (operator view only). The trial is number
+    /// `trial` (from 1) of its phase.
     Average {
         trial: usize,
         phase: String,

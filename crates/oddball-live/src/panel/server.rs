@@ -47,6 +47,8 @@ pub enum DrawnReport {
         code: u32,
         on_ms: f64,
         received_ms: f64,
+        /// The page had said it was hidden: nobody saw the flash, whatever it stamps.
+        hidden: bool,
     },
     Off {
         id: u64,
@@ -818,11 +820,13 @@ fn handle(shared: &Shared, text: &str, role: Role) -> Option<ServerMsg> {
             server_ms: shared.clock.now_ms(),
         }),
         Ok(ClientMsg::On { id, code, on_ms }) => {
+            let hidden = lock(&shared.page).hidden;
             lock(&shared.drawn).push(DrawnReport::On {
                 id,
                 code,
                 on_ms,
                 received_ms: shared.clock.now_ms(),
+                hidden,
             });
             None
         }
