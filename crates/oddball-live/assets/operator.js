@@ -176,7 +176,7 @@
   // ---- Presentation alarms -------------------------------------------------------------
   // A session-clock time as the wall clock of this page and as time into the session.
   function when(m, ms) {
-    const wall = new Date(Date.now() - (m.now_ms - ms));
+    const wall = new Date(m.since_unix_ms + (ms - m.since_ms));
     const s = Math.max(0, ms / 1000);
     const mmss = `${Math.floor(s / 60)}:${String(Math.floor(s % 60)).padStart(2, "0")}`;
     return `${wall.toLocaleTimeString([], { hour12: false })} (session ${mmss})`;

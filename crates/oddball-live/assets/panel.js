@@ -174,8 +174,8 @@
 
   // The board as the person needs it: what they are drawing, large. The main view frames the
   // drawing (the planned shape or path, the targets, the pen's trace and the pen) with room
-  // around it, never less than a fifth of the board; a small inset shows the whole arm on its
-  // board and where the main view is.
+  // around it, never less than a fifth of the board; a small view beside the last decision
+  // shows the whole arm on its board and where the main view is.
   function drawArm() {
     const c = $("arm"), g = c.getContext("2d");
     const dpr = window.devicePixelRatio || 1;
@@ -237,20 +237,30 @@
     g.fillStyle = "#ff9800"; g.strokeStyle = "#1a1a1a"; g.lineWidth = 3 * u;
     g.beginPath(); g.arc(q[0], q[1], 13 * u, 0, 2 * Math.PI); g.fill(); g.stroke();
     g.restore();
-    // The inset: the whole arm on its board, and the main view's frame on it.
+    // Beside the last decision, small: the whole arm on its board, the main view's frame on it.
+    const mc = $("mini"), mg = mc.getContext("2d");
+    const iw = Math.max(1, Math.round(mc.clientWidth * dpr)), ih = Math.max(1, Math.round(mc.clientHeight * dpr));
+    if (mc.width !== iw || mc.height !== ih) { mc.width = iw; mc.height = ih; }
+    mg.clearRect(0, 0, iw, ih);
     const upper = Math.hypot(cfg.pose_m[0][0] - bx, cfg.pose_m[0][1] - bz);
     const xs = [x0, x1, bx, cfg.pose_m[0][0]], zs = [z0, z1, bz, bz + upper];
     const ilo = [Math.min(...xs), Math.min(...zs)], ihi = [Math.max(...xs), Math.max(...zs)];
-    const iw = 0.3 * Math.min(w, 1.4 * h), ih = iw * 0.8, m = 8 * u;
+    const m = 4 * dpr, v = Math.min(iw, ih) / 120;
     const is = Math.min((iw - 2 * m) / (ihi[0] - ilo[0]), (ih - 2 * m) / (ihi[1] - ilo[1]));
-    const I = (p) => [m + (iw - is * (ihi[0] - ilo[0])) / 2 + (p[0] - ilo[0]) * is, ih - m - (ih - 2 * m - is * (ihi[1] - ilo[1])) / 2 - (p[1] - ilo[1]) * is];
-    g.fillStyle = "rgba(17,17,17,0.85)"; g.fillRect(0, 0, iw, ih);
+    const I = (p) => [(iw - is * (ihi[0] - ilo[0])) / 2 + (p[0] - ilo[0]) * is,
+                      ih - (ih - is * (ihi[1] - ilo[1])) / 2 - (p[1] - ilo[1]) * is];
     const ia = I([x0, z1]), ib = I([x1, z0]);
-    g.fillStyle = "#bdbab2"; g.fillRect(ia[0], ia[1], ib[0] - ia[0], ib[1] - ia[1]);
-    line(S.trail, "#222", 2 * u, I);
-    line([[bx, bz], elbow, pen], "#ff9800", 4 * u, I);
+    mg.fillStyle = "#bdbab2"; mg.fillRect(ia[0], ia[1], ib[0] - ia[0], ib[1] - ia[1]);
+    const mline = (pts, style, lw) => {
+      if (pts.length < 2) return;
+      mg.strokeStyle = style; mg.lineWidth = lw; mg.lineJoin = "round"; mg.lineCap = "round"; mg.beginPath();
+      pts.forEach((p, i) => { const q = I(p); i ? mg.lineTo(q[0], q[1]) : mg.moveTo(q[0], q[1]); });
+      mg.stroke();
+    };
+    mline(S.trail, "#222", 1.5 * v);
+    mline([[bx, bz], elbow, pen], "#ff9800", 4 * v);
     const va = I([D.view[0], D.view[3]]), vb = I([D.view[2], D.view[1]]);
-    g.strokeStyle = "#4fc3f7"; g.lineWidth = 2 * u; g.strokeRect(va[0], va[1], vb[0] - va[0], vb[1] - va[1]);
+    mg.strokeStyle = "#4fc3f7"; mg.lineWidth = 1.5 * v; mg.strokeRect(va[0], va[1], vb[0] - va[0], vb[1] - va[1]);
   }
 
   function frame(ts) {

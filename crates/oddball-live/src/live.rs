@@ -385,6 +385,7 @@ impl<S: EegSource> LiveSubject<S> {
             self.scope_rules,
             self.source.sfreq(),
             self.source.ch_names(),
+            self.position,
         );
         let (erp_tmin_ms, erp_dt_ms) = scope.erp_axis_ms();
         p.send(&ServerMsg::Scope {

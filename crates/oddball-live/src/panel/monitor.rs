@@ -213,6 +213,9 @@ impl FaultMonitor {
     /// The alarms to send at `now_ms`: episodes begun, grown (at most every
     /// [`ALARM_EVERY_MS`]) or ended since the last call.
     pub fn alarms(&mut self, now_ms: f64) -> Vec<Alarm> {
+        let unix_now_ms = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64() * 1e3);
         let mut out = Vec::new();
         for (k, kind) in FaultKind::ALL.into_iter().enumerate() {
             let holds = self.holds && kind.is_state();
@@ -237,6 +240,7 @@ impl FaultMonitor {
                 since_ms: e.since_ms,
                 last_ms: e.last_ms,
                 now_ms,
+                since_unix_ms: unix_now_ms - (now_ms - e.since_ms),
                 count: e.count,
                 holds: holds && e.active,
                 text: describe(kind, e.count, e.peak, holds && e.active),

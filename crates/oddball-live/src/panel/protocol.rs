@@ -197,6 +197,8 @@ pub struct Alarm {
     pub since_ms: f64,
     pub last_ms: f64,
     pub now_ms: f64,
+    /// When the episode began by the wall clock, ms since 1970 (what the operator reads).
+    pub since_unix_ms: f64,
     /// Events in this episode (1 for a state).
     pub count: u64,
     /// Calibration is held while it lasts.

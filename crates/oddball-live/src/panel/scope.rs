@@ -144,8 +144,9 @@ pub struct Scope {
 
 impl Scope {
     /// The display of a stream of `ch_names` at `sfreq` Hz under `rules` (the first
-    /// [`MAX_SCOPE_CHANNELS`] channels).
-    pub fn new(rules: ScopeRules, sfreq: f64, ch_names: &[String]) -> Self {
+    /// [`MAX_SCOPE_CHANNELS`] channels), whose next sample is number `position` (a panel
+    /// attached after a calibration without it).
+    pub fn new(rules: ScopeRules, sfreq: f64, ch_names: &[String], position: u64) -> Self {
         let n = ch_names.len().min(MAX_SCOPE_CHANNELS);
         let filter = rules
             .band
@@ -165,7 +166,7 @@ impl Scope {
             names: ch_names[..n].to_vec(),
             filter,
             last: vec![0.0; n],
-            position: 0,
+            position,
             bin_len,
             bin: Bin::empty(n),
             bin_fill: 0,
@@ -174,7 +175,7 @@ impl Scope {
             recent: VecDeque::new(),
             state_bins,
             ring: vec![VecDeque::new(); n],
-            ring_start: 0,
+            ring_start: position,
             keep: (KEEP_S * sfreq).ceil() as usize + erp_len,
             erp_first,
             erp_len,
@@ -441,7 +442,7 @@ mod tests {
 
     #[test]
     fn bins_carry_the_peaks_and_channels_their_state() {
-        let mut s = Scope::new(ScopeRules::default(), 250.0, &names(4));
+        let mut s = Scope::new(ScopeRules::default(), 250.0, &names(4), 0);
         assert_eq!(s.bin_ms(), 20.0);
         let mut blocks = Vec::new();
         for k in 0..50 {
@@ -475,14 +476,16 @@ mod tests {
     #[test]
     fn the_average_separates_the_attended_flashes() {
         let sfreq = 250.0;
-        let mut s = Scope::new(ScopeRules::default(), sfreq, &names(1));
+        // The stream began long before the display (a panel attached after calibration).
+        let start = 90_000;
+        let mut s = Scope::new(ScopeRules::default(), sfreq, &names(1), start as u64);
         // Flashes every 250 ms, code 1 followed by a 300 ms-late bump of 10 µV, the others not.
         let n = 5000;
         let mut x = Array2::zeros((1, n));
         let mut flashes = Vec::new();
         for (i, onset) in (250..4000).step_by(62).enumerate() {
             let code = (i % 4) as u32 + 1;
-            flashes.push((onset as u64, code));
+            flashes.push(((start + onset) as u64, code));
             if code == 1 {
                 for t in 0..50 {
                     let w = (std::f64::consts::PI * t as f64 / 50.0).sin();
@@ -492,7 +495,7 @@ mod tests {
         }
         let mut next = 0;
         for k in 0..n / 25 {
-            while next < flashes.len() && flashes[next].0 < (k * 25 + 25) as u64 {
+            while next < flashes.len() && flashes[next].0 < (start + k * 25 + 25) as u64 {
                 s.flash(flashes[next].0, flashes[next].1);
                 next += 1;
             }
