@@ -484,21 +484,28 @@ fn the_signal_reaches_operator_views_only() {
     assert!(!has(&to_subject, r#""t":"signal""#), "{to_subject:?}");
 }
 
-/// The first server message of kind `tag` the page reads within 5 s.
-fn next_msg(
+/// The first server message of each kind in `tags` the page reads within 5 s, in the order of
+/// `tags` (operator-only messages come on their own channel: their order against the others'
+/// is not kept).
+fn next_msgs(
     ws: &mut tungstenite::WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>,
-    tag: &str,
-) -> serde_json::Value {
+    tags: &[&str],
+) -> Vec<serde_json::Value> {
     let t0 = Instant::now();
-    loop {
-        assert!(t0.elapsed() < Duration::from_secs(5), "no {tag} message");
+    let mut found: Vec<Option<serde_json::Value>> = vec![None; tags.len()];
+    while found.iter().any(Option::is_none) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(5),
+            "not all of {tags:?}: {found:?}"
+        );
         if let Ok(tungstenite::Message::Text(t)) = ws.read() {
             let v: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
-            if v["t"] == tag {
-                return v;
+            if let Some(k) = tags.iter().position(|tag| v["t"] == *tag) {
+                found[k].get_or_insert(v);
             }
         }
     }
+    found.into_iter().flatten().collect()
 }
 
 /// Issue #30: a calibration holds between trials while its subject view says it is hidden,
@@ -565,18 +572,18 @@ fn a_hidden_subject_view_holds_a_calibration_and_its_stamps_are_void() {
     let f = subject.presentation_faults();
     assert_eq!((f.hidden, f.calibration_holds), (1, 1), "{f:?}");
     // The operator view is told, with the alarm and the hold.
-    let alarm = next_msg(&mut operator, "alarm");
+    let told = next_msgs(&mut operator, &["alarm", "paused"]);
+    let (alarm, held) = (&told[0], &told[1]);
     assert_eq!(
         (alarm["kind"].as_str(), alarm["active"].as_bool()),
         (Some("hidden"), Some(true))
     );
-    let held = next_msg(&mut operator, "paused");
     assert_eq!(held["fault"], "hidden", "{held}");
 
     // A flash the page stamps while it says it is hidden: void.
     let onset = subject.position() + subject.lead();
     subject.show(onset, 2, true).unwrap();
-    let flash = next_msg(&mut page, "flash");
+    let flash = next_msgs(&mut page, &["flash"]).remove(0);
     page.send(Message::text(format!(
         r#"{{"t":"on","id":{},"code":2,"on_ms":{}}}"#,
         flash["id"], flash["at_ms"]
