@@ -17,9 +17,10 @@ pub const EPISODE_GAP_MS: f64 = 3000.0;
 pub const ALARM_EVERY_MS: f64 = 500.0;
 /// A subject view that reported no frame for this long draws nothing (ms).
 pub const STALLED_AFTER_MS: f64 = 1000.0;
-/// A subject view whose frames came this far apart (ms) in its last report is throttled
-/// (a browser draws a background page once a second).
-pub const THROTTLED_GAP_MS: f64 = 150.0;
+/// A subject view whose frames came this far apart (ms) in its last report is throttled (a
+/// browser draws a background page once a second); a shorter hitch while flashing is a frame
+/// gap, counted, not a state.
+pub const THROTTLED_GAP_MS: f64 = 500.0;
 /// A flash stamped this late (ms after its time) is reported late.
 pub const LATE_AFTER_MS: f64 = 50.0;
 
