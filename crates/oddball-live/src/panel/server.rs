@@ -658,6 +658,17 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
                 reason: "another subject view has this panel".into(),
             })))
             .await;
+        // Its messages are read and dropped, unheard, until it answers the close (a second at
+        // most): a socket closed with unread data resets the connection, and the page would
+        // read 1006 instead of why it was refused.
+        let _ = tokio::time::timeout(Duration::from_secs(1), async {
+            while let Some(Ok(m)) = socket.recv().await {
+                if matches!(m, Message::Close(_)) {
+                    break;
+                }
+            }
+        })
+        .await;
         return;
     }
     {
