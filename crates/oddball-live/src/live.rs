@@ -5,8 +5,9 @@
 //! has it before it must draw it. The page stamps the frame that drew it; that stamp, mapped to
 //! the EEG's sample clock, becomes the flash's marker (and is sent on the marker stream and
 //! recorded). A flash the page never drew within [`UNDRAWN_AFTER_MS`] of its planned onset (no
-//! page, a page that disconnected or stalled) loses its epoch: a decision never rests on
-//! flashes nobody saw, and with none at all the session abstains and the arm holds still.
+//! page, a page that disconnected or stalled), by the clock or by the EEG taken, whichever is
+//! further on, loses its epoch: a decision never rests on flashes nobody saw, and with none at
+//! all the session abstains and the arm holds still.
 //! Without a panel ([`Stamping::Schedule`]) flashes count as drawn on schedule.
 //!
 //! The operator view's requests reach the session here: a pause holds it before its next trial
@@ -16,6 +17,35 @@
 //! A recording played back ([`crate::playback`]) draws each flash where the recording drew it
 //! ([`EegSource::recorded_flash`]) and holds where the recorded session held
 //! ([`EegSource::recorded_hold`]), so a session set up as the recorded one decides as it did.
+//!
+//! # Presentation faults
+//! What the person is shown is watched as closely as the EEG: flashes undrawn or late (from the
+//! stamps), and what the subject page says of itself (hidden, frames stalled or missed, more
+//! than one bulb lit) become alarms on the operator view and counts in the session's summary
+//! ([`LiveSubject::presentation_faults`]; [`crate::panel::monitor`]).
+//!
+//! Calibration does not train on garbage, by two rules and nothing more:
+//! * an undrawn flash (no stamp within [`UNDRAWN_AFTER_MS`]; or a stamp refused: implausible,
+//!   or sent by a page that had said it was hidden) never gives an epoch, in calibration as
+//!   online: the engine drops it before its epoch completes. The
+//!   page skips a flash it would draw that late rather than draw it, and lights one bulb at a
+//!   time, so a page that comes back from the background does not fire a burst of old
+//!   flashes;
+//! * while a presentation fault that lasts is on (no subject view, the view hidden, or drawing
+//!   almost no frames) a calibration holds between trials, as an operator's pause does (the
+//!   EEG recorded, `pause` and `resume` marked), and goes on by itself once the view draws
+//!   again. The trial under way when the fault began finishes: its flashes drawn before are
+//!   sound epochs and kept, the rest are undrawn and dropped. No trial is repeated: a
+//!   calibration ends with fewer epochs, never with wrong ones.
+//!
+//! Online, the same faults raise the same alarms but do not hold: an undrawn flash adds no
+//! evidence, and a decision with none abstains, so the arm stays still.
+//!
+//! # The operator's signal display
+//! With a panel, every block of EEG also feeds [`crate::panel::scope::Scope`]: the signal
+//! band-passed as the decoder sees it, decimated to bins, each channel's state by the
+//! session's epoch rules ([`LiveSubject::set_scope_rules`]; the online default otherwise),
+//! and after each trial the average epoch of the cued (or decided) bulb against the others'.
 
 use std::time::{Duration, Instant};
 
@@ -29,12 +59,15 @@ use oddball_session::roles::{Drawn, EegStream, Observer, Presenter};
 use oddball_session::{SessionError, SimulatedSubject};
 
 use crate::clock::{Clock, Pacer};
-use crate::panel::{ChannelQuality, DrawnReport, PanelServer, ServerMsg};
+use crate::panel::monitor::LATE_AFTER_MS;
+pub use crate::panel::protocol::UNDRAWN_AFTER_MS;
+use crate::panel::{
+    ChannelQuality, DrawnReport, FaultKind, FaultMonitor, PanelServer, PresentationFaults, Scope,
+    ScopeRules, ServerMsg,
+};
 use crate::record::Recorder;
 use crate::LiveError;
 
-/// A flash not stamped by the page this long after its planned onset was not drawn.
-pub const UNDRAWN_AFTER_MS: f64 = 200.0;
 /// How far ahead flashes are announced to the page, seconds.
 pub const ANNOUNCE_AHEAD_S: f64 = 0.5;
 
@@ -267,8 +300,17 @@ pub struct LiveSubject<S: EegSource> {
     n_decisions: usize,
     /// Trials to come per phase when known (calibration, online), for the operator's progress.
     plan: (Option<usize>, Option<usize>),
-    /// Held before the next trial at the operator's request.
-    paused: bool,
+    /// Held before the next trial (at the operator's request, or for the presentation fault).
+    held: (bool, Option<FaultKind>),
+    /// Since when (session-clock ms) a calibration holds for a presentation fault.
+    fault_hold_since: Option<f64>,
+    /// The phase of the trial under way (or of the last one).
+    phase: Option<Phase>,
+    /// Presentation faults: alarms and counts.
+    monitor: FaultMonitor,
+    /// The operator's signal display (with a panel), and its rules.
+    scope: Option<Scope>,
+    scope_rules: ScopeRules,
     /// Held before the next trial where a replayed recording held.
     replay_held: bool,
     /// Epochs rejected per channel when the last trial ended (its own are the difference).
@@ -312,7 +354,12 @@ impl<S: EegSource> LiveSubject<S> {
             n_calibration: 0,
             n_decisions: 0,
             plan: (None, None),
-            paused: false,
+            held: (false, None),
+            fault_hold_since: None,
+            phase: None,
+            monitor: FaultMonitor::new(),
+            scope: None,
+            scope_rules: ScopeRules::default(),
             replay_held: false,
             faults_before: Vec::new(),
             announced: Vec::new(),
@@ -328,8 +375,7 @@ impl<S: EegSource> LiveSubject<S> {
 
     /// Flashes are drawn (and stamped) by this panel's page.
     pub fn with_panel(mut self, panel: PanelServer) -> Self {
-        self.panel = Some(panel);
-        self.stamping = Stamping::Panel;
+        self.attach_panel(panel);
         self
     }
 
@@ -337,6 +383,58 @@ impl<S: EegSource> LiveSubject<S> {
     pub fn attach_panel(&mut self, panel: PanelServer) {
         self.panel = Some(panel);
         self.stamping = Stamping::Panel;
+        self.start_scope();
+    }
+
+    /// The operator's signal display follows these rules (the session's band-pass, epoch
+    /// window and rejection thresholds: `ScopeRules::of(&params.decoder.preprocess)`); by
+    /// default those of [`oddball_decode::preprocess::Preprocess::online`].
+    pub fn set_scope_rules(&mut self, rules: ScopeRules) {
+        self.scope_rules = rules;
+        if self.panel.is_some() {
+            self.start_scope();
+        }
+    }
+
+    fn start_scope(&mut self) {
+        let Some(p) = &self.panel else {
+            return;
+        };
+        let scope = Scope::new(
+            self.scope_rules,
+            self.source.sfreq(),
+            self.source.ch_names(),
+            self.position,
+        );
+        let (erp_tmin_ms, erp_dt_ms) = scope.erp_axis_ms();
+        p.send(&ServerMsg::Scope {
+            names: scope.names().to_vec(),
+            bin_ms: scope.bin_ms(),
+            flat_uv: scope.rules().flat_uv,
+            noisy_uv: scope.rules().noisy_uv,
+            band: scope.band_text(),
+            erp_tmin_ms,
+            erp_dt_ms,
+        });
+        self.scope = Some(scope);
+    }
+
+    /// The presentation faults so far: what the session's summary reports of them.
+    pub fn presentation_faults(&self) -> PresentationFaults {
+        let now = self.clock.now_ms();
+        let mut c = self.monitor.counts(now);
+        if let Some(t0) = self.fault_hold_since {
+            c.calibration_held_s += (now - t0).max(0.0) / 1e3;
+        }
+        c
+    }
+
+    /// Whether the next trial is a calibration's (what a presentation fault holds).
+    fn calibrating(&self) -> bool {
+        match self.plan.0 {
+            Some(n) => self.n_calibration < n && self.n_decisions == 0,
+            None => self.phase == Some(Phase::Calibration),
+        }
     }
 
     /// How many calibration trials and online decisions the session will run, when known:
@@ -428,11 +526,32 @@ impl<S: EegSource> LiveSubject<S> {
             code: a.code,
             onset: Some(onset),
         });
+        if let Some(s) = &mut self.scope {
+            s.flash(onset, a.code);
+        }
         Ok(())
     }
 
-    /// Takes the page's stamps; declares flashes past their deadline undrawn.
-    fn collect_stamps(&mut self) -> Result<(), LiveError> {
+    /// A flash lost: never drawn in time, or its stamp refused. Its epoch is dropped.
+    fn undrawn(&mut self, a: Announced) {
+        self.timing.undrawn += 1;
+        self.monitor
+            .event(FaultKind::Undrawn, self.clock.now_ms(), 1, 0.0);
+        if self.phase == Some(Phase::Calibration) {
+            self.monitor.calibration_undrawn(1);
+        }
+        self.drawn.push(Drawn {
+            planned: a.planned,
+            code: a.code,
+            onset: None,
+        });
+    }
+
+    /// Takes the page's stamps; declares flashes past their deadline undrawn: more than
+    /// [`UNDRAWN_AFTER_MS`] ago by the clock, or by the EEG about to be taken (`upcoming`
+    /// samples more: a source faster than real time, a file played back `--fast`, must not
+    /// complete an epoch whose flash no page stamped yet).
+    fn collect_stamps(&mut self, upcoming: u64) -> Result<(), LiveError> {
         let Some(panel) = &self.panel else {
             return Ok(());
         };
@@ -443,6 +562,7 @@ impl<S: EegSource> LiveSubject<S> {
                     id,
                     on_ms,
                     received_ms,
+                    hidden,
                     ..
                 } => {
                     let Some(k) = self.announced.iter().position(|a| a.id == id) else {
@@ -450,15 +570,15 @@ impl<S: EegSource> LiveSubject<S> {
                         continue;
                     };
                     let a = self.announced.remove(k);
-                    if !plausible_stamp(a.at_ms, on_ms) {
+                    // A page that said it was hidden drew nothing anyone saw.
+                    if hidden || !plausible_stamp(a.at_ms, on_ms) {
                         self.timing.refused_stamps += 1;
-                        self.timing.undrawn += 1;
-                        self.drawn.push(Drawn {
-                            planned: a.planned,
-                            code: a.code,
-                            onset: None,
-                        });
+                        self.undrawn(a);
                         continue;
+                    }
+                    if on_ms - a.at_ms > LATE_AFTER_MS {
+                        let now = self.clock.now_ms();
+                        self.monitor.event(FaultKind::Late, now, 1, on_ms - a.at_ms);
                     }
                     self.lit.push((id, on_ms));
                     self.timing.onset_error_ms.push(on_ms - a.at_ms);
@@ -478,21 +598,40 @@ impl<S: EegSource> LiveSubject<S> {
         if self.lit.len() > 64 {
             self.lit.drain(..32);
         }
-        let now = self.clock.now_ms();
+        let now = self
+            .clock
+            .now_ms()
+            .max(self.source.time_of(self.position + upcoming));
         let (gone, kept): (Vec<Announced>, Vec<Announced>) = self
             .announced
             .iter()
             .partition(|a| now > a.at_ms + UNDRAWN_AFTER_MS);
         self.announced = kept;
         for a in gone {
-            self.timing.undrawn += 1;
-            self.drawn.push(Drawn {
-                planned: a.planned,
-                code: a.code,
-                onset: None,
-            });
+            self.undrawn(a);
         }
+        self.watch_presentation();
         Ok(())
+    }
+
+    /// The subject view's state and reports into alarms for the operator view.
+    fn watch_presentation(&mut self) {
+        let Some(panel) = &self.panel else {
+            return;
+        };
+        let now = self.clock.now_ms();
+        self.monitor.set_holds(self.calibrating());
+        self.monitor.view(&panel.subject_view(), now);
+        let alarms = self.monitor.alarms(now);
+        if alarms.is_empty() {
+            return;
+        }
+        for a in alarms {
+            panel.send(&ServerMsg::Alarm(a));
+        }
+        panel.send(&ServerMsg::Faults {
+            counts: self.presentation_faults(),
+        });
     }
 
     fn status(&self) -> String {
@@ -545,11 +684,21 @@ impl<S: EegSource> EegStream for LiveSubject<S> {
             return Err(LiveError::Aborted.into());
         }
         self.source.wait(n)?;
-        self.collect_stamps()?;
+        self.collect_stamps(n as u64)?;
         let data = self.source.take(n)?;
         if let Some(rec) = &mut self.recorder {
             let t0 = self.source.time_of(self.position);
             rec.eeg(t0, self.source.sfreq(), data.view())?;
+        }
+        if let (Some(scope), Some(p)) = (&mut self.scope, &self.panel) {
+            if let Some(b) = scope.push(data.view()) {
+                p.send(&ServerMsg::Signal {
+                    t_ms: self.source.time_of(b.first_sample),
+                    lo: b.lo,
+                    hi: b.hi,
+                    state: b.state,
+                });
+            }
         }
         self.position += n as u64;
         self.last_block = Instant::now();
@@ -599,6 +748,8 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
     fn drawn(&mut self) -> Vec<Drawn> {
         std::mem::take(&mut self.drawn)
     }
+    /// Holds at the operator's request, and in calibration while a presentation fault that
+    /// lasts is on (see the module doc).
     fn hold(&mut self) -> Result<bool, SessionError> {
         if self.replay_hold()? {
             return Ok(true);
@@ -606,17 +757,38 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
         let Some(panel) = &self.panel else {
             return Ok(false);
         };
-        let wanted = panel.pause_requested();
-        if wanted != self.paused {
-            self.paused = wanted;
-            let now = self.clock.now_ms();
+        let operator = panel.pause_requested();
+        self.monitor.set_holds(self.calibrating());
+        let fault = if operator {
+            None
+        } else {
+            self.monitor.holding()
+        };
+        let held = (operator || fault.is_some(), fault);
+        let now = self.clock.now_ms();
+        if held != self.held {
             panel.send(&ServerMsg::Paused {
-                paused: wanted,
+                paused: held.0,
                 at_ms: now,
+                fault,
             });
-            self.marker(if wanted { "pause" } else { "resume" }, now)?;
+            if held.0 != self.held.0 {
+                self.marker(if held.0 { "pause" } else { "resume" }, now)?;
+            }
         }
-        Ok(self.paused)
+        match (fault.is_some(), self.fault_hold_since) {
+            (true, None) => {
+                self.fault_hold_since = Some(now);
+                self.monitor.held(0.0, true);
+            }
+            (false, Some(t0)) => {
+                self.fault_hold_since = None;
+                self.monitor.held((now - t0).max(0.0) / 1e3, false);
+            }
+            _ => {}
+        }
+        self.held = held;
+        Ok(held.0)
     }
     fn trial_started(
         &mut self,
@@ -627,6 +799,7 @@ impl<S: EegSource> Presenter for LiveSubject<S> {
         let at_ms = self.source.time_of(start);
         let trial = self.n_trials;
         self.n_trials += 1;
+        self.phase = Some(phase);
         let (number, of) = match phase {
             Phase::Calibration => {
                 self.n_calibration += 1;
@@ -702,6 +875,27 @@ impl<S: EegSource> Observer for LiveSubject<S> {
             p.send(&ServerMsg::Diag {
                 text: self.status(),
             });
+            p.send(&ServerMsg::Faults {
+                counts: self.presentation_faults(),
+            });
+            let target = t.intended.or(t.decided());
+            if let Some(a) = self.scope.as_mut().and_then(|s| s.trial_done(target)) {
+                p.send(&ServerMsg::Average {
+                    trial: match t.phase {
+                        Phase::Calibration => self.n_calibration,
+                        Phase::Online => self.n_decisions,
+                    },
+                    phase: match t.phase {
+                        Phase::Calibration => "calibration".into(),
+                        Phase::Online => "online".into(),
+                    },
+                    target: a.target,
+                    n_target: a.n_target,
+                    n_other: a.n_other,
+                    target_uv: a.target_uv,
+                    other_uv: a.other_uv,
+                });
+            }
         }
         Ok(())
     }

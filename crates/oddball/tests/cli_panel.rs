@@ -10,6 +10,10 @@
 //! operator view during a live calibration, screenshots of each (target/panel-subject.png,
 //! target/panel-operator.png); pause, resume and abort from the operator view.
 //!
+//! A subject tab sent to the background during calibration (tools/panel-test/throttle.mjs):
+//! the operator view raises the alarm, the calibration holds while the tab is hidden, and the
+//! flashes it did not draw give no calibration epoch (target/panel-throttle-*.png).
+//!
 //! Needs Chromium and Node with playwright-core: runs when ODDBALL_CHROMIUM names the browser
 //! (CI: `apt-get install chromium`, `npm ci` in tools/panel-test), otherwise says it skips.
 
@@ -370,6 +374,114 @@ fn the_operator_view_pauses_resumes_and_aborts_a_live_calibration_in_chromium() 
         rec.raw.n_times()
     );
     let bytes = std::fs::read(&path).unwrap();
+    for marker in [&b"pause"[..], b"resume"] {
+        assert!(
+            bytes.windows(marker.len()).any(|w| w == marker),
+            "no {} marker in the recording",
+            String::from_utf8_lossy(marker)
+        );
+    }
+}
+
+/// Issue #30, presentation faults: the probe's background-throttled subject tab (hidden, one
+/// frame a second) during a live calibration. The operator view raises an alarm naming the
+/// fault and when at once, the calibration holds between trials while the tab is hidden (no
+/// trial starts, nothing is announced) and goes on by itself when it is back, and calibration
+/// trains on no flash the page did not draw: the calibration's epochs are at most the flashes
+/// recorded as drawn, which fall short of those scheduled by exactly the undrawn flashes the
+/// operator view counted.
+#[test]
+fn a_throttled_subject_tab_raises_the_alarm_and_calibration_uses_no_undrawn_flash_in_chromium() {
+    let Some(chromium) = chromium() else {
+        return;
+    };
+    let _browser = one_browser_at_a_time();
+    let dir = common::tmp_dir("panel-throttle");
+    let out = dir.join("online");
+    // 2 calibration decisions per bulb, the fast timing: 8 trials of 5 rounds of 4 flashes.
+    let mut online = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["online", "--serve", "127.0.0.1:0", "--calibrate"])
+        .args(["--calibration-per-bulb", "2", "--paradigm", "fast"])
+        .args(["--commands", "up,left", "--seed", "3"])
+        .args(["--out", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("oddball online starts");
+    let mut stdout = BufReader::new(online.stdout.take().unwrap());
+    let url = common::panel_urls(&mut stdout);
+    let prefix = root().join("target/panel-throttle");
+    let page = Command::new("node")
+        .current_dir(root().join("tools/panel-test"))
+        .env("CHROMIUM", &chromium)
+        .arg("throttle.mjs")
+        .args([&url.0, &url.1])
+        .arg(&prefix)
+        .output()
+        .expect("node runs");
+    let mut rest = String::new();
+    stdout.read_to_string(&mut rest).unwrap();
+    let status = online.wait().unwrap();
+    let page_out = String::from_utf8_lossy(&page.stdout).into_owned();
+    println!(
+        "page: {page_out}\n{}\nsession:\n{rest}",
+        String::from_utf8_lossy(&page.stderr)
+    );
+    assert!(page.status.success(), "the page checks failed");
+    assert!(status.success(), "the session failed:\n{rest}");
+    let seen: serde_json::Value = serde_json::from_str(
+        page_out
+            .lines()
+            .find(|l| l.starts_with('{'))
+            .expect("what the pages saw"),
+    )
+    .unwrap();
+    // The calibration's epochs, as it reported them.
+    let (trials, epochs): (usize, usize) = rest
+        .lines()
+        .find_map(|l| {
+            let l = l.strip_prefix("calibration: ")?;
+            let (t, l) = l.split_once(" decisions, ")?;
+            let (e, _) = l.split_once(" epochs")?;
+            Some((t.parse().ok()?, e.parse().ok()?))
+        })
+        .unwrap_or_else(|| panic!("no calibration line:\n{rest}"));
+    assert_eq!(trials, 8, "{rest}");
+    let scheduled = trials * 5 * 4;
+    // The flashes the recording holds as drawn during calibration: those after a calibration
+    // cue and before the first online one.
+    let rec = oddball_io::read(out.join("session.xdf")).expect("the recording opens");
+    let markers = &rec.xdf().expect("an XDF recording").markers;
+    let mut calibrating = false;
+    let mut drawn = 0;
+    for m in markers {
+        use oddball_io::xdf::session_markers::{parse_cue_marker, parse_flash_marker};
+        if let Some((_, calibration)) = parse_cue_marker(&m.text) {
+            calibrating = calibration;
+        } else if calibrating && parse_flash_marker(&m.text).is_some() {
+            drawn += 1;
+        }
+    }
+    let undrawn = seen["faults"]["calibration_undrawn_flashes"]
+        .as_u64()
+        .expect("the operator view's fault counts") as usize;
+    assert!(undrawn > 0, "the hidden tab left no flash undrawn: {seen}");
+    assert_eq!(
+        drawn + undrawn,
+        scheduled,
+        "every scheduled calibration flash is drawn or counted undrawn: {seen}"
+    );
+    assert!(
+        epochs <= drawn,
+        "calibration trained on {epochs} epochs of {drawn} drawn flashes ({undrawn} undrawn):\n{rest}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        summary["undrawn_flashes"].as_u64().unwrap() as usize >= undrawn,
+        "{summary}"
+    );
+    // The hold is in the recording, as an operator's pause would be.
+    let bytes = std::fs::read(out.join("session.xdf")).unwrap();
     for marker in [&b"pause"[..], b"resume"] {
         assert!(
             bytes.windows(marker.len()).any(|w| w == marker),

@@ -18,6 +18,19 @@ use serde::{Deserialize, Serialize};
 /// Largest client message accepted, bytes.
 pub const MAX_CLIENT_MESSAGE: usize = 1024;
 
+/// A flash not stamped by the page this long after its planned onset was not drawn (the server
+/// voids it; the page skips it rather than draw it late), ms.
+pub const UNDRAWN_AFTER_MS: f64 = 200.0;
+
+/// How often the subject page reports its frames ([`ClientMsg::Frames`]), ms.
+pub const FRAMES_EVERY_MS: f64 = 250.0;
+
+/// The most channels the operator view's signal display carries (the first ones).
+pub const MAX_SCOPE_CHANNELS: usize = 64;
+
+/// Largest value a page's frame report may carry: frames and gaps (ms) in one report.
+const MAX_REPORTED: f64 = 1e7;
+
 /// The subject view's page and WebSocket paths.
 pub const SUBJECT_PAGE: &str = "/";
 pub const SUBJECT_WS: &str = "/ws";
@@ -43,7 +56,9 @@ impl Role {
             ClientMsg::On { .. }
             | ClientMsg::Off { .. }
             | ClientMsg::Hello { .. }
-            | ClientMsg::Clock { .. } => self == Role::Subject,
+            | ClientMsg::Clock { .. }
+            | ClientMsg::Frames { .. }
+            | ClientMsg::Visibility { .. } => self == Role::Subject,
             ClientMsg::Control { .. } => self == Role::Operator,
         }
     }
@@ -86,6 +101,11 @@ pub struct PanelConfig {
     pub plan_m: Vec<[f64; 2]>,
     /// What runs: e.g. "sim typical seed 1, lda".
     pub title: String,
+    /// A flash this late (ms after its time) is skipped, not drawn: the server voids it anyway
+    /// ([`UNDRAWN_AFTER_MS`]).
+    pub undrawn_after_ms: f64,
+    /// How often the page reports its frames, ms ([`FRAMES_EVERY_MS`]).
+    pub frames_every_ms: f64,
 }
 
 impl PanelConfig {
@@ -115,8 +135,127 @@ impl PanelConfig {
             targets_m,
             plan_m,
             title,
+            undrawn_after_ms: UNDRAWN_AFTER_MS,
+            frames_every_ms: FRAMES_EVERY_MS,
         }
     }
+}
+
+/// A fault in what the person is shown, as the operator view's alarm names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FaultKind {
+    /// No subject view is connected: nothing is drawn.
+    Disconnected,
+    /// The subject view is hidden (another tab or window in front, minimised): the browser
+    /// draws nothing.
+    Hidden,
+    /// The subject view draws (almost) no frames: frozen, or throttled by the browser.
+    Stalled,
+    /// Flashes the page never stamped in time (or whose stamps were refused): their epochs are
+    /// dropped.
+    Undrawn,
+    /// Flashes drawn late (stamped, kept: their epochs follow the stamp).
+    Late,
+    /// Frames missed while flashing (a gap of several frame periods).
+    FrameGap,
+    /// More than one bulb lit in one frame (the page's own check of its page).
+    MultipleLit,
+}
+
+impl FaultKind {
+    /// Every kind, in the order the operator view lists them.
+    pub const ALL: [FaultKind; 7] = [
+        FaultKind::Disconnected,
+        FaultKind::Hidden,
+        FaultKind::Stalled,
+        FaultKind::Undrawn,
+        FaultKind::Late,
+        FaultKind::FrameGap,
+        FaultKind::MultipleLit,
+    ];
+
+    /// Whether the fault is a state that lasts (and holds a calibration while it does), not
+    /// a count of events.
+    pub fn is_state(self) -> bool {
+        matches!(
+            self,
+            FaultKind::Disconnected | FaultKind::Hidden | FaultKind::Stalled
+        )
+    }
+}
+
+/// One presentation fault as the operator view shows it: an episode of one kind (events of
+/// that kind less than a few seconds apart, or a state while it lasts).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Alarm {
+    pub kind: FaultKind,
+    /// Still going on (`false`: the episode is over, kept in the operator's log).
+    pub active: bool,
+    /// When the episode began and when it was last seen, and the server's clock when this was
+    /// sent (session-clock ms: the page maps them to its wall clock).
+    pub since_ms: f64,
+    pub last_ms: f64,
+    pub now_ms: f64,
+    /// When the episode began by the wall clock, ms since 1970 (what the operator reads).
+    pub since_unix_ms: f64,
+    /// Events in this episode (1 for a state).
+    pub count: u64,
+    /// Calibration is held while it lasts.
+    pub holds: bool,
+    /// What happened, in words.
+    pub text: String,
+}
+
+/// The presentation faults of a session, counted: what its summary reports of them
+/// ([`crate::live::LiveSubject::presentation_faults`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct PresentationFaults {
+    /// Flashes never stamped in time, or whose stamps were refused: their epochs are dropped.
+    pub undrawn_flashes: u64,
+    /// Of these, in calibration: epochs calibration did not get.
+    pub calibration_undrawn_flashes: u64,
+    /// Flashes stamped late (several frames after their time; kept, their epochs follow the
+    /// stamp).
+    pub late_flashes: u64,
+    /// Times the subject view was hidden, and for how long in all, s.
+    pub hidden: u64,
+    pub hidden_s: f64,
+    /// Times the subject view drew (almost) no frames while visible, and for how long, s.
+    pub stalled: u64,
+    pub stalled_s: f64,
+    /// Times no subject view was connected once the session ran, and for how long, s.
+    pub disconnected: u64,
+    pub disconnected_s: f64,
+    /// Gaps of several frame periods while flashing, and the longest gap reported, ms.
+    pub frame_gaps: u64,
+    pub longest_frame_gap_ms: f64,
+    /// Frames with more than one bulb lit.
+    pub multiple_lit_frames: u64,
+    /// Times calibration held between trials for a fault, and for how long in all, s.
+    pub calibration_holds: u64,
+    pub calibration_held_s: f64,
+}
+
+impl PresentationFaults {
+    /// Whether anything went wrong at all.
+    pub fn any(&self) -> bool {
+        *self != Self::default()
+    }
+}
+
+/// A channel's live state on the operator's signal display, by the session's epoch rules
+/// applied to the last epoch-length of its band-passed signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SignalState {
+    Ok,
+    /// Peak-to-peak under the flat threshold: disconnected, or stuck at a rail (saturated).
+    Flat,
+    /// Peak-to-peak over the rejection threshold.
+    Noisy,
+    /// Samples lost (NaN or infinite).
+    Nan,
 }
 
 /// Server → page.
@@ -173,10 +312,52 @@ pub enum ServerMsg {
     Quality {
         channels: Vec<ChannelQuality>,
     },
-    /// The session holds between trials (`true`, the operator paused it) or runs on.
+    /// The session holds between trials (`true`: the operator paused it, or a presentation
+    /// fault holds a calibration) or runs on.
     Paused {
         paused: bool,
         at_ms: f64,
+        /// Why it holds when not at the operator's request (a presentation fault).
+        #[serde(default)]
+        fault: Option<FaultKind>,
+    },
+    /// A presentation fault began, goes on or ended (operator view only).
+    Alarm(Alarm),
+    /// The presentation faults counted so far (operator view only).
+    Faults {
+        counts: PresentationFaults,
+    },
+    /// The signal display's channels and scales (operator view only, sent once): bins of
+    /// `bin_ms`, the flat and noisy thresholds (µV peak-to-peak), and the averages' window
+    /// (first sample at `erp_tmin_ms` after the onset, `erp_dt_ms` apart).
+    Scope {
+        names: Vec<String>,
+        bin_ms: f64,
+        flat_uv: f64,
+        noisy_uv: Option<f64>,
+        band: String,
+        erp_tmin_ms: f64,
+        erp_dt_ms: f64,
+    },
+    /// The band-passed signal from `t_ms` on, per channel the lowest and highest value of each
+    /// bin (µV), and each channel's state now (operator view only).
+    Signal {
+        t_ms: f64,
+        lo: Vec<Vec<f32>>,
+        hi: Vec<Vec<f32>>,
+        state: Vec<SignalState>,
+    },
+    /// The last trial's average epoch per channel (µV): the flashes of `target` (the cued bulb,
+    /// else the decided one) and of the others (operator view only). The trial is number
+    /// `trial` (from 1) of its phase.
+    Average {
+        trial: usize,
+        phase: String,
+        target: Option<u32>,
+        n_target: usize,
+        n_other: usize,
+        target_uv: Vec<Vec<f32>>,
+        other_uv: Vec<Vec<f32>>,
     },
     Pong {
         id: u64,
@@ -198,6 +379,20 @@ pub enum ServerMsg {
     },
 }
 
+impl ServerMsg {
+    /// Whether only operator views get this message (the signal, the averages, the alarms).
+    pub fn operator_only(&self) -> bool {
+        matches!(
+            self,
+            ServerMsg::Alarm(_)
+                | ServerMsg::Faults { .. }
+                | ServerMsg::Scope { .. }
+                | ServerMsg::Signal { .. }
+                | ServerMsg::Average { .. }
+        )
+    }
+}
+
 /// Page → server.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "t", rename_all = "snake_case", deny_unknown_fields)]
@@ -215,6 +410,18 @@ pub enum ClientMsg {
     Clock { offset_ms: f64, rtt_ms: f64 },
     /// The operator pauses, resumes or aborts the session.
     Control { action: Control },
+    /// The subject page's frames since its last report (sent from its animation frames every
+    /// [`FRAMES_EVERY_MS`]): how many, the longest gap between two (ms), gaps of several frame
+    /// periods while flashing, and frames with more than one bulb lit (its own check of its
+    /// page).
+    Frames {
+        frames: u32,
+        max_gap_ms: f64,
+        dropped: u32,
+        multi_lit: u32,
+    },
+    /// The subject page became hidden or visible again (`document.hidden`), and on connect.
+    Visibility { hidden: bool },
 }
 
 /// Why a client message was rejected.
@@ -287,7 +494,30 @@ pub fn parse_client(text: &str) -> Result<ClientMsg, ProtocolError> {
                 });
             }
         }
-        ClientMsg::Control { .. } => {}
+        ClientMsg::Frames {
+            frames,
+            max_gap_ms,
+            dropped,
+            multi_lit,
+        } => {
+            finite("max_gap_ms", *max_gap_ms)?;
+            let within = |field: &'static str, v: f64, max: f64| {
+                if (0.0..=max).contains(&v) {
+                    Ok(())
+                } else {
+                    Err(ProtocolError::BadValue {
+                        field,
+                        value: v.to_string(),
+                        reason: "out of range",
+                    })
+                }
+            };
+            within("max_gap_ms", *max_gap_ms, MAX_REPORTED)?;
+            within("frames", f64::from(*frames), MAX_REPORTED)?;
+            within("dropped", f64::from(*dropped), f64::from(*frames) + 1.0)?;
+            within("multi_lit", f64::from(*multi_lit), f64::from(*frames) + 1.0)?;
+        }
+        ClientMsg::Control { .. } | ClientMsg::Visibility { .. } => {}
     }
     Ok(msg)
 }
@@ -361,6 +591,106 @@ mod tests {
         // serde_json refuses NaN literals, and 1e999 overflows to infinity: both refused.
         assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":NaN}"#).is_err());
         assert!(parse_client(r#"{"t":"ping","id":1,"page_ms":1e999}"#).is_err());
+    }
+
+    /// The subject page's reports of itself are checked like its stamps: bounded, finite, in
+    /// range, no field more or less.
+    #[test]
+    fn frame_and_visibility_reports_are_checked() {
+        assert_eq!(
+            parse_client(
+                r#"{"t":"frames","frames":15,"max_gap_ms":17.1,"dropped":0,"multi_lit":0}"#
+            )
+            .unwrap(),
+            ClientMsg::Frames {
+                frames: 15,
+                max_gap_ms: 17.1,
+                dropped: 0,
+                multi_lit: 0
+            }
+        );
+        assert_eq!(
+            parse_client(r#"{"t":"visibility","hidden":true}"#).unwrap(),
+            ClientMsg::Visibility { hidden: true }
+        );
+        for (bad, field) in [
+            (
+                r#"{"t":"frames","frames":1,"max_gap_ms":-5,"dropped":0,"multi_lit":0}"#,
+                "max_gap_ms",
+            ),
+            (
+                r#"{"t":"frames","frames":1,"max_gap_ms":1e8,"dropped":0,"multi_lit":0}"#,
+                "max_gap_ms",
+            ),
+            (
+                r#"{"t":"frames","frames":4000000000,"max_gap_ms":5,"dropped":0,"multi_lit":0}"#,
+                "frames",
+            ),
+            (
+                r#"{"t":"frames","frames":2,"max_gap_ms":5,"dropped":900,"multi_lit":0}"#,
+                "dropped",
+            ),
+            (
+                r#"{"t":"frames","frames":2,"max_gap_ms":5,"dropped":0,"multi_lit":900}"#,
+                "multi_lit",
+            ),
+        ] {
+            let e = parse_client(bad).unwrap_err();
+            assert!(
+                matches!(e, ProtocolError::BadValue { field: f, .. } if f == field),
+                "{bad}: {e}"
+            );
+        }
+        for bad in [
+            r#"{"t":"frames","frames":1,"max_gap_ms":5,"dropped":0}"#,
+            r#"{"t":"frames","frames":-1,"max_gap_ms":5,"dropped":0,"multi_lit":0}"#,
+            r#"{"t":"frames","frames":1,"max_gap_ms":5,"dropped":0,"multi_lit":0,"x":1}"#,
+            r#"{"t":"visibility","hidden":"yes"}"#,
+            r#"{"t":"visibility"}"#,
+        ] {
+            assert!(
+                matches!(parse_client(bad), Err(ProtocolError::Malformed { .. })),
+                "{bad}"
+            );
+        }
+        let frames =
+            parse_client(r#"{"t":"frames","frames":1,"max_gap_ms":5,"dropped":0,"multi_lit":0}"#)
+                .unwrap();
+        let hidden = ClientMsg::Visibility { hidden: true };
+        for m in [&frames, &hidden] {
+            assert!(Role::Subject.accepts(m) && !Role::Operator.accepts(m));
+        }
+    }
+
+    #[test]
+    fn what_only_operators_see() {
+        let signal = ServerMsg::Signal {
+            t_ms: 0.0,
+            lo: vec![],
+            hi: vec![],
+            state: vec![],
+        };
+        assert!(signal.operator_only());
+        assert!(!ServerMsg::Cancel { after_ms: 0.0 }.operator_only());
+        // A pause carries its fault, and an older message without one still reads.
+        let p: ServerMsg =
+            serde_json::from_str(r#"{"t":"paused","paused":true,"at_ms":5}"#).unwrap();
+        assert_eq!(
+            p,
+            ServerMsg::Paused {
+                paused: true,
+                at_ms: 5.0,
+                fault: None
+            }
+        );
+        let held = ServerMsg::Paused {
+            paused: true,
+            at_ms: 5.0,
+            fault: Some(FaultKind::Hidden),
+        };
+        assert!(serde_json::to_string(&held)
+            .unwrap()
+            .contains(r#""fault":"hidden""#));
     }
 
     #[test]

@@ -9,6 +9,12 @@
 //! WebSockets). One subject page at a time owns the flashes' stamps: a second one is refused,
 //! counted and announced to the operator view. A pause left by an operator view that closed
 //! ends once no operator has been connected for [`ORPHANED_PAUSE_S`].
+//!
+//! What the subject page says of itself (hidden or visible, its frames) is hostile input like
+//! any other: only its one keyed socket may say it, each message bounded and checked
+//! ([`super::protocol::parse_client`]), and the server keeps counters, not a queue, so however
+//! fast a page reports it costs nothing more ([`PanelServer::subject_view`]). The signal, the
+//! averages and the alarms go to operator views only ([`PanelServer::send_operator`]).
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -24,6 +30,7 @@ use axum::Router;
 use tokio::sync::{broadcast, watch};
 
 use super::assets::{COMMON_JS, INDEX_HTML, OPERATOR_HTML, OPERATOR_JS, PANEL_JS};
+use super::monitor::SubjectView;
 use super::protocol::{
     parse_client, ClientMsg, Control, PanelConfig, Role, ServerMsg, MAX_CLIENT_MESSAGE,
     OPERATOR_PAGE, OPERATOR_WS, SUBJECT_PAGE, SUBJECT_WS,
@@ -40,6 +47,8 @@ pub enum DrawnReport {
         code: u32,
         on_ms: f64,
         received_ms: f64,
+        /// The page had said it was hidden: nobody saw the flash, whatever it stamps.
+        hidden: bool,
     },
     Off {
         id: u64,
@@ -94,7 +103,50 @@ struct Shared {
     subject_taken: AtomicBool,
     /// Since when no operator view has been connected (`None`: one is).
     operatorless_since: Mutex<Option<Instant>>,
+    /// Messages for operator views only, and what a late one needs of them.
+    op_tx: broadcast::Sender<Arc<str>>,
+    op_backlog: Mutex<OperatorBacklog>,
+    /// What the subject page said of itself.
+    page: Mutex<PageState>,
 }
+
+/// What the subject page reported of itself: counters, never a queue.
+#[derive(Debug)]
+struct PageState {
+    hidden: bool,
+    /// Its last frame report, or when it connected.
+    frames_at: Instant,
+    last_max_gap_ms: f64,
+    /// Since the session last looked.
+    dropped: u64,
+    dropped_gap_ms: f64,
+    multi_lit: u64,
+}
+
+impl PageState {
+    fn fresh() -> Self {
+        Self {
+            hidden: false,
+            frames_at: Instant::now(),
+            last_max_gap_ms: 0.0,
+            dropped: 0,
+            dropped_gap_ms: 0.0,
+            multi_lit: 0,
+        }
+    }
+}
+
+/// What a late operator view needs of the operator-only messages.
+#[derive(Debug, Default)]
+struct OperatorBacklog {
+    scope: Option<Arc<str>>,
+    alarms: std::collections::VecDeque<Arc<str>>,
+    faults: Option<Arc<str>>,
+    average: Option<Arc<str>>,
+}
+
+/// Alarm messages kept for operator views that connect late.
+const ALARM_BACKLOG: usize = 200;
 
 /// A pause whose operator views have all been gone this long ends by itself, s.
 pub const ORPHANED_PAUSE_S: f64 = 120.0;
@@ -232,6 +284,7 @@ impl PanelServer {
                 reason: e.to_string(),
             })?;
         let (tx, _) = broadcast::channel(4096);
+        let (op_tx, _) = broadcast::channel(1024);
         let shared = Arc::new(Shared {
             clock,
             tx,
@@ -243,6 +296,9 @@ impl PanelServer {
             access: Access::new(addr, allow_remote),
             subject_taken: AtomicBool::new(false),
             operatorless_since: Mutex::new(Some(Instant::now())),
+            op_tx,
+            op_backlog: Mutex::new(OperatorBacklog::default()),
+            page: Mutex::new(PageState::fresh()),
         });
         let (shutdown, shutdown_rx) = watch::channel(false);
         let runtime = tokio::runtime::Builder::new_multi_thread()
@@ -320,7 +376,12 @@ impl PanelServer {
     }
 
     /// Sends `msg` to every page (never blocks; a page too slow to keep up skips messages).
+    /// What only operators may see (the signal, the averages, the alarms) goes to operator
+    /// views only ([`PanelServer::send_operator`]).
     pub fn send(&self, msg: &ServerMsg) {
+        if msg.operator_only() {
+            return self.send_operator(msg);
+        }
         let text: Arc<str> = serde_json::to_string(msg)
             .expect("server messages serialise")
             .into();
@@ -343,10 +404,59 @@ impl PanelServer {
                 ServerMsg::Pages { .. } => b.pages = Some(text.clone()),
                 ServerMsg::End { .. } => b.end = Some(text.clone()),
                 ServerMsg::Flash { .. } | ServerMsg::Cancel { .. } | ServerMsg::Pong { .. } => {}
+                ServerMsg::Alarm(_)
+                | ServerMsg::Faults { .. }
+                | ServerMsg::Scope { .. }
+                | ServerMsg::Signal { .. }
+                | ServerMsg::Average { .. } => unreachable!("sent to operator views only"),
             }
         }
         // No receiver (no page yet) is not an error.
         let _ = self.shared.tx.send(text);
+    }
+
+    /// Sends `msg` to operator views only (the signal, the averages, the alarms: the subject
+    /// page never gets them). Never blocks.
+    pub fn send_operator(&self, msg: &ServerMsg) {
+        let text: Arc<str> = serde_json::to_string(msg)
+            .expect("server messages serialise")
+            .into();
+        {
+            let mut b = lock(&self.shared.op_backlog);
+            match msg {
+                ServerMsg::Scope { .. } => b.scope = Some(text.clone()),
+                ServerMsg::Alarm(_) => {
+                    if b.alarms.len() >= ALARM_BACKLOG {
+                        b.alarms.pop_front();
+                    }
+                    b.alarms.push_back(text.clone());
+                }
+                ServerMsg::Faults { .. } => b.faults = Some(text.clone()),
+                ServerMsg::Average { .. } => b.average = Some(text.clone()),
+                _ => {}
+            }
+        }
+        let _ = self.shared.op_tx.send(text);
+    }
+
+    /// The subject view now, and what it reported since the last call (whose counters this
+    /// resets): the one reader is the session.
+    pub fn subject_view(&self) -> SubjectView {
+        let connected = lock(&self.shared.stats).connected > 0;
+        let mut p = lock(&self.shared.page);
+        let v = SubjectView {
+            connected,
+            hidden: p.hidden,
+            since_frames_ms: p.frames_at.elapsed().as_secs_f64() * 1e3,
+            last_max_gap_ms: p.last_max_gap_ms,
+            dropped: p.dropped,
+            dropped_gap_ms: p.dropped_gap_ms,
+            multi_lit: p.multi_lit,
+        };
+        p.dropped = 0;
+        p.dropped_gap_ms = 0.0;
+        p.multi_lit = 0;
+        v
     }
 
     /// Flash stamps reported since the last call.
@@ -548,6 +658,17 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
                 reason: "another subject view has this panel".into(),
             })))
             .await;
+        // Its messages are read and dropped, unheard, until it answers the close (a second at
+        // most): a socket closed with unread data resets the connection, and the page would
+        // read 1006 instead of why it was refused.
+        let _ = tokio::time::timeout(Duration::from_secs(1), async {
+            while let Some(Ok(m)) = socket.recv().await {
+                if matches!(m, Message::Close(_)) {
+                    break;
+                }
+            }
+        })
+        .await;
         return;
     }
     {
@@ -556,6 +677,7 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             Role::Subject => {
                 s.connected += 1;
                 s.connections += 1;
+                *lock(&shared.page) = PageState::fresh();
             }
             Role::Operator => {
                 s.operators += 1;
@@ -566,7 +688,8 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
     }
     announce_pages(&shared);
     let mut rx = shared.tx.subscribe();
-    let backlog: Vec<Arc<str>> = {
+    let mut op_rx = (role == Role::Operator).then(|| shared.op_tx.subscribe());
+    let mut backlog: Vec<Arc<str>> = {
         let b = lock(&shared.backlog);
         b.config
             .iter()
@@ -581,6 +704,17 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             .cloned()
             .collect()
     };
+    if role == Role::Operator {
+        let b = lock(&shared.op_backlog);
+        backlog.extend(
+            b.scope
+                .iter()
+                .chain(b.alarms.iter())
+                .chain(b.faults.iter())
+                .chain(b.average.iter())
+                .cloned(),
+        );
+    }
     let mut alive = true;
     for text in backlog {
         if socket
@@ -593,7 +727,15 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
         }
     }
     while alive {
-        alive = serve_one(&mut socket, &shared, &mut rx, &mut stop, role).await;
+        alive = serve_one(
+            &mut socket,
+            &shared,
+            &mut rx,
+            op_rx.as_mut(),
+            &mut stop,
+            role,
+        )
+        .await;
     }
     {
         let mut s = lock(&shared.stats);
@@ -601,6 +743,7 @@ async fn client(mut socket: WebSocket, (shared, mut stop): AppState, role: Role)
             Role::Subject => {
                 s.connected -= 1;
                 s.disconnects += 1;
+                *lock(&shared.page) = PageState::fresh();
                 shared.subject_taken.store(false, Ordering::SeqCst);
             }
             Role::Operator => {
@@ -619,12 +762,25 @@ async fn serve_one(
     socket: &mut WebSocket,
     shared: &Shared,
     rx: &mut broadcast::Receiver<Arc<str>>,
+    op_rx: Option<&mut broadcast::Receiver<Arc<str>>>,
     stop: &mut watch::Receiver<bool>,
     role: Role,
 ) -> bool {
+    let operator_only = async {
+        match op_rx {
+            Some(r) => r.recv().await,
+            None => std::future::pending().await,
+        }
+    };
     tokio::select! {
         out = rx.recv() => match out {
             Ok(text) => socket.send(Message::Text(text.as_ref().into())).await.is_ok(),
+            Err(broadcast::error::RecvError::Lagged(_)) => true,
+            Err(broadcast::error::RecvError::Closed) => false,
+        },
+        out = operator_only => match out {
+            Ok(text) => socket.send(Message::Text(text.as_ref().into())).await.is_ok(),
+            // A view too slow for the signal skips some of it.
             Err(broadcast::error::RecvError::Lagged(_)) => true,
             Err(broadcast::error::RecvError::Closed) => false,
         },
@@ -675,11 +831,13 @@ fn handle(shared: &Shared, text: &str, role: Role) -> Option<ServerMsg> {
             server_ms: shared.clock.now_ms(),
         }),
         Ok(ClientMsg::On { id, code, on_ms }) => {
+            let hidden = lock(&shared.page).hidden;
             lock(&shared.drawn).push(DrawnReport::On {
                 id,
                 code,
                 on_ms,
                 received_ms: shared.clock.now_ms(),
+                hidden,
             });
             None
         }
@@ -697,6 +855,32 @@ fn handle(shared: &Shared, text: &str, role: Role) -> Option<ServerMsg> {
             let mut s = lock(&shared.stats);
             s.clock_offset_ms = Some(offset_ms);
             s.clock_rtt_ms = Some(rtt_ms);
+            None
+        }
+        Ok(ClientMsg::Frames {
+            max_gap_ms,
+            dropped,
+            multi_lit,
+            ..
+        }) => {
+            let mut p = lock(&shared.page);
+            p.frames_at = Instant::now();
+            p.last_max_gap_ms = max_gap_ms;
+            p.dropped = p.dropped.saturating_add(u64::from(dropped));
+            if dropped > 0 {
+                p.dropped_gap_ms = p.dropped_gap_ms.max(max_gap_ms);
+            }
+            p.multi_lit = p.multi_lit.saturating_add(u64::from(multi_lit));
+            None
+        }
+        Ok(ClientMsg::Visibility { hidden }) => {
+            let mut p = lock(&shared.page);
+            p.hidden = hidden;
+            // Back in view: its frames are judged afresh from now.
+            if !hidden {
+                p.frames_at = Instant::now();
+                p.last_max_gap_ms = 0.0;
+            }
             None
         }
         Ok(ClientMsg::Control { action }) => {
