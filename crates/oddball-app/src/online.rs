@@ -16,7 +16,7 @@ use oddball_live::online::{
     coincidence, decision_line, free_recording_path, is_recording_end, stop_reason, OnlineRun,
     OnlineSummary,
 };
-use oddball_live::panel::PanelConfig;
+use oddball_live::panel::{PanelConfig, ScopeRules};
 use oddball_live::plan::{PlanError, SessionPlan};
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
@@ -212,6 +212,10 @@ impl Online {
             }
             Err(e) => return Err(plan_error(e, plan)),
         }
+        // The operator's signal display judges channels by the session's own band and rules
+        // (a loaded model's, once started).
+        let pre = session.params().decoder.preprocess.clone();
+        session.subject_mut().set_scope_rules(ScopeRules::of(&pre));
         if let Some(m) = session.model() {
             report::write(&self.out.join("model.json"), m.to_json())?;
         }
@@ -280,6 +284,7 @@ impl Online {
                 },
                 source: source_name.clone(),
                 result: scores(&steps, &rule),
+                presentation: subject.presentation_faults(),
             },
             &steps,
             &subject.timing,

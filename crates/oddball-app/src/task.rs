@@ -186,6 +186,10 @@ impl TaskRun {
                 }
                 subject.attach_panel(p);
             }
+            let pre = session.params().decoder.preprocess.clone();
+            session
+                .subject_mut()
+                .set_scope_rules(oddball_live::panel::ScopeRules::of(&pre));
         }
         Ok(prep)
     }

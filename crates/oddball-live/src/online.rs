@@ -10,6 +10,7 @@ use oddball_session::SessionError;
 use serde::Serialize;
 
 use crate::live::{EegSource, FlashTiming, Summary};
+use crate::panel::PresentationFaults;
 use crate::source::AnySource;
 use crate::LiveError;
 
@@ -51,6 +52,9 @@ pub struct OnlineSummary<'a> {
     pub undrawn_flashes: usize,
     /// Page stamps refused as implausible (`live::plausible_stamp`); their flashes are undrawn.
     pub refused_stamps: usize,
+    /// What went wrong with what the person was shown (hidden or stalled subject view, late or
+    /// undrawn flashes, frame gaps, several bulbs lit), and how long calibration held for it.
+    pub presentation: PresentationFaults,
     pub decision_latency: Option<TimingRow>,
     pub recording: String,
     /// `--source replay:…`: how many flashes fell on the file's flashes.
@@ -66,6 +70,7 @@ pub struct OnlineRun<'a> {
     pub source: String,
     /// The decisions' scores ([`oddball_session::report::scores`] under the session's rule).
     pub result: Scores,
+    pub presentation: PresentationFaults,
 }
 
 impl<'a> OnlineSummary<'a> {
@@ -89,6 +94,7 @@ impl<'a> OnlineSummary<'a> {
             stamp_delay: Summary::of(&timing.report_delay_ms).map(Into::into),
             undrawn_flashes: timing.undrawn,
             refused_stamps: timing.refused_stamps,
+            presentation: run.presentation,
             decision_latency: Summary::of(latency_ms).map(Into::into),
             recording: recording.display().to_string(),
             replay,

@@ -130,6 +130,8 @@ pub struct TaskSummary<'a, T> {
     #[serde(flatten)]
     pub facts: SessionFacts<'a>,
     pub task: &'static str,
+    /// A live session's presentation faults (`null` for a replayed recording).
+    pub presentation: Option<crate::panel::PresentationFaults>,
     /// What a replayed recording's decisions mean ([`REPLAY_NOTE`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<&'static str>,
@@ -157,6 +159,10 @@ impl Prepared {
                 calibration: CalibrationSummary::from(&self.calibration),
             },
             task,
+            presentation: match &self.pilot {
+                AnyPilot::Live(s) => Some(s.subject().presentation_faults()),
+                AnyPilot::Replay(_) => None,
+            },
             note: matches!(self.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
             report,
         }

@@ -46,6 +46,11 @@ fn demo_task_and_online_write_one_summary_schema() {
         }
     }
     assert_eq!(task["task"], "draw");
+    // Live sessions count what went wrong with what the person was shown.
+    for (what, s) in [("task", &task), ("online", &online)] {
+        assert!(s["presentation"].is_object(), "{what}: {s}");
+        assert_eq!(s["presentation"]["undrawn_flashes"], 0, "{what}: {s}");
+    }
     for (what, s) in [("demo", &demo), ("online", &online)] {
         assert_eq!(s["result"]["decisions"], 2, "{what}: {s}");
         let keys = |r: &serde_json::Value| {
