@@ -154,6 +154,15 @@ impl Online {
             record_path.display()
         )?;
         subject.source_mut().start_now();
+        if let AnySource::Playback(p) = subject.source() {
+            if !p.holds_flashes() {
+                writeln!(
+                    out,
+                    "warning: {} is not an XDF recording: it holds no flash as drawn, so this session's own flashes fall on EEG with no response to them and its decisions mean nothing (a panel demonstration); replay a session's session.xdf to re-decide it",
+                    p.path().display()
+                )?;
+            }
+        }
         let mut session = plan.session(subject).map_err(|e| plan_error(e, plan))?;
         // The recorder writes every sample as it comes: the session keeps none (flat memory).
         session.discard_samples();
@@ -251,11 +260,30 @@ impl Online {
             };
             steps = run.steps;
         }
-        // decisions.csv as demo and task write it (one row per decision).
+        // decisions.csv, erp.png and pen_trace.png as demo writes them.
         report::write(
             &self.out.join("decisions.csv"),
             oddball_live::pilot::decisions_csv(&steps),
         )?;
+        if calibration.is_some() {
+            report::write_erp(&self.out, &session.calibration_epochs()?)?;
+        }
+        if let Some(session_arm) = session.arm() {
+            let pen_start = arm.pen();
+            let intended: Vec<_> = planned_path(
+                pen_start,
+                steps.iter().map(|s| s.intended),
+                session_arm.settings().step_m,
+            );
+            let (executed, missed) = report::executed_and_missed(session_arm, pen_start, &steps);
+            let paths = oddball_plot::arm::SessionPaths {
+                intended: &intended,
+                executed: &executed,
+                missed: &missed,
+                numbered: true,
+            };
+            report::write_pen_trace(&self.out, session_arm, &paths)?;
+        }
         if let Some(r) = session.channel_report() {
             writeln!(out, "{r}")?;
         }

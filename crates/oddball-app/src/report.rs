@@ -10,7 +10,7 @@ use oddball_live::pilot::{decisions_csv, Prepared};
 use oddball_plot::arm::SessionPaths;
 use oddball_session::decision::Decision;
 use oddball_session::report::{
-    accuracy_over_time, accuracy_over_time_text, executed_path, missed_decisions,
+    accuracy_over_time, accuracy_over_time_text, executed_path, missed_decisions, MissedDecision,
 };
 use oddball_session::tasks::Pilot;
 use serde::Serialize;
@@ -56,15 +56,49 @@ pub fn write_decisions_and_model(
 ) -> Result<Option<PathBuf>> {
     write(&out.join("decisions.csv"), decisions_csv(steps))?;
     write(&out.join("model.json"), model_json(prep)?)?;
-    if prep.erp.n_epochs() == 0 {
+    write_erp(out, &prep.erp)
+}
+
+/// erp.png of labelled calibration epochs (`None` and nothing drawn without any: an
+/// uncalibrated session, or one started from a model).
+pub fn write_erp(out: &Path, erp: &oddball_signal::Epochs) -> Result<Option<PathBuf>> {
+    if erp.n_epochs() == 0 {
         return Ok(None);
     }
     let erp_png = out.join("erp.png");
     drawn(
         &erp_png,
-        oddball_plot::task::draw_calibration_erp(&erp_png, &prep.erp),
+        oddball_plot::task::draw_calibration_erp(&erp_png, erp),
     )?;
     Ok(Some(erp_png))
+}
+
+/// Where the executed commands put the reference (from `pen_start`, by `steps`) and the
+/// decisions that did not move the pen as intended.
+pub fn executed_and_missed(
+    arm: &oddball_arm::ArmSim,
+    pen_start: Vector2<f64>,
+    steps: &[Decision],
+) -> (Vec<Vector2<f64>>, Vec<MissedDecision>) {
+    let step_m = arm.settings().step_m;
+    (
+        executed_path(pen_start, steps, step_m),
+        missed_decisions(pen_start, steps, step_m),
+    )
+}
+
+/// pen_trace.png: the arm at the start and the end, the pen trace over `paths`.
+pub fn write_pen_trace(
+    out: &Path,
+    arm: &oddball_arm::ArmSim,
+    paths: &SessionPaths<'_>,
+) -> Result<PathBuf> {
+    let pen_png = out.join("pen_trace.png");
+    drawn(
+        &pen_png,
+        oddball_plot::arm::draw_pen_trace(arm, paths, &pen_png),
+    )?;
+    Ok(pen_png)
 }
 
 /// Ends a live pilot's session and saves its raw EEG in `out` (`session.easy` for a NIC stream,
@@ -99,20 +133,14 @@ pub fn write_task_files(
         accuracy_over_time_text(&accuracy_over_time(steps, 10))
     )?;
     let arm = prep.pilot.arm();
-    let step_m = arm.settings().step_m;
-    let executed = executed_path(prep.pen_start, steps, step_m);
-    let missed = missed_decisions(prep.pen_start, steps, step_m);
+    let (executed, missed) = executed_and_missed(arm, prep.pen_start, steps);
     let paths = SessionPaths {
         intended,
         executed: &executed,
         missed: &missed,
         numbered: false,
     };
-    let pen_png = out.join("pen_trace.png");
-    drawn(
-        &pen_png,
-        oddball_plot::arm::draw_pen_trace(arm, &paths, &pen_png),
-    )?;
+    write_pen_trace(out, arm, &paths)?;
     if let Some(title) = task_title {
         let task_png = out.join("task.png");
         drawn(

@@ -24,8 +24,13 @@
 //!   `resume`, within [`CUE_AFTER_RESUME_S`]); a `pause` never resumed holds to the end of the
 //!   file.
 //!
-//! A recording whose flashes are not this session's is refused before the session decides on
-//! it: once [`JUDGED_AFTER`] flashes have been shown, fewer than half of the flashes shown so far
+//! Only an XDF recording (oddball's own format, and LSL's) holds the flashes as the page drew
+//! them; a recording in another format (a lab's `.dat`, `.csv`, `.edf`, `.mat`) plays as EEG
+//! under this session's own flashes, which it cannot hold responses to: decisions on it mean
+//! nothing, and the run says so ([`PlaybackSource::holds_flashes`]; a panel demonstration).
+//!
+//! An XDF recording whose flashes are not this session's is refused before the session decides
+//! on it: once [`JUDGED_AFTER`] flashes have been shown, fewer than half of the flashes shown so far
 //! matching a recorded flash is a [`LiveError::ReplayMismatch`] (another seed, other commands or
 //! another model's stopping, or a file oddball did not record, or one without flashes: its EEG
 //! holds no response where this session looks for one). A faithful recording passes unless most
@@ -139,6 +144,9 @@ pub struct PlaybackSource {
     /// Flashes of this session asked about, and those drawn at a recorded flash.
     asked: usize,
     found: usize,
+    /// Whether the file records flashes as drawn (XDF): they are matched, and a mismatch
+    /// refused.
+    holds_flashes: bool,
 }
 
 impl PlaybackSource {
@@ -146,6 +154,7 @@ impl PlaybackSource {
     pub fn open(path: impl AsRef<Path>, clock: Clock) -> Result<Self, LiveError> {
         let path = path.as_ref();
         let rec = oddball_io::read(path)?;
+        let holds_flashes = rec.xdf().is_some();
         let calibration = calibration_part(&rec);
         let holds = recorded_holds(&rec);
         let (data, sfreq, ch_names, events) = rec.raw.into_parts();
@@ -171,9 +180,23 @@ impl PlaybackSource {
             holds,
             asked: 0,
             found: 0,
+            holds_flashes,
             events: Vec::new(),
         }
         .with_events(events.into_vec()))
+    }
+
+    /// Whether the file records flashes as they were drawn (an XDF recording): each of this
+    /// session's flashes is then drawn where the recording drew it, and a recording of other
+    /// flashes is refused. Otherwise (another format) the session's own flashes are drawn on
+    /// EEG that holds no response to them.
+    pub fn holds_flashes(&self) -> bool {
+        self.holds_flashes
+    }
+
+    /// The file played back.
+    pub fn path(&self) -> &Path {
+        &self.path
     }
 
     /// `events` as the recording's flashes.
@@ -335,6 +358,9 @@ impl EegSource for PlaybackSource {
         self.start_ms = self.clock.now_ms() - self.position as f64 * 1e3 / self.sfreq;
     }
     fn recorded_flash(&mut self, planned: u64, code: u32) -> Result<Option<Drawn>, LiveError> {
+        if !self.holds_flashes {
+            return Ok(None);
+        }
         let window = (UNDRAWN_AFTER_MS * self.sfreq / 1e3).round() as u64;
         let onset = self.take_flash(planned, code, window);
         self.asked += 1;

@@ -208,6 +208,28 @@ fn a_recorded_session_replays_to_the_same_decisions_and_stops_at_the_end_of_the_
         "{err}"
     );
     assert!(decisions(&wrong).is_empty(), "{wrong}");
+    // A recording in another format holds no flash as drawn: it plays as EEG under this
+    // session's own flashes, and the run says its decisions mean nothing.
+    let csv = out.join("foreign.csv");
+    let (data, markers, sfreq) = oddball_testkit::synthetic_oddball(8, 5);
+    oddball_testkit::write_codes_csv(&csv, &data, &markers, sfreq);
+    let (_, said, _) = common::oddball(&[
+        "online",
+        "--calibrate",
+        "--calibration-per-bulb",
+        "2",
+        "--fast",
+        "--commands",
+        "up",
+        "--source",
+        &format!("replay:{}", csv.display()),
+        "--out",
+        out.join("foreign").to_str().unwrap(),
+    ]);
+    assert!(
+        said.contains("is not an XDF recording") && said.contains("mean nothing"),
+        "{said}"
+    );
     // Errors: --fast with a live stream, a file that is not there.
     let (ok, _, err) = common::oddball(&[
         "online",

@@ -1,6 +1,6 @@
 //! One schema for `summary.json` (issue #30): `demo`, `task` and `online` start their summaries
 //! with the same facts (command, subject, pipeline, seed, paradigm, calibration), and `demo`
-//! and `online` write the same result and decision rows.
+//! and `online` write the same result and decision rows, and the same files.
 
 mod common;
 
@@ -46,6 +46,12 @@ fn demo_task_and_online_write_one_summary_schema() {
         }
     }
     assert_eq!(task["task"], "draw");
+    // online writes the pictures demo writes.
+    for file in ["decisions.csv", "pen_trace.png", "erp.png", "model.json"] {
+        for what in ["demo", "online"] {
+            assert!(dir.join(what).join(file).is_file(), "{what}: {file}");
+        }
+    }
     // Live sessions count what went wrong with what the person was shown.
     for (what, s) in [("task", &task), ("online", &online)] {
         assert!(s["presentation"].is_object(), "{what}: {s}");
