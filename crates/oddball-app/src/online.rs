@@ -223,7 +223,7 @@ impl Online {
         }
         // The operator's signal display judges channels by the session's own band and rules
         // (a loaded model's, once started).
-        let pre = session.params().decoder.preprocess.clone();
+        let pre = session.params().decoder.preprocess;
         session.subject_mut().set_scope_rules(ScopeRules::of(&pre));
         if let Some(m) = session.model() {
             report::write(&self.out.join("model.json"), m.to_json())?;

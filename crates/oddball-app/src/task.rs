@@ -186,7 +186,7 @@ impl TaskRun {
                 }
                 subject.attach_panel(p);
             }
-            let pre = session.params().decoder.preprocess.clone();
+            let pre = session.params().decoder.preprocess;
             session
                 .subject_mut()
                 .set_scope_rules(oddball_live::panel::ScopeRules::of(&pre));
