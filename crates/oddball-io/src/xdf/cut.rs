@@ -24,8 +24,8 @@ use std::collections::BTreeMap;
 
 use crate::IoError;
 
+use super::acc::{Acc, Ctx};
 use super::chunk::{le_u32, varlen};
-use super::read::{Acc, Ctx};
 use super::types::*;
 
 /// How the samples of a chunk cut by the file's end lie in the bytes there are.

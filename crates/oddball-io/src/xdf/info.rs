@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::read::XdfStreamInfo;
+use super::types::XdfStreamInfo;
 
 /// One marker (a string sample or a marker-stream number).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

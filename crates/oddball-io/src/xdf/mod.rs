@@ -112,6 +112,7 @@
 //! (`read.rs`), telling a cut file from a corrupt one (`cut.rs`), what a recording keeps ([`XdfInfo`], `info.rs`) and making a
 //! [`Recording`](crate::Recording) (`recording.rs`: EEG stream, clocks, markers).
 
+mod acc;
 mod chunk;
 mod cut;
 mod info;
@@ -123,10 +124,11 @@ mod writer;
 mod xml;
 
 pub use info::{XdfInfo, XdfMarker};
-pub use read::{
-    parse_xdf_file, read_xdf_file, XdfFile, XdfFooter, XdfStreamData, XdfStreamInfo, XdfValues,
-};
+pub use read::{parse_xdf_file, read_xdf_file, XdfFile, XdfStreamData, XdfValues};
 pub use recording::{parse_xdf, parse_xdf_with, read_xdf, read_xdf_with, XdfOptions};
 pub(crate) use types::has_magic;
-pub use types::{XdfFormat, XdfStream, BOUNDARY_INTERVAL_S, BOUNDARY_UUID, MAGIC, MAX_CHANNELS};
+pub use types::{
+    XdfFooter, XdfFormat, XdfStream, XdfStreamInfo, BOUNDARY_INTERVAL_S, BOUNDARY_UUID, MAGIC,
+    MAX_CHANNELS,
+};
 pub use writer::{sample_timestamp, write_xdf, XdfWriteOptions, XdfWriteSummary, XdfWriter};

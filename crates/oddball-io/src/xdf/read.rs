@@ -4,56 +4,14 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
-use serde::{Deserialize, Serialize};
 
 use crate::files::read_file;
 use crate::IoError;
 
+use super::acc::{Acc, Ctx};
 use super::chunk::*;
 use super::cut::{check_cut_chunk, check_footer_count};
 use super::types::*;
-use super::xml::*;
-
-/// A StreamFooter's values.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct XdfFooter {
-    pub first_timestamp: Option<f64>,
-    pub last_timestamp: Option<f64>,
-    pub sample_count: Option<u64>,
-    /// The footer XML as written.
-    pub xml: String,
-}
-
-/// One stream's header and what was read of it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct XdfStreamInfo {
-    pub id: u32,
-    pub name: String,
-    pub stream_type: String,
-    pub channel_count: usize,
-    pub nominal_srate: f64,
-    pub format: XdfFormat,
-    pub source_id: String,
-    pub created_at: Option<f64>,
-    /// `desc/channels/channel/label`, `unit` and `type`, as many as the header has (empty text
-    /// where a channel lacks one).
-    pub channel_labels: Vec<String>,
-    pub channel_units: Vec<String>,
-    pub channel_types: Vec<String>,
-    /// The StreamHeader XML as written.
-    pub header_xml: String,
-    pub n_samples: usize,
-    pub n_sample_chunks: usize,
-    /// Timestamps of the first and last sample, as in the file.
-    pub first_timestamp: Option<f64>,
-    pub last_timestamp: Option<f64>,
-    /// `(collection time, offset value)` of each ClockOffset chunk.
-    pub clock_offsets: Vec<(f64, f64)>,
-    /// `(a, b)` of the clock correction `t + a + b·t` applied by `read_xdf` (when
-    /// synchronizing and the stream has clock offsets).
-    pub clock_fit: Option<(f64, f64)>,
-    pub footer: Option<XdfFooter>,
-}
 
 /// A stream's values.
 #[derive(Debug, Clone, PartialEq)]
@@ -103,58 +61,6 @@ impl XdfFile {
     /// The first stream with this name.
     pub fn stream_named(&self, name: &str) -> Option<&XdfStreamData> {
         self.streams.iter().find(|s| s.info.name == name)
-    }
-}
-
-pub(super) struct Acc {
-    pub(super) info: XdfStreamInfo,
-    timestamps: Vec<f64>,
-    numeric: Vec<f64>,
-    strings: Vec<Vec<String>>,
-    last_ts: f64,
-    tdiff: f64,
-    /// File offset of the StreamFooter's `sample_count` text, when it has one.
-    pub(super) footer_count_at: Option<usize>,
-}
-
-pub(super) struct Ctx<'a> {
-    path: &'a Path,
-}
-
-impl Ctx<'_> {
-    pub(super) fn invalid(
-        &self,
-        offset: usize,
-        field: impl Into<String>,
-        expected: impl Into<String>,
-        found: impl Into<String>,
-    ) -> IoError {
-        IoError::invalid_field(self.path, field, offset as u64, expected, found)
-    }
-}
-
-// The XML of StreamHeaders and StreamFooters.
-
-impl Ctx<'_> {
-    /// Parses XML `bytes` starting at file offset `base`.
-    pub(super) fn xml(
-        &self,
-        bytes: &[u8],
-        base: usize,
-        what: &str,
-    ) -> Result<(String, XmlNode), IoError> {
-        let text = std::str::from_utf8(bytes).map_err(|e| {
-            self.invalid(
-                base + e.valid_up_to(),
-                format!("{what} XML"),
-                "UTF-8 text",
-                format!("byte {:#04x}", bytes[e.valid_up_to()]),
-            )
-        })?;
-        let root = parse_xml(text).map_err(|e| {
-            self.invalid(base + e.offset, format!("{what} XML"), e.expected, e.found)
-        })?;
-        Ok((text.to_string(), root))
     }
 }
 

@@ -143,3 +143,44 @@ pub(crate) fn has_magic(path: &Path) -> bool {
         .map(|()| &head == MAGIC)
         .unwrap_or(false)
 }
+
+/// One stream's header and what was read of it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct XdfStreamInfo {
+    pub id: u32,
+    pub name: String,
+    pub stream_type: String,
+    pub channel_count: usize,
+    pub nominal_srate: f64,
+    pub format: XdfFormat,
+    pub source_id: String,
+    pub created_at: Option<f64>,
+    /// `desc/channels/channel/label`, `unit` and `type`, as many as the header has (empty text
+    /// where a channel lacks one).
+    pub channel_labels: Vec<String>,
+    pub channel_units: Vec<String>,
+    pub channel_types: Vec<String>,
+    /// The StreamHeader XML as written.
+    pub header_xml: String,
+    pub n_samples: usize,
+    pub n_sample_chunks: usize,
+    /// Timestamps of the first and last sample, as in the file.
+    pub first_timestamp: Option<f64>,
+    pub last_timestamp: Option<f64>,
+    /// `(collection time, offset value)` of each ClockOffset chunk.
+    pub clock_offsets: Vec<(f64, f64)>,
+    /// `(a, b)` of the clock correction `t + a + b·t` applied by `read_xdf` (when
+    /// synchronizing and the stream has clock offsets).
+    pub clock_fit: Option<(f64, f64)>,
+    pub footer: Option<XdfFooter>,
+}
+
+/// A StreamFooter's values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct XdfFooter {
+    pub first_timestamp: Option<f64>,
+    pub last_timestamp: Option<f64>,
+    pub sample_count: Option<u64>,
+    /// The footer XML as written.
+    pub xml: String,
+}
