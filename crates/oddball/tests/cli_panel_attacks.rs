@@ -11,7 +11,7 @@ mod common;
 use std::io::{BufReader, Read, Write};
 use std::net::TcpStream;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use tungstenite::client::IntoClientRequest;
 use tungstenite::Message;
@@ -27,7 +27,7 @@ fn split(url: &str) -> (String, String) {
     )
 }
 
-type Socket = tungstenite::WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>;
+use common::Socket;
 
 fn socket(url: &str, headers: &[(&str, &str)]) -> Result<Socket, tungstenite::Error> {
     let mut req = url.into_client_request().unwrap();
@@ -52,86 +52,6 @@ fn status(addr: &str, host: &str, path: &str) -> String {
     let mut out = String::new();
     let _ = s.read_to_string(&mut out);
     out.lines().next().unwrap_or("").to_string()
-}
-
-/// A subject page in a script: says hello, keeps the server's clock by ping/pong, and stamps
-/// every flash on and off at its scheduled times, until the session ends.
-fn scripted_page(ws: &mut Socket) {
-    let t0 = Instant::now();
-    let local = || t0.elapsed().as_secs_f64() * 1e3;
-    match ws.get_mut() {
-        tungstenite::stream::MaybeTlsStream::Plain(s) => {
-            s.set_read_timeout(Some(Duration::from_millis(2))).unwrap()
-        }
-        _ => unreachable!(),
-    }
-    let send = |ws: &mut Socket, v: serde_json::Value| {
-        ws.send(Message::text(v.to_string())).unwrap();
-    };
-    send(
-        ws,
-        serde_json::json!({"t": "ping", "id": 1, "page_ms": local()}),
-    );
-    send(
-        ws,
-        serde_json::json!({"t": "hello", "frame_ms": 16.7, "agent": "scripted page"}),
-    );
-    let mut offset = None; // server − local, ms
-    let mut pending: Vec<(u64, u32, f64, f64)> = Vec::new(); // id, code, at, off
-    let deadline = Instant::now() + Duration::from_secs(240);
-    while Instant::now() < deadline {
-        match ws.read() {
-            Ok(Message::Text(t)) => {
-                let m: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
-                match m["t"].as_str().unwrap_or("") {
-                    "pong" => offset = Some(m["server_ms"].as_f64().unwrap() - local()),
-                    "flash" => pending.push((
-                        m["id"].as_u64().unwrap(),
-                        m["code"].as_u64().unwrap() as u32,
-                        m["at_ms"].as_f64().unwrap(),
-                        m["at_ms"].as_f64().unwrap() + m["dur_ms"].as_f64().unwrap(),
-                    )),
-                    "cancel" => {
-                        let after = m["after_ms"].as_f64().unwrap();
-                        pending.retain(|p| p.2 < after);
-                    }
-                    "end" => return,
-                    _ => {}
-                }
-            }
-            Ok(Message::Close(_)) => return,
-            Ok(_) => {}
-            Err(tungstenite::Error::Io(e))
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) => {}
-            Err(_) => return,
-        }
-        let Some(off) = offset else { continue };
-        let now = local() + off;
-        let mut i = 0;
-        while i < pending.len() {
-            let (id, code, at, end) = pending[i];
-            if now >= at && end > 0.0 {
-                send(
-                    ws,
-                    serde_json::json!({"t": "on", "id": id, "code": code, "on_ms": at}),
-                );
-                pending[i].3 = -end; // on sent; off due at |end|
-            }
-            if pending[i].3 < 0.0 && now >= -pending[i].3 {
-                send(
-                    ws,
-                    serde_json::json!({"t": "off", "id": id, "off_ms": -pending[i].3}),
-                );
-                pending.remove(i);
-                continue;
-            }
-            i += 1;
-        }
-    }
-    panic!("the session did not end within 240 s");
 }
 
 /// Runs `oddball online --serve` with the scripted page; `attack` runs against the panel once
@@ -204,7 +124,7 @@ fn session(
             refused
         })
     });
-    scripted_page(&mut page);
+    common::scripted_page(&mut page, |_| 0.0);
     let mut rest = String::new();
     stdout.read_to_string(&mut rest).unwrap();
     let status = online.wait().unwrap();

@@ -6,14 +6,13 @@
 mod common;
 
 use std::io::{BufRead, BufReader};
-use std::net::TcpStream;
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use tungstenite::Message;
 
-type Socket = tungstenite::WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>;
+use common::Socket;
 
 /// `http://ADDR/PATH?key=K` → (`ADDR`, `?key=K`).
 fn split(url: &str) -> (String, String) {
@@ -33,74 +32,6 @@ fn socket(url: &str) -> Socket {
 /// How late the page draws flash `id`, ms (a frame to five frames, never a whole sample).
 fn late_ms(id: u64) -> f64 {
     [7.3, 24.9, 41.2, 58.6, 75.1][(id % 5) as usize]
-}
-
-/// The subject page: hello, the server's clock by ping/pong, every flash stamped on
-/// `late_ms` after its schedule and off 100 ms later, until the session ends.
-fn page(ws: &mut Socket) {
-    let t0 = Instant::now();
-    let local = || t0.elapsed().as_secs_f64() * 1e3;
-    match ws.get_mut() {
-        tungstenite::stream::MaybeTlsStream::Plain(s) => {
-            s.set_read_timeout(Some(Duration::from_millis(2))).unwrap()
-        }
-        _ => unreachable!(),
-    }
-    let send = |ws: &mut Socket, v: serde_json::Value| {
-        ws.send(Message::text(v.to_string())).unwrap();
-    };
-    send(
-        ws,
-        serde_json::json!({"t": "ping", "id": 1, "page_ms": local()}),
-    );
-    send(
-        ws,
-        serde_json::json!({"t": "hello", "frame_ms": 16.7, "agent": "scripted page"}),
-    );
-    let mut offset = None; // server − local, ms
-    let mut due: Vec<(f64, serde_json::Value)> = Vec::new();
-    let deadline = Instant::now() + Duration::from_secs(240);
-    while Instant::now() < deadline {
-        match ws.read() {
-            Ok(Message::Text(t)) => {
-                let m: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
-                match m["t"].as_str().unwrap_or("") {
-                    "pong" => offset = Some(m["server_ms"].as_f64().unwrap() - local()),
-                    "flash" => {
-                        let id = m["id"].as_u64().unwrap();
-                        let on = m["at_ms"].as_f64().unwrap() + late_ms(id);
-                        let code = m["code"].clone();
-                        due.push((
-                            on,
-                            serde_json::json!({"t": "on", "id": id, "code": code, "on_ms": on}),
-                        ));
-                        due.push((
-                            on + 100.0,
-                            serde_json::json!({"t": "off", "id": id, "off_ms": on + 100.0}),
-                        ));
-                    }
-                    "end" => return,
-                    _ => {}
-                }
-            }
-            Ok(Message::Close(_)) => return,
-            Ok(_) => {}
-            Err(tungstenite::Error::Io(e))
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
-                ) => {}
-            Err(_) => return,
-        }
-        let Some(off) = offset else { continue };
-        let now = local() + off;
-        due.sort_by(|a, b| a.0.total_cmp(&b.0));
-        while due.first().is_some_and(|d| d.0 <= now) {
-            let (_, m) = due.remove(0);
-            send(ws, m);
-        }
-    }
-    panic!("the session did not end within 240 s");
 }
 
 fn control(ws: &mut Socket, action: &str) {
@@ -147,7 +78,7 @@ fn a_paused_live_session_with_late_stamps_replays_to_the_same_decisions() {
     let (addr, key) = split(&subject);
     let (_, operator_key) = split(&operator);
     let mut page_ws = socket(&format!("ws://{addr}/ws{key}"));
-    let page = std::thread::spawn(move || page(&mut page_ws));
+    let page = std::thread::spawn(move || common::scripted_page(&mut page_ws, late_ms));
     // The operator pauses once the second decision is out, and resumes 1.5 s later.
     let (lines_tx, lines) = mpsc::channel::<String>();
     let reader = std::thread::spawn(move || {

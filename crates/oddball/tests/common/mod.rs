@@ -208,3 +208,86 @@ pub fn without_progress(stderr: &str) -> String {
         .map(|l| format!("{l}\n"))
         .collect()
 }
+
+/// A WebSocket to a session's panel.
+pub type Socket = tungstenite::WebSocket<tungstenite::stream::MaybeTlsStream<std::net::TcpStream>>;
+
+/// A subject page in a script: says hello, keeps the server's clock by ping/pong, and stamps
+/// every flash on `late_ms(id)` after its schedule and off its duration later (a `cancel`
+/// drops the flashes from its time on), until the session ends (at most 240 s).
+pub fn scripted_page(ws: &mut Socket, late_ms: impl Fn(u64) -> f64) {
+    use std::time::{Duration, Instant};
+    use tungstenite::Message;
+    let t0 = Instant::now();
+    let local = || t0.elapsed().as_secs_f64() * 1e3;
+    match ws.get_mut() {
+        tungstenite::stream::MaybeTlsStream::Plain(s) => {
+            s.set_read_timeout(Some(Duration::from_millis(2))).unwrap()
+        }
+        _ => unreachable!(),
+    }
+    let send = |ws: &mut Socket, v: serde_json::Value| {
+        ws.send(Message::text(v.to_string())).unwrap();
+    };
+    send(
+        ws,
+        serde_json::json!({"t": "ping", "id": 1, "page_ms": local()}),
+    );
+    send(
+        ws,
+        serde_json::json!({"t": "hello", "frame_ms": 16.7, "agent": "scripted page"}),
+    );
+    let mut offset = None; // server − local, ms
+                           // (send at, the flash's scheduled time, message), server ms.
+    let mut due: Vec<(f64, f64, serde_json::Value)> = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(240);
+    while Instant::now() < deadline {
+        match ws.read() {
+            Ok(Message::Text(t)) => {
+                let m: serde_json::Value = serde_json::from_str(t.as_str()).unwrap();
+                match m["t"].as_str().unwrap_or("") {
+                    "pong" => offset = Some(m["server_ms"].as_f64().unwrap() - local()),
+                    "flash" => {
+                        let id = m["id"].as_u64().unwrap();
+                        let at = m["at_ms"].as_f64().unwrap();
+                        let on = at + late_ms(id);
+                        let off = on + m["dur_ms"].as_f64().unwrap();
+                        let code = m["code"].clone();
+                        due.push((
+                            on,
+                            at,
+                            serde_json::json!({"t": "on", "id": id, "code": code, "on_ms": on}),
+                        ));
+                        due.push((
+                            off,
+                            at,
+                            serde_json::json!({"t": "off", "id": id, "off_ms": off}),
+                        ));
+                    }
+                    "cancel" => {
+                        let after = m["after_ms"].as_f64().unwrap();
+                        due.retain(|d| d.1 < after);
+                    }
+                    "end" => return,
+                    _ => {}
+                }
+            }
+            Ok(Message::Close(_)) => return,
+            Ok(_) => {}
+            Err(tungstenite::Error::Io(e))
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(_) => return,
+        }
+        let Some(off) = offset else { continue };
+        let now = local() + off;
+        due.sort_by(|a, b| a.0.total_cmp(&b.0));
+        while due.first().is_some_and(|d| d.0 <= now) {
+            let (_, _, m) = due.remove(0);
+            send(ws, m);
+        }
+    }
+    panic!("the session did not end within 240 s");
+}
