@@ -43,12 +43,9 @@ pub fn save_session(
 ) -> Result<Bci2000WriteSummary, SessionError> {
     let samples = log.samples.as_ref().ok_or(SessionError::NoSamples)?;
     let n = log.n_times;
-    let events: Vec<Event> = log
-        .flashes
-        .iter()
-        .filter(|f| (f.onset as usize) < n)
-        .map(|f| Event::new(f.onset as usize, f.code).with_target(f.attended))
-        .collect();
+    let events = flash_events(log, |f| {
+        Event::new(f.onset as usize, f.code).with_target(f.attended)
+    });
     let flash_samples = (paradigm.flash_s * log.sfreq).round() as usize;
     let mut states = stimulus_runs(&events, n, flash_samples);
     let mut trial_no = Vec::new();
@@ -97,6 +94,15 @@ pub fn save_session(
         &states,
         &options,
     )?)
+}
+
+/// The log's flashes within its samples, each as `event` makes it.
+fn flash_events(log: &SessionLog, event: impl Fn(&ShownFlash) -> Event) -> Vec<Event> {
+    log.flashes
+        .iter()
+        .filter(|f| (f.onset as usize) < log.n_times)
+        .map(event)
+        .collect()
 }
 
 /// Appends the run `value` over `[start, end)`; a run before it that reaches past `start` is
@@ -482,18 +488,12 @@ pub fn save_session_easy(
     start_ms: u64,
 ) -> Result<oddball_io::EasyWriteSummary, SessionError> {
     let samples = log.samples.as_ref().ok_or(SessionError::NoSamples)?;
-    let n = log.n_times;
-    let events: Vec<Event> = log
-        .flashes
-        .iter()
-        .filter(|f| (f.onset as usize) < n)
-        .map(|f| {
-            Event::new(
-                f.onset as usize,
-                f.code + if f.attended { EASY_ATTENDED_OFFSET } else { 0 },
-            )
-        })
-        .collect();
+    let events = flash_events(log, |f| {
+        Event::new(
+            f.onset as usize,
+            f.code + if f.attended { EASY_ATTENDED_OFFSET } else { 0 },
+        )
+    });
     let mut extra = vec![
         (EASY_PARADIGM.to_string(), "four-bulb".to_string()),
         (
