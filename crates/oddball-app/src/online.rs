@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use oddball_arm::{planned_path, Command};
 use oddball_live::clock::Clock;
-use oddball_live::live::{EegSource, LiveSubject, MarkerSink, Summary};
+use oddball_live::live::{EegSource, LiveSubject, MarkerSink};
 use oddball_live::online::{
     coincidence, decision_line, free_recording_path, is_recording_end, stop_reason, OnlineRun,
     OnlineSummary,
@@ -20,6 +20,7 @@ use oddball_live::panel::{PanelConfig, ScopeRules};
 use oddball_live::plan::{PlanError, SessionPlan};
 use oddball_live::record::Recorder;
 use oddball_live::source::{AnySource, SourceSpec};
+use oddball_live::timing::Summary;
 use oddball_session::decision::CalibrationReport;
 use oddball_session::decoder::Start;
 use oddball_session::report::{scores, SessionFacts};

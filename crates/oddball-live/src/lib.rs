@@ -26,7 +26,7 @@
 //! # Example
 //! The timing report's summary of a list of delays (population standard deviation):
 //! ```
-//! use oddball_live::live::Summary;
+//! use oddball_live::timing::Summary;
 //!
 //! let s = Summary::of(&[1.0, 2.0, 3.0, 6.0]).unwrap();
 //! assert_eq!((s.n, s.mean, s.min, s.max), (4, 3.0, 1.0, 6.0));
@@ -51,7 +51,9 @@ pub mod pilot;
 pub mod plan;
 pub mod playback;
 pub mod record;
+pub mod sim;
 pub mod source;
 pub mod stop;
+pub mod timing;
 
 pub use error::LiveError;

@@ -47,7 +47,7 @@
 //! session's epoch rules ([`LiveSubject::set_scope_rules`]; the online default otherwise),
 //! and after each trial the average epoch of the cued (or decided) bulb against the others'.
 
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use ndarray::Array2;
 use oddball_arm::ArmSim;
@@ -56,9 +56,9 @@ use oddball_session::decision::{Phase, TrialOutcome, TrialRecord};
 use oddball_session::online::ChannelFaults;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::roles::{Drawn, EegStream, Observer, Presenter};
-use oddball_session::{SessionError, SimulatedSubject};
+use oddball_session::SessionError;
 
-use crate::clock::{Clock, Pacer};
+use crate::clock::Clock;
 use crate::panel::monitor::LATE_AFTER_MS;
 pub use crate::panel::protocol::UNDRAWN_AFTER_MS;
 use crate::panel::{
@@ -66,6 +66,7 @@ use crate::panel::{
     ScopeRules, ServerMsg,
 };
 use crate::record::Recorder;
+use crate::timing::{plausible_stamp, FlashTiming, Summary};
 use crate::LiveError;
 
 /// How far ahead flashes are announced to the page, seconds.
@@ -120,75 +121,6 @@ pub trait MarkerSink: Send {
     fn marker(&mut self, text: &str, ms: f64);
 }
 
-/// The simulated subject as a live source, paced by the wall clock: sample `i` is acquired at
-/// `start_ms + i / sfreq` and delivered `latency_ms` later (an amplifier's buffering), which is
-/// what lets a flash stamped by the page reach the simulated brain before its samples render.
-#[derive(Debug)]
-pub struct SimSource {
-    sim: SimulatedSubject,
-    pacer: Pacer,
-    latency_ms: f64,
-    /// Samples that arrived too late to carry their flash's response.
-    pub late_flashes: u64,
-}
-
-impl SimSource {
-    pub fn new(sim: SimulatedSubject, clock: Clock, latency_ms: f64) -> Self {
-        Self {
-            pacer: Pacer::new(clock, sim.sfreq(), true),
-            sim,
-            latency_ms,
-            late_flashes: 0,
-        }
-    }
-
-    /// From now on paced by the wall clock, the next sample acquired now (after an unpaced
-    /// calibration, say).
-    pub fn pace_from_now(&mut self, latency_ms: f64) {
-        self.pacer.paced = true;
-        self.latency_ms = latency_ms;
-        self.pacer.restart_at(self.sim.position());
-    }
-
-    /// As fast as it can (tests, and replaying a session's timing without waiting).
-    pub fn unpaced(sim: SimulatedSubject, clock: Clock) -> Self {
-        let mut s = Self::new(sim, clock, 0.0);
-        s.pacer.paced = false;
-        s
-    }
-}
-
-impl EegSource for SimSource {
-    fn sfreq(&self) -> f64 {
-        self.sim.sfreq()
-    }
-    fn ch_names(&self) -> &[String] {
-        self.sim.ch_names()
-    }
-    fn wait(&mut self, n: usize) -> Result<(), LiveError> {
-        self.pacer
-            .wait_for(self.sim.position() + n as u64, self.latency_ms);
-        Ok(())
-    }
-    fn take(&mut self, n: usize) -> Result<Array2<f64>, LiveError> {
-        Ok(self.sim.render(n))
-    }
-    fn time_of(&self, sample: u64) -> f64 {
-        self.pacer.time_of(sample)
-    }
-    fn start_now(&mut self) {
-        if self.pacer.paced {
-            self.pace_from_now(self.latency_ms);
-        }
-    }
-    fn saw(&mut self, onset: u64, _code: u32, attended: bool) -> Result<(), LiveError> {
-        if onset < self.sim.position() || self.sim.flash(onset, attended).is_err() {
-            self.late_flashes += 1;
-        }
-        Ok(())
-    }
-}
-
 /// How flash onsets are known.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stamping {
@@ -205,83 +137,6 @@ struct Announced {
     code: u32,
     attended: bool,
     at_ms: f64,
-}
-
-/// Flash timing as measured: on-times and onset errors (ms), and the flashes lost.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FlashTiming {
-    pub on_ms: Vec<f64>,
-    /// Drawn onset − planned onset.
-    pub onset_error_ms: Vec<f64>,
-    /// Stamp arrival − drawn onset (page → server delay of the on report).
-    pub report_delay_ms: Vec<f64>,
-    pub undrawn: usize,
-    /// Stamps that came after their flash had been declared undrawn.
-    pub late_stamps: usize,
-    /// Stamps refused as implausible ([`plausible_stamp`]): their flash counts as undrawn.
-    pub refused_stamps: usize,
-}
-
-/// Whether a page's stamp `on_ms` for a flash scheduled at `at_ms` (both session-clock ms) is
-/// plausible: within [`UNDRAWN_AFTER_MS`] either side of the schedule. A page draws a flash at
-/// the frame nearest its time; a stamp far off it (a clock gone wrong, a hostile client: `0`,
-/// `1e15`) would move the flash's epoch before the buffered EEG or into a future that never
-/// comes. One home for the rule: every stamp passes here before it reaches the engine.
-pub fn plausible_stamp(at_ms: f64, on_ms: f64) -> bool {
-    (on_ms - at_ms).abs() <= UNDRAWN_AFTER_MS
-}
-
-/// Summary statistics of a list of numbers.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Summary {
-    pub n: usize,
-    pub mean: f64,
-    pub sd: f64,
-    pub min: f64,
-    pub max: f64,
-}
-
-impl Summary {
-    pub fn of(x: &[f64]) -> Option<Self> {
-        if x.is_empty() {
-            return None;
-        }
-        let n = x.len() as f64;
-        let mean = x.iter().sum::<f64>() / n;
-        let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
-        Some(Self {
-            n: x.len(),
-            mean,
-            sd,
-            min: x.iter().copied().fold(f64::INFINITY, f64::min),
-            max: x.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        })
-    }
-}
-
-impl std::fmt::Display for Summary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "{:.2} ± {:.2} ms [{:.2}, {:.2}], n = {}",
-            self.mean, self.sd, self.min, self.max, self.n
-        )
-    }
-}
-
-impl FlashTiming {
-    pub fn report(&self) -> String {
-        let s = |x: &[f64]| Summary::of(x).map_or("–".to_string(), |s| s.to_string());
-        format!(
-            "flash on-time {}\nonset − schedule {}\nstamp delay {}\nundrawn {}, late stamps {}, refused stamps {}",
-            s(&self.on_ms),
-            s(&self.onset_error_ms),
-            s(&self.report_delay_ms),
-            self.undrawn,
-            self.late_stamps,
-            self.refused_stamps
-        )
-    }
 }
 
 /// The live subject: all three of the engine's roles (`oddball_session::roles`).
@@ -976,28 +831,5 @@ impl<S: EegSource> LiveSubject<S> {
             self.marker(text, self.source.time_of(self.position))?;
         }
         Ok(held)
-    }
-}
-
-/// Waits for a page for at most `timeout`, printing nothing: `true` when one is connected.
-pub fn wait_for_page(panel: &PanelServer, timeout: Duration) -> bool {
-    panel.wait_for_page(timeout)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Issue #19, defects 1 and 2: the stamps `on_ms: 0` and `1e15` are refused; a frame
-    /// or two off the schedule is not.
-    #[test]
-    fn implausible_stamps_are_refused() {
-        let at = 12_345.0;
-        for on in [at, at - 16.7, at + 33.4, at + UNDRAWN_AFTER_MS] {
-            assert!(plausible_stamp(at, on), "{on}");
-        }
-        for on in [0.0, 1e15, -1e15, at + UNDRAWN_AFTER_MS + 1.0, f64::NAN] {
-            assert!(!plausible_stamp(at, on), "{on}");
-        }
     }
 }

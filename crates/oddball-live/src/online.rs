@@ -9,9 +9,10 @@ use oddball_session::report::{numbered, Row, Scores, SessionFacts};
 use oddball_session::SessionError;
 use serde::Serialize;
 
-use crate::live::{EegSource, FlashTiming, Summary};
+use crate::live::EegSource;
 use crate::panel::PresentationFaults;
 use crate::source::AnySource;
+use crate::timing::{FlashTiming, Summary};
 use crate::LiveError;
 
 /// A [`Summary`] of delays with its unit in the field names (ms).
@@ -50,7 +51,7 @@ pub struct OnlineSummary<'a> {
     pub flash_onset_error: Option<TimingRow>,
     pub stamp_delay: Option<TimingRow>,
     pub undrawn_flashes: usize,
-    /// Page stamps refused as implausible (`live::plausible_stamp`); their flashes are undrawn.
+    /// Page stamps refused as implausible (`timing::plausible_stamp`); their flashes are undrawn.
     pub refused_stamps: usize,
     /// What went wrong with what the person was shown (hidden or stalled subject view, late or
     /// undrawn flashes, frame gaps, several bulbs lit), and how long calibration held for it.

@@ -12,9 +12,10 @@ use oddball_io::nic::NicFormat;
 use oddball_session::SimulatedSubject;
 
 use crate::clock::Clock;
-use crate::live::{EegSource, MarkerSink, SimSource};
+use crate::live::{EegSource, MarkerSink};
 use crate::nic::{NicSource, Reconnect};
 use crate::playback::PlaybackSource;
+use crate::sim::SimSource;
 use crate::LiveError;
 
 /// Where a session's EEG comes from.

@@ -4,9 +4,10 @@
 
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_live::clock::Clock;
-use oddball_live::live::{LiveSubject, SimSource};
+use oddball_live::live::LiveSubject;
 use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
+use oddball_live::sim::SimSource;
 use oddball_live::LiveError;
 use oddball_session::decoder::Preset;
 use oddball_session::engine::{Session, SessionParams};

@@ -514,7 +514,8 @@ fn next_msgs(
 /// undrawn flash adds no evidence and the decision abstains).
 #[test]
 fn a_hidden_subject_view_holds_a_calibration_and_its_stamps_are_void() {
-    use oddball_live::live::{LiveSubject, SimSource};
+    use oddball_live::live::LiveSubject;
+    use oddball_live::sim::SimSource;
     use oddball_session::decision::Phase;
     use oddball_session::paradigm::FourBulbParams;
     use oddball_session::roles::{EegStream, Presenter};

@@ -12,10 +12,11 @@ use std::time::{Duration, Instant};
 
 use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_live::clock::Clock;
-use oddball_live::live::{EegSource, LiveSubject, SimSource};
+use oddball_live::live::{EegSource, LiveSubject};
 use oddball_live::panel::{PanelConfig, PanelServer};
 use oddball_live::playback::PlaybackSource;
 use oddball_live::record::Recorder;
+use oddball_live::sim::SimSource;
 use oddball_live::LiveError;
 use oddball_session::decision::TrialRecord;
 use oddball_session::decoder::{Preset, Start};
