@@ -298,7 +298,6 @@ impl Online {
             (SourceSpec::Sim, Some(preset)) => preset.to_string(),
             _ => source_name.clone(),
         };
-        let (_, rule) = settings.rules()?;
         let summary = OnlineSummary::new(
             OnlineRun {
                 facts: SessionFacts {
@@ -312,7 +311,7 @@ impl Online {
                         .map_or_else(|| (&CalibrationReport::none()).into(), Into::into),
                 },
                 source: source_name.clone(),
-                result: scores(&steps, &rule),
+                result: scores(&steps, &plan.params.decoder.rule),
                 presentation: subject.presentation_faults(),
             },
             &steps,
