@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use oddball_io::events::{describe_events, LabelError};
 use oddball_io::manifest::SpellerSpec;
-use oddball_io::{CodeOrder, EventMapping, IoError, ReadOptions, Recording, Speller};
+use oddball_io::{EventMapping, IoError, ReadOptions, Recording, Speller};
 use oddball_signal::SignalError;
 use thiserror::Error;
 
@@ -95,28 +95,9 @@ pub struct Labelling<'a> {
     pub read: Option<&'a ReadOptions>,
 }
 
-/// The [`Speller`] of a manifest's geometry: its codes must be the rows then the columns, or the
-/// columns then the rows, numbered from 1 (the two layouts BCI2000 and the BCI Competitions use).
+/// The [`Speller`] of a manifest's geometry ([`SpellerSpec::speller`]).
 pub fn speller_of(spec: &SpellerSpec) -> Result<Speller, String> {
-    let mut speller = Speller::from_rows(&spec.matrix)
-        .ok_or_else(|| "the matrix has no symbols or rows of different lengths".to_string())?;
-    let (n_rows, n_cols) = (spec.rows.len() as u32, spec.columns.len() as u32);
-    let seq = |from: u32, n: u32| (from..from + n).collect::<Vec<u32>>();
-    if spec.rows == seq(1, n_rows) && spec.columns == seq(n_rows + 1, n_cols) {
-        speller.code_order = CodeOrder::RowsFirst;
-    } else if spec.columns == seq(1, n_cols) && spec.rows == seq(n_cols + 1, n_rows) {
-        speller.code_order = CodeOrder::ColumnsFirst;
-    } else {
-        return Err(format!(
-            "rows {:?} and columns {:?}: the codes must be 1..{} for the rows then the columns, \
-             or for the columns then the rows",
-            spec.rows,
-            spec.columns,
-            n_rows + n_cols
-        ));
-    }
-    speller.flashes_per_character = spec.flashes_per_character();
-    Ok(speller)
+    spec.speller()
 }
 
 /// Reads a recording with `options` and applies `mapping`, if any: its events may stay
@@ -266,6 +247,7 @@ pub fn load_epochs<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use oddball_io::CodeOrder;
 
     fn spec(rows: &[u32], columns: &[u32]) -> SpellerSpec {
         SpellerSpec {

@@ -50,6 +50,7 @@ pub mod manifest;
 pub mod mat;
 pub mod montage;
 pub mod nic;
+pub mod paradigm;
 pub mod read_options;
 mod recording;
 pub mod samples;
@@ -81,6 +82,7 @@ pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,
 };
+pub use paradigm::{MarkerKind, Paradigm, ParadigmError};
 pub use read_options::{read_with, ReadOptions};
 pub use recording::{Details, Format, Recording};
 pub use samples::{SampleBlocks, SampleSpill, SpilledSamples};

@@ -60,7 +60,33 @@ impl SpellerSpec {
             .map(|r| r * (self.rows.len() + self.columns.len()))
     }
 
-    fn validate(&self) -> Result<(), String> {
+    /// The [`crate::Speller`] of this geometry: its codes must be the rows then the columns, or
+    /// the columns then the rows, numbered from 1 (the two layouts BCI2000 and the BCI
+    /// Competitions use).
+    pub fn speller(&self) -> Result<crate::Speller, String> {
+        use crate::CodeOrder;
+        let mut speller = crate::Speller::from_rows(&self.matrix)
+            .ok_or_else(|| "the matrix has no symbols or rows of different lengths".to_string())?;
+        let (n_rows, n_cols) = (self.rows.len() as u32, self.columns.len() as u32);
+        let seq = |from: u32, n: u32| (from..from + n).collect::<Vec<u32>>();
+        if self.rows == seq(1, n_rows) && self.columns == seq(n_rows + 1, n_cols) {
+            speller.code_order = CodeOrder::RowsFirst;
+        } else if self.columns == seq(1, n_cols) && self.rows == seq(n_cols + 1, n_rows) {
+            speller.code_order = CodeOrder::ColumnsFirst;
+        } else {
+            return Err(format!(
+                "rows {:?} and columns {:?}: the codes must be 1..{} for the rows then the \
+                 columns, or for the columns then the rows",
+                self.rows,
+                self.columns,
+                n_rows + n_cols
+            ));
+        }
+        speller.flashes_per_character = self.flashes_per_character();
+        Ok(speller)
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), String> {
         let n_rows = self.matrix.len();
         if n_rows == 0 {
             return Err("speller.matrix has no rows".into());

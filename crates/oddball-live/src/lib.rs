@@ -8,6 +8,8 @@
 //!   the recording on one clock; the simulated subject as a live source.
 //! * [`clock`]: the session clock (ms) the panel, the sources and the recording share, and the
 //!   one [`clock::Pacer`] that paces simulated and played-back EEG by it.
+//! * [`decode`]: `oddball decode`, the online decoder behind another program's stimuli: EEG
+//!   from any source, the program's markers over LSL, decisions out as JSON.
 //! * [`source`]: every live source behind one type, as `--source` names it
 //!   (`sim`, `nic:HOST:PORT`, `lsl:NAME`, `replay:FILE`).
 //! * [`nic`]: Neuroelectrics NIC's TCP stream as a live source (reconnecting), and a simulated
@@ -35,6 +37,7 @@
 //! ```
 
 pub mod clock;
+pub mod decode;
 mod error;
 pub mod listen;
 pub mod live;

@@ -163,6 +163,32 @@ impl UncalibratedParams {
     }
 }
 
+/// Where `model`'s channels are among `ch_names` (matched by name, case aside; the stream may
+/// have more, in any order), refusing a model of another rate.
+pub(crate) fn model_channels(
+    model: &Model,
+    ch_names: &[String],
+    sfreq: f64,
+) -> Result<Vec<usize>, SessionError> {
+    if (sfreq - model.sfreq).abs() > 1e-9 * model.sfreq {
+        return Err(SessionError::ModelRate {
+            model_sfreq: model.sfreq,
+            stream_sfreq: sfreq,
+        });
+    }
+    model
+        .channel_order(ch_names, sfreq)
+        .map_err(|_| SessionError::ModelChannels {
+            missing: model
+                .ch_names
+                .iter()
+                .filter(|w| !ch_names.iter().any(|h| h.eq_ignore_ascii_case(w)))
+                .cloned()
+                .collect(),
+            have: ch_names.to_vec(),
+        })
+}
+
 /// The decoder a session decides with once started.
 #[derive(Debug)]
 pub(crate) enum OnlineDecoder {
@@ -219,18 +245,20 @@ impl Unlabelled {
     /// scores of the session's epochs start the EM, which from then on follows its own last fit
     /// only (no random initialisations), so the session adapts the transferred model instead of
     /// searching from scratch.
+    ///
+    /// `constraint` says which codes compete in a trial (the panel's bulbs: one of them; a
+    /// speller: one row and one column).
     pub(crate) fn new(
         params: UncalibratedParams,
         transfer: Option<Model>,
-        n_bulbs: usize,
+        constraint: Constraint,
         preprocess: &Preprocess,
         sfreq: f64,
     ) -> Result<Self, SessionError> {
         params.check()?;
-        let codes: Vec<u32> = (1..=n_bulbs as u32).collect();
         Ok(Self {
             params,
-            constraint: Constraint::one_of(&codes)?,
+            constraint,
             rows: Vec::new(),
             codes: Vec::new(),
             trials: Vec::new(),
@@ -243,6 +271,11 @@ impl Unlabelled {
 }
 
 impl Unlabelled {
+    /// A decision whose best choice has a smaller posterior abstains.
+    pub(crate) fn abstain_below(&self) -> f64 {
+        self.params.abstain_below
+    }
+
     /// Drops the epochs of all but the last `max_trials` trials (trials arrive in order).
     fn keep_last_trials(&mut self) {
         let mut seen = 0;
@@ -420,19 +453,48 @@ impl OnlineDecoder {
         Ok(())
     }
 
-    /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it.
+    /// Refits the unsupervised decoder on every online epoch so far and decides `trial` with it
+    /// (the panel's bulbs: the first constraint set).
     pub(crate) fn decide_unlabelled(&mut self, trial: usize) -> Result<Verdict, SessionError> {
         let Self::Unlabelled(u) = self else {
             return Err(SessionError::NotCalibrated);
         };
+        let abstain_below = u.params.abstain_below;
         let n_stimuli = u.constraint.sets()[0].len();
-        let none = |p: Vec<f64>| Verdict::Abstain {
-            posterior: Posterior { p, p_none: 0.0 },
+        let Some(sets) = self.refit_unlabelled(trial)? else {
+            return Ok(Verdict::Abstain {
+                posterior: Posterior {
+                    p: vec![1.0 / n_stimuli as f64; n_stimuli],
+                    p_none: 0.0,
+                },
+            });
         };
-        let uniform = vec![1.0 / n_stimuli as f64; n_stimuli];
+        let posterior = Posterior {
+            p: sets[0].clone(),
+            p_none: 0.0,
+        };
+        let (index, best) = posterior.best();
+        Ok(if best >= abstain_below {
+            Verdict::Choose { index, posterior }
+        } else {
+            Verdict::Abstain { posterior }
+        })
+    }
+
+    /// Refits the unsupervised decoder on every online epoch so far (the last `max_trials`
+    /// trials) and returns `trial`'s posterior over each constraint set, in the sets' code
+    /// order; `None` when there is nothing to decide from yet (too few epochs, none of this
+    /// trial, or a fit that cannot separate anything).
+    pub(crate) fn refit_unlabelled(
+        &mut self,
+        trial: usize,
+    ) -> Result<Option<Vec<Vec<f64>>>, SessionError> {
+        let Self::Unlabelled(u) = self else {
+            return Err(SessionError::NotCalibrated);
+        };
         // Two epochs at least, and some from this trial, or there is nothing to decide from.
         if u.codes.len() < 2 || u.trials.last() != Some(&trial) {
-            return Ok(none(uniform));
+            return Ok(None);
         }
         u.keep_last_trials();
         let n = u.codes.len();
@@ -467,22 +529,16 @@ impl OnlineDecoder {
             Ok(m) => m,
             // Too little data to separate anything yet: keep the arm still.
             Err(UnsupervisedError::Degenerate { .. })
-            | Err(UnsupervisedError::NotPositiveDefinite { .. }) => return Ok(none(uniform)),
+            | Err(UnsupervisedError::NotPositiveDefinite { .. }) => return Ok(None),
             Err(e) => return Err(e.into()),
         };
-        let p = fitted
+        let sets = fitted
             .averaged_trials()
             .iter()
             .find(|t| t.trial == trial)
-            .map_or(uniform, |t| t.sets[0].clone());
+            .map(|t| t.sets.clone());
         u.model = Some(fitted);
-        let posterior = Posterior { p, p_none: 0.0 };
-        let (index, best) = posterior.best();
-        Ok(if best >= u.params.abstain_below {
-            Verdict::Choose { index, posterior }
-        } else {
-            Verdict::Abstain { posterior }
-        })
+        Ok(sets)
     }
 }
 
@@ -494,7 +550,8 @@ mod tests {
     fn an_uncalibrated_decoder_keeps_the_last_max_trials_trials() {
         let mut params = UncalibratedParams::for_sfreq(500.0).unwrap();
         params.max_trials = 3;
-        let mut u = Unlabelled::new(params, None, 4, &Preprocess::online(), 500.0).unwrap();
+        let four = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+        let mut u = Unlabelled::new(params, None, four, &Preprocess::online(), 500.0).unwrap();
         // Trials 0..6, each with 2 + trial epochs of 3 features.
         for trial in 0..6usize {
             for k in 0..2 + trial {

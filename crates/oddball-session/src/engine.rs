@@ -266,7 +266,9 @@ impl<S: Subject> Session<S> {
                 self.decoder = OnlineDecoder::Unlabelled(Box::new(Unlabelled::new(
                     params,
                     transfer,
-                    self.params.paradigm.bulbs.len(),
+                    oddball_decode::unsupervised::Constraint::one_of(
+                        &(1..=self.params.paradigm.bulbs.len() as u32).collect::<Vec<_>>(),
+                    )?,
                     &self.params.decoder.preprocess,
                     self.subject.sfreq(),
                 )?));
@@ -366,24 +368,7 @@ impl<S: Subject> Session<S> {
                 pipeline: model.pipeline.name().to_string(),
             });
         }
-        let sfreq = self.subject.sfreq();
-        if (sfreq - model.sfreq).abs() > 1e-9 * model.sfreq {
-            return Err(SessionError::ModelRate {
-                model_sfreq: model.sfreq,
-                stream_sfreq: sfreq,
-            });
-        }
-        let order = model.channel_order(&self.ch_names, sfreq).map_err(|_| {
-            SessionError::ModelChannels {
-                missing: model
-                    .ch_names
-                    .iter()
-                    .filter(|w| !self.ch_names.iter().any(|h| h.eq_ignore_ascii_case(w)))
-                    .cloned()
-                    .collect(),
-                have: self.ch_names.clone(),
-            }
-        })?;
+        let order = crate::decoder::model_channels(&model, &self.ch_names, self.subject.sfreq())?;
         let taken = self.n_times;
         if taken > 0 {
             return Err(SessionError::TooLate {

@@ -19,6 +19,8 @@
 //!   cross-validated scores.
 //! * [`decoder`]: how a session starts ([`decoder::Start`]) and the decoder it then decides
 //!   with (calibrated, adapting, given, or unsupervised).
+//! * [`listener`]: another program's session decoded: its markers read by a paradigm file,
+//!   epochs cut at their times, a decision per trial (and a stop when sure).
 //! * [`engine`]: the session loop: calibration trials, online decisions driving the arm.
 //! * [`replay`] and [`record`]: speller recordings replayed as four-choice decisions; session
 //!   files saved, read and re-decided.
@@ -44,6 +46,7 @@ pub mod decoder;
 pub mod engine;
 mod error;
 mod fit;
+pub mod listener;
 pub mod online;
 pub mod paradigm;
 pub mod record;

@@ -1,320 +1,199 @@
-//! `oddball train` and `oddball evaluate`: the arguments, the progress bars, the files, and
-//! printing. The fitting, cross-validation, tuning and scoring are `oddball_eval::evaluate`'s
-//! (and its `unsupervised` and `sessions`), the text printed is `oddball_eval::text`'s.
+//! `oddball decode`: the flags mapped to an `oddball_live::decode::DecodePlan`, its JSON lines
+//! written, its summary printed.
 
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use crate::progress::{bar, Bar};
-use oddball_decode::pipeline::{Model, Preprocess};
-use oddball_eval::evaluate::{self, EvaluateParams, PipelineResult, Progress, TrainingSet};
-use oddball_eval::text::{self, Narration};
-use oddball_eval::{dataset, sessions, unsupervised};
-use oddball_io::ReadOptions;
-use oddball_session::record::is_session;
-
-use crate::load::{load_epochs, load_model, EventArgs, Layout};
-use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
+use oddball_decode::decision::{DecisionRule, MAX_ROUNDS};
+use oddball_decode::pipeline::Preprocess;
 use oddball_decode::preset::Preset;
+use oddball_io::nic::{NicFormat, NicMode};
+use oddball_io::Paradigm;
+use oddball_live::decode::{self, DecodePlan, MarkerSpec};
+use oddball_live::source::SourceSpec;
+use oddball_session::decoder::DecoderParams;
+use oddball_session::listener::{ListenerParams, ListenerStart};
 
-#[derive(Debug, clap::Args)]
-pub struct TrainArgs {
-    #[arg(
-        required = true,
-        help = concat!("Training recordings (targets flagged): ", crate::load::formats!(), ".")
-    )]
-    pub files: Vec<PathBuf>,
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_parser = preset, help = one_help())]
-    pub pipeline: Preset,
-    /// Where to write the model (JSON).
-    #[arg(
-        short,
-        long,
-        visible_alias = "output",
-        value_name = "FILE",
-        default_value = "model.json",
-        value_parser = crate::args::output_file
-    )]
-    pub out: PathBuf,
-    /// Choose the preset's hyper-parameters from a small grid by cross-validation on the
-    /// training files (folds keep speller characters whole); the model records the choice.
-    #[arg(long)]
-    pub tune: bool,
-    /// Folds of the tuning cross-validation.
-    #[arg(long, default_value_t = 5, requires = "tune")]
-    pub folds: usize,
-    #[command(flatten)]
-    pub events: EventArgs,
+use crate::load::load_model;
+use crate::preset_arg::{one_help, preset};
+
+/// How decoding starts (`--calibration`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CalibrationArg {
+    /// The first N trials' flags or cues are the calibration.
+    Trials(usize),
+    /// No calibration: the unsupervised decoder.
+    None,
+}
+
+fn calibration_arg(s: &str) -> Result<CalibrationArg, String> {
+    if s == "none" {
+        return Ok(CalibrationArg::None);
+    }
+    match s.parse::<usize>() {
+        Ok(n) if (1..=1000).contains(&n) => Ok(CalibrationArg::Trials(n)),
+        _ => Err("expected `none` or a number of calibration trials (1 to 1000)".into()),
+    }
 }
 
 #[derive(Debug, clap::Args)]
-pub struct EvaluateArgs {
-    #[arg(
-        long,
-        num_args = 1..,
-        required_unless_present_any = ["model", "unsupervised"],
-        help = concat!("Training recordings: ", crate::load::formats!(), ".")
-    )]
-    pub train: Vec<PathBuf>,
-    /// Decode the test recordings (speller runs, played in order as one session) without
-    /// labels and without training files: each character decided by the model fitted (EM over
-    /// one row + one column per character) on the characters so far, then all re-decided by the
-    /// final model; the labels only score the result.
-    #[arg(long, requires = "test", conflicts_with_all = ["train", "model", "tune", "plot"])]
-    pub unsupervised: bool,
-    /// With --unsupervised: where each refit's EM starts (the likeliest result kept) —
-    /// `template`: every epoch's score by a P300 template (a positive wave at 350 ms, sd 80 ms,
-    /// seen through the band-pass), the last fit and, once there are as many epochs as features,
-    /// 8 random starts, as a session without calibration starts; `random`: the last fit and the
-    /// 8 random starts only.
-    #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
-    pub em_start: EmStart,
-    /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
-    /// oddball session files (`session.dat` of `oddball demo`) get every online decision
-    /// recomputed.
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["train", "pipeline", "tune"], requires = "test")]
+pub struct DecodeArgs {
+    /// Where the EEG comes from: lsl:NAME or lsl:type=EEG (an LSL stream), nic:HOST:PORT, or
+    /// replay:FILE (a recording played back at its own rate, for testing).
+    #[arg(long)]
+    pub source: SourceSpec,
+    /// The stimulus program's marker stream: lsl:NAME or lsl:type=Markers (string or numeric
+    /// markers); `recording` takes a played-back recording's own events instead (no LSL).
+    #[arg(long, default_value = "lsl:type=Markers")]
+    pub markers: String,
+    /// The paradigm file: the choices, which marker flashes which, how trials start and end
+    /// (see paradigms/).
+    #[arg(long, value_name = "FILE")]
+    pub paradigm: PathBuf,
+    /// Decide with a model from `oddball train` or an earlier session.
+    #[arg(long, value_name = "FILE", conflicts_with = "calibration")]
     pub model: Option<PathBuf>,
-    #[arg(
-        long,
-        num_args = 1..,
-        help = concat!(
-            "Test recordings (",
-            crate::load::formats!(),
-            "); without them, k-fold cross-validation on the training data."
-        )
-    )]
-    pub test: Vec<PathBuf>,
-    /// The text each test recording spelled, for speller runs recorded without labels (e.g.
-    /// the BCI Competition's test runs): one per test file, comma-separated (e.g. HAM,PIE).
-    #[arg(
-        long,
-        value_name = "TEXT[,TEXT…]",
-        value_delimiter = ',',
-        requires = "test"
-    )]
-    pub test_text: Vec<String>,
-    #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
-    pub pipeline: PipelineList,
-    /// Folds of the cross-validation (without test files) and of the tuning (`--tune`); speller
-    /// data is split by character, other data stratified by label.
-    #[arg(long, default_value_t = 5)]
-    pub folds: usize,
-    /// Choose each preset's hyper-parameters from a small grid by cross-validation on the
-    /// training files only (nested inside each fold when there are no test files).
+    /// Calibrate in-stream on the first N trials (their target flags or cues), or `none` (the
+    /// unsupervised decoder, no labels: one attended choice per trial).
+    #[arg(long, value_name = "N|none", value_parser = calibration_arg, required_unless_present = "model")]
+    pub calibration: Option<CalibrationArg>,
+    /// With --calibration N: the pipeline fitted.
+    #[arg(long, default_value = "lda", value_parser = preset, help = one_help())]
+    pub pipeline: Preset,
+    /// Stop a trial as soon as one choice is probable enough (a `stop` message goes out first),
+    /// abstain when none is credible.
     #[arg(long)]
-    pub tune: bool,
-    /// Draw character accuracy vs repetitions per preset (speller test files) to this .png/.svg.
-    #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
-    pub plot: Option<PathBuf>,
-    /// Also write the results as JSON here.
-    #[arg(short, long, visible_alias = "json", value_name = "FILE", value_parser = crate::args::output_file)]
-    pub out: Option<PathBuf>,
-    #[command(flatten)]
-    pub events: EventArgs,
+    pub dynamic_stopping: bool,
+    /// With --dynamic-stopping: the posterior that stops a trial.
+    #[arg(long, default_value_t = 0.95, requires = "dynamic_stopping")]
+    pub threshold: f64,
+    /// JSON lines of the decisions: a file, or - for standard output.
+    #[arg(long, short, value_name = "FILE", default_value = "-")]
+    pub out: String,
+    /// Name of the LSL outlet the decisions go out on (type oddball-decisions); `none` for no
+    /// outlet.
+    #[arg(long, default_value = "oddball-decisions")]
+    pub outlet: String,
+    /// With replay:FILE, decode as fast as possible instead of in real time.
+    #[arg(long)]
+    pub fast: bool,
+    /// Write the run's summary (decisions, marker counts, latency) as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
+    /// Seconds to wait for the LSL streams to appear.
+    #[arg(long, default_value_t = 30.0)]
+    pub resolve_timeout: f64,
 }
 
-/// What a run reports: the progress bar, and above it what [`Narration`] says.
-struct Report {
-    what: String,
-    bar: Option<Bar>,
-    text: Narration,
-}
-
-impl Report {
-    fn new(what: &str, text: Narration) -> Self {
-        Self {
-            what: what.to_string(),
-            bar: None,
-            text,
-        }
+pub fn run(args: &DecodeArgs) -> Result<Option<String>> {
+    let paradigm = Paradigm::load(&args.paradigm)?;
+    let start = match (&args.model, args.calibration) {
+        (Some(path), _) => ListenerStart::Model(Box::new(load_model(path)?)),
+        (None, Some(CalibrationArg::Trials(trials))) => ListenerStart::Calibrate { trials },
+        (None, Some(CalibrationArg::None)) => ListenerStart::Uncalibrated { params: None },
+        (None, None) => anyhow::bail!("give --model FILE or --calibration N|none"),
+    };
+    if !(args.threshold > 0.0 && args.threshold <= 1.0) {
+        anyhow::bail!("--threshold {}: a probability in (0, 1]", args.threshold);
     }
-
-    fn on(&mut self, p: Progress<'_>) {
-        if let Progress::Plan { fits, .. } = p {
-            let b = bar(
-                fits as u64,
-                "{msg} [{bar:30}] {pos}/{len} fits {elapsed} (eta {eta})",
-            );
-            b.set_message(self.what.clone());
-            self.bar = Some(b);
-        }
-        match (p, &self.bar) {
-            (Progress::Preset(name), Some(b)) => b.set_message(name.to_string()),
-            (Progress::Fit, Some(b)) => b.inc(1),
-            _ => {}
-        }
-        let text = self.text.on(&p);
-        match &self.bar {
-            Some(b) if !text.is_empty() => b.suspend(|| print!("{text}")),
-            _ => print!("{text}"),
-        }
+    if !(args.resolve_timeout > 0.0 && args.resolve_timeout <= 3600.0) {
+        anyhow::bail!("--resolve-timeout {}: 0 to 3600 s", args.resolve_timeout);
     }
-
-    fn finish(self) {
-        if let Some(b) = self.bar {
-            b.finish_and_clear();
-        }
-    }
-}
-
-pub fn run_train(args: &TrainArgs) -> Result<()> {
-    let pre = Preprocess::peer();
-    let set = TrainingSet::pool(load_epochs(&args.files, &pre, &args.events, &[], None)?.0)?;
-    let t0 = std::time::Instant::now();
-    let (name, folds) = (args.pipeline.name(), args.tune.then_some(args.folds));
-    let mut report = Report::new(
-        name,
-        Narration::training(name, "zero-phase band-passed epochs"),
-    );
-    let trained = evaluate::train(args.pipeline, &set, folds, &mut |p| report.on(p));
-    report.finish();
-    let trained = trained?;
-    let ch_names = set.epochs().ch_names().to_vec();
-    // The zero-phase epochs go before the causal ones come (one set in memory at a time).
-    drop(set);
-    // What a session runs: the same settings on the causally band-passed epochs.
-    let causal = pre.as_causal();
-    let live_set =
-        TrainingSet::pool(load_epochs(&args.files, &causal, &args.events, &[], None)?.0)?;
-    let mut report = Report::new(
-        name,
-        Narration::training(name, "causally band-passed epochs (as a session runs it)"),
-    );
-    let live = evaluate::train_with(
-        &trained.params,
-        &live_set,
-        folds.unwrap_or(evaluate::DECISION_FOLDS),
-        &mut |p| report.on(p),
-    );
-    report.finish();
-    let live = live.context("fitting the live (causal) model")?;
-    drop(live_set);
-    // Said once the model is written; the time is the training's.
-    let seconds = t0.elapsed().as_secs_f64();
-    let said = text::trained(name, &trained, &live, args.files.len(), seconds, &args.out);
-    let model = evaluate::session_model(pre, ch_names, trained, live);
-    oddball_io::write_atomic(&args.out, model.to_json())
-        .with_context(|| format!("writing {}", args.out.display()))?;
-    print!("{said}");
-    Ok(())
-}
-
-pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
-    if args.unsupervised {
-        return evaluate_unsupervised(args);
-    }
-    if let Some(path) = &args.model {
-        let model = load_model(path)?;
-        if let Some(first) = args.test.first() {
-            if is_session(&dataset::read(first, &ReadOptions::default())?) {
-                return evaluate_sessions(args, &model, path);
+    let rule = args
+        .dynamic_stopping
+        .then(|| match DecisionRule::dynamic(MAX_ROUNDS) {
+            DecisionRule::Dynamic {
+                min_rounds,
+                max_rounds,
+                credible,
+                p_no_control,
+                ..
+            } => DecisionRule::Dynamic {
+                threshold: args.threshold,
+                min_rounds,
+                max_rounds,
+                credible,
+                p_no_control,
+            },
+            fixed => fixed,
+        });
+    let markers = if args.markers == "recording" {
+        MarkerSpec::Recording
+    } else {
+        let q = args.markers.strip_prefix("lsl:").with_context(|| {
+            format!(
+                "--markers {}: expected lsl:NAME, lsl:type=TYPE or recording",
+                args.markers
+            )
+        })?;
+        MarkerSpec::Lsl(q.to_string())
+    };
+    let plan = DecodePlan {
+        source: args.source.clone(),
+        markers,
+        listener: ListenerParams {
+            paradigm,
+            start,
+            rule,
+            decoder: DecoderParams {
+                pipeline: args.pipeline,
+                // The peer stack's band and window (what `evaluate` and `train` use), run causally.
+                preprocess: Preprocess::peer().as_causal(),
+                rule: DecisionRule::Fixed { rounds: MAX_ROUNDS },
+                cv_folds: 5,
+                chunk: 20,
+                seed: 0,
+                stopping: None,
+            },
+        },
+        outlet: (args.outlet != "none").then(|| args.outlet.clone()),
+        paced: !args.fast,
+        block: 10,
+        resolve_timeout_s: args.resolve_timeout,
+        nic: NicFormat::starstim(NicMode::Binary),
+        nic_sfreq: 500.0,
+    };
+    let mut sink: Box<dyn Write> = if args.out == "-" {
+        Box::new(std::io::stdout())
+    } else {
+        let path = PathBuf::from(&args.out);
+        Box::new(std::io::BufWriter::new(
+            std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?,
+        ))
+    };
+    let mut write_error = None;
+    let summary = decode::run(plan, &mut |line| {
+        if write_error.is_none() {
+            if let Err(e) = writeln!(sink, "{line}").and_then(|()| sink.flush()) {
+                write_error = Some(e);
             }
         }
-        // The data is matched to the model (channels by name, rate) before any filtering.
-        let layout = Layout::of_model(&model, path);
-        let (test, _) = load_epochs(
-            &args.test,
-            &model.preprocess,
-            &args.events,
-            &args.test_text,
-            Some(&layout),
-        )?;
-        let r = evaluate::score_model(&model, &path.display().to_string(), &test)?;
-        print!("{}{}", text::RESULT_HEADER, text::result_row(&r));
-        return finish(args, &[r]);
-    }
-    let pre = Preprocess::peer();
-    let (train, layout) = load_epochs(&args.train, &pre, &args.events, &[], None)?;
-    let (test, _) = load_epochs(
-        &args.test,
-        &pre,
-        &args.events,
-        &args.test_text,
-        layout.as_ref(),
-    )?;
-    let params = EvaluateParams {
-        presets: args.pipeline.0.clone(),
-        folds: args.folds,
-        tune: args.tune,
-    };
-    let train = TrainingSet::pool(train)?;
-    let mut report = Report::new("evaluate", Narration::evaluating());
-    let results = evaluate::evaluate(&params, &train, &test, &mut |p| report.on(p));
-    report.finish();
-    finish(args, &results?)
-}
-
-/// The plot (if asked) and the JSON (if asked).
-fn finish(args: &EvaluateArgs, results: &[PipelineResult]) -> Result<()> {
-    if let Some(path) = &args.plot {
-        if results.iter().any(|r| r.speller_accuracy.is_some()) {
-            oddball_plot::accuracy::draw_accuracy(path, results)?;
-            println!("wrote {}", path.display());
-        } else {
-            print!("{}", text::no_accuracy_plot(args.test.is_empty()));
-        }
-    }
-    write_json(args, results)
-}
-
-fn write_json(args: &EvaluateArgs, results: &(impl serde::Serialize + ?Sized)) -> Result<()> {
-    match &args.out {
-        Some(path) => crate::load::write_out(path, serde_json::to_string_pretty(results)?),
-        None => Ok(()),
-    }
-}
-
-/// Re-evaluates oddball session files (`oddball demo` writes `session.dat`) with a model:
-/// every online decision recomputed from the raw EEG, compared with the recorded one.
-fn evaluate_sessions(args: &EvaluateArgs, model: &Model, model_path: &Path) -> Result<()> {
-    let mut results = Vec::new();
-    for path in &args.test {
-        let r = sessions::redecide(path, model, model_path)?;
-        print!("{}", text::redecided(&r));
-        results.push(r.result);
-    }
-    write_json(args, &results)
-}
-
-/// Where an unsupervised replay's EM starts (`--em-start`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum EmStart {
-    Template,
-    Random,
-}
-
-/// `evaluate --unsupervised`: the test recordings as one unlabelled session.
-fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    let pre = Preprocess::peer();
-    let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
-    let template = args.em_start == EmStart::Template;
-    let mut shown: Option<Bar> = None;
-    let r = unsupervised::replay(&pre, &test, template, &mut |k, n| {
-        shown
-            .get_or_insert_with(|| {
-                bar(
-                    n as u64,
-                    "unsupervised [{bar:30}] {pos}/{len} characters {elapsed}",
-                )
-            })
-            .set_position(k as u64 + 1);
-    });
-    if let Some(b) = shown {
-        b.finish_and_clear();
-    }
-    let r = r.map_err(|e| match e {
-        e @ unsupervised::ReplayError::Unscorable { .. } => {
-            anyhow::anyhow!("{e}; give it with --test-text")
-        }
-        e => e.into(),
     })?;
-    print!("{}", text::unsupervised(&r));
-    if let Some(path) = &args.out {
-        let v = serde_json::json!({ "unsupervised": r });
-        std::fs::write(path, serde_json::to_string_pretty(&v)?)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("wrote {}", path.display());
+    if let Some(e) = write_error {
+        return Err(e).with_context(|| format!("writing {}", args.out));
     }
-    Ok(())
+    let m = &summary.markers;
+    eprintln!(
+        "decode: {} decisions ({} abstentions, {} stopped early) from {} samples in {:.1} s; ended: {}",
+        summary.decisions, summary.abstentions, summary.stops, summary.samples, summary.seconds, summary.ended
+    );
+    eprintln!(
+        "markers: {} read, {} flashes; unknown {}, too old {}, future {}, out of order {}, duplicate {}, orphan flags {}, rejected epochs {}",
+        m.markers, m.flashes, m.unknown, m.too_old, m.future, m.out_of_order, m.duplicate, m.orphan_flags, m.rejected
+    );
+    if let Some((median, p99)) = summary.latency_ms {
+        eprintln!("latency (last epoch's block taken → decision sent): median {median:.2} ms, 99th percentile {p99:.2} ms");
+    }
+    if let Some(s) = &summary.marker_stream {
+        eprintln!("marker stream: {s}");
+    }
+    if let Some(path) = &args.summary {
+        oddball_io::write_atomic(path, serde_json::to_string_pretty(&summary)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    // The streams ending (the stimulus program done) is how a decode run ends.
+    eprintln!("ended: {}", summary.ended);
+    Ok(None)
 }

@@ -25,6 +25,7 @@ mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
 mod cmd_task;
+mod cmd_train;
 mod load;
 mod preset_arg;
 mod progress;
@@ -65,6 +66,12 @@ enum Command {
   oddball online --source lsl:type=EEG --calibrate --serve 127.0.0.1:8080   # needs --features lsl
   oddball online --source nic:127.0.0.1:1234 --model out/demo/model.json")]
     Online(Box<cmd_online::OnlineArgs>),
+    /// Decode another program's P300 session: EEG and its stimulus markers over LSL in, decisions out (LSL outlet, JSON lines).
+    #[command(after_help = "Examples:
+  oddball decode --source lsl:EEG --markers lsl:MARKERS --paradigm paradigms/speller-6x6.toml --model M.json --out decisions.jsonl
+  oddball decode --source lsl:type=EEG --markers lsl:type=Markers --paradigm paradigms/four-bulb.toml --calibration none
+  oddball decode --source replay:eeg3_2.dat --markers recording --paradigm paradigms/speller-6x6.toml --model M.json --fast")]
+    Decode(Box<cmd_decode::DecodeArgs>),
     /// Serve the simulated subject as a live amplifier stream: NIC's TCP protocol or an LSL outlet.
     #[command(after_help = "Examples:
   oddball simulate --nic 127.0.0.1:1234          # then: oddball demo --source nic:127.0.0.1:1234
@@ -79,13 +86,13 @@ enum Command {
     #[command(after_help = "Examples:
   oddball train eeg3_1.dat --pipeline lda -o model.json
   oddball train run1.csv run2.csv --target-events 2 --nontarget-events 1 --tune -o model.json")]
-    Train(cmd_decode::TrainArgs),
+    Train(cmd_train::TrainArgs),
     /// Score pipelines on held-out recordings (or by cross-validation): AUC, speller accuracy vs repetitions, ITR.
     #[command(after_help = "Examples:
   oddball evaluate --train eeg3_1.dat --test eeg3_2.dat --pipeline all --plot accuracy.png
   oddball evaluate --train session.dat --pipeline lda,riemann --tune   # nested cross-validation
   oddball evaluate --test eeg3_2.dat --model model.json")]
-    Evaluate(cmd_decode::EvaluateArgs),
+    Evaluate(cmd_train::EvaluateArgs),
     /// Every preset on every subject of dataset manifests (MOABB's protocols): per-subject rows, means, paired tests, JSON/CSV/plot.
     #[command(after_help = "Examples:
   oddball benchmark datasets/bci2000-eeg3.toml --pipeline all --json results.json --plot results.png
@@ -159,7 +166,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     if matches!(
         cli.command,
-        Command::Demo(_) | Command::Task(_) | Command::Online(_)
+        Command::Demo(_) | Command::Task(_) | Command::Online(_) | Command::Decode(_)
     ) {
         stop_on_signals();
     }
@@ -168,10 +175,11 @@ fn main() -> ExitCode {
         Command::Demo(args) => cmd_demo::run(&args),
         Command::Task(args) => cmd_task::run(&args),
         Command::Online(args) => cmd_online::run(&args),
+        Command::Decode(args) => cmd_decode::run(&args),
         Command::Simulate(args) => done(cmd_simulate::run(&args)),
         Command::Inspect(args) => done(cmd_inspect::run(&args)),
-        Command::Train(args) => done(cmd_decode::run_train(&args)),
-        Command::Evaluate(args) => done(cmd_decode::run_evaluate(&args)),
+        Command::Train(args) => done(cmd_train::run_train(&args)),
+        Command::Evaluate(args) => done(cmd_train::run_evaluate(&args)),
         Command::Benchmark(args) => done(cmd_benchmark::run(&args)),
         Command::Arm(args) => done(cmd_arm::run(&args)),
     };
