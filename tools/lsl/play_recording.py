@@ -16,8 +16,8 @@ and opens two LSL outlets:
     `Stim/{code}`          at each flash, stamped with the EEG stamp of the flash's onset sample;
     `Target`/`NonTarget`   right after a labelled flash's `Stim/{code}`, with the SAME stamp;
     `TrialEnd`             after a trial's last flash, stamped 1 ms after it; or, when the
-                           decoder stopped the trial early, stamped with the current stream time
-                           (the stamp of the next EEG sample).
+                           decoder stopped the trial early (or Ctrl-C came inside a trial),
+                           stamped with the current stream time (the next EEG sample's stamp).
   A marker is pushed as the EEG chunk holding its sample is pushed (just before it).
 
 `--clock-offset-ms MS` stamps both outlets with local_clock() + MS: a stimulus program whose clock
@@ -292,11 +292,11 @@ class Player:
                 end_now = True
 
     # -- playing -----------------------------------------------------------------------------
-    def end_trial(self, ti, played, stopped, ts):
+    def end_trial(self, ti, played, stopped, ts, note=""):
         self.marker("TrialEnd", ts)
         n_rec = len(self.trials[ti])
         self.results.append({"trial": ti + 1, "flashes": played, "recorded_flashes": n_rec, "stopped_early": stopped})
-        note = " (stopped by the decoder)" if stopped else ""
+        note = " (stopped by the decoder)" if stopped else note
         print(f"trial {ti + 1}: {played} of {n_rec} flashes played{note}", flush=True)
 
     def play(self):
@@ -350,6 +350,8 @@ class Player:
             self.eeg.push_chunk(chunk, stamps)
             self.k += n
             pos += n
+        if in_trial:  # interrupted inside a trial: close it for the decoder
+            self.end_trial(ti, played, False, self.stamp(self.k), note=" (interrupted)")
         if self.listener is not None and not self.stop_flag:
             deadline = time.monotonic() + a.final_wait
             while time.monotonic() < deadline and not self.stop_flag:
