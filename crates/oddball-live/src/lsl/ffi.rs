@@ -240,10 +240,11 @@ impl Liblsl {
     /// [`Liblsl::version`] (`1.18.0.b6`), else major.minor (`1.18`).
     pub fn version_text(&self) -> String {
         let short = format!("{}.{}", self.version / 100, self.version % 100);
+        // `…/branch:refs/tags/v1.18.0.b6/build:…`
         let tag = self
             .info
-            .split('/')
-            .find_map(|part| part.strip_prefix("branch:refs/tags/v"));
+            .split_once("refs/tags/v")
+            .and_then(|(_, rest)| rest.split('/').next());
         match tag {
             Some(t) if t == short || t.starts_with(&format!("{short}.")) => t.to_string(),
             _ => short,
@@ -311,7 +312,16 @@ fn c_string(s: &str) -> Result<CString, Fault> {
 fn open(c: &Candidate) -> Result<Liblsl, String> {
     // SAFETY: opening runs the file's initialisers; the file is liblsl by its name or by the
     // user's word (see the module documentation).
-    let lib = unsafe { Library::new(&c.file) }.map_err(|e| e.to_string())?;
+    let lib = unsafe { Library::new(&c.file) }.map_err(|e| {
+        // libloading says "dlopen failed"; the loader's own words are its source.
+        let mut why = e.to_string();
+        let mut cause = std::error::Error::source(&e);
+        while let Some(c) = cause {
+            why = format!("{why}: {c}");
+            cause = c.source();
+        }
+        why
+    })?;
     // SAFETY: a library that exports liblsl's names is liblsl, whose symbols have the
     // signatures of `lsl_c.h`.
     let fns = unsafe { Fns::load(&lib) }?;

@@ -57,7 +57,7 @@ pub(super) const PYTHON: &str = "python3";
 ///    `$CONDA_PREFIX` (and conda-forge's `liblsl` in `$CONDA_PREFIX/lib`) and the user's
 ///    (`~/.local`), those that exist.
 ///
-/// [`liblsl`] asks `python3` where pylsl is ([`liblsl_of_python`]) when none of them loads.
+/// [`super::library`] asks `python3` where pylsl is ([`liblsl_of_python`]) when none of them loads.
 pub fn candidates(env: impl Fn(&str) -> Option<OsString>) -> Vec<Candidate> {
     let set = |name: &str| env(name).filter(|v| !v.is_empty());
     if let Some(file) = set("ODDBALL_LIBLSL") {
