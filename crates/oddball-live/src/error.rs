@@ -41,6 +41,10 @@ pub enum LiveError {
     Nic(#[from] oddball_io::nic::NicError),
     #[error("LSL: {0}")]
     Lsl(String),
+    /// liblsl could not be loaded from any of the places tried ([`crate::lsl`] says where it
+    /// looks), each with the loader's reason.
+    #[error("Lab Streaming Layer needs liblsl, which could not be loaded (tried {}); install pylsl, whose wheels carry it (pip install pylsl), or set ODDBALL_LIBLSL to liblsl's path", tried.join("; "))]
+    LiblslNotFound { tried: Vec<String> },
     #[error(transparent)]
     Session(#[from] oddball_session::SessionError),
     #[error(transparent)]

@@ -21,9 +21,10 @@
 //!   recording) and what its run leaves behind.
 //! * [`playback`]: a recording played back as a live source (`--source replay:FILE`).
 //! * [`record`]: the recording, XDF flushed per block.
-//! * `lsl` (cargo feature `lsl`): Lab Streaming Layer inlets and outlets (EEG in, markers and
-//!   decisions out), LSL as a live source (`lsl_live`) and the simulated subject as a live LSL
-//!   amplifier (`lsl_sim`).
+//! * [`lsl`]: Lab Streaming Layer inlets and outlets (EEG in, markers and decisions out) over
+//!   liblsl loaded at run time (in every build; an error says how to get liblsl when it is
+//!   missing), LSL as a live source ([`lsl_live`]) and the simulated subject as a live LSL
+//!   amplifier ([`lsl_sim`]).
 //!
 //! # Example
 //! The timing report's summary of a list of delays (population standard deviation):
@@ -41,11 +42,8 @@ pub mod decode;
 mod error;
 pub mod listen;
 pub mod live;
-#[cfg(feature = "lsl")]
 pub mod lsl;
-#[cfg(feature = "lsl")]
 pub mod lsl_live;
-#[cfg(feature = "lsl")]
 pub mod lsl_sim;
 pub mod nic;
 pub mod online;

@@ -2,10 +2,9 @@
 //!
 //! LSL is how lab EEG amplifiers, stimulus programs and recorders find each other and share one
 //! clock: every sample carries a timestamp on the sender's `local_clock()`, and an inlet measures
-//! the offset to its own clock (`time_correction`). This module wraps the `lsl` crate (Rust
-//! bindings over liblsl, built from source with cmake) in the few types a session needs, so the
-//! rest of the code sees `ndarray` blocks in µV with timestamps on this machine's clock and
-//! [`LiveError`]s, never liblsl's handles:
+//! the offset to its own clock (`time_correction`). This module wraps liblsl in the few types a
+//! session needs, so the rest of the code sees `ndarray` blocks in µV with timestamps on this
+//! machine's clock and [`LiveError`]s, never liblsl's handles:
 //!
 //! * [`EegInlet`]: a regular-rate EEG stream found by name or type ([`StreamQuery`]); its
 //!   channel labels and unit come from the stream's `desc/channels`; [`EegInlet::read`] blocks
@@ -13,28 +12,47 @@
 //!   stream goes quiet, so a session never hangs on a dead amplifier.
 //! * [`MarkerOutlet`] / [`MarkerInlet`]: irregular-rate, one-channel string streams (the panel's
 //!   `cue C`, `flash C`, `decision C`, `abstain`, `end`; a second outlet of type
-//!   `oddball-decisions` carries the decisions).
+//!   `oddball-decisions` carries the decisions). The inlet also reads the numeric marker
+//!   streams other stimulus programs send (int8…int64, float32, double64), as decimal text.
 //! * [`EegOutlet`]: a regular-rate float32 EEG stream, for the simulated amplifier (`oddball
 //!   simulate --lsl`) and for tests.
+//!
+//! # liblsl, loaded at run time
+//! Every build speaks LSL: liblsl's C API is loaded when the first LSL call needs it, once per
+//! process ([`library`]), as pylsl loads it. It is looked for, in order ([`find`]):
+//! 1. the file `ODDBALL_LIBLSL` names (then only there), or pylsl's `PYLSL_LIB`;
+//! 2. the system's (`liblsl.so`, `liblsl.so.2`, …; `liblsl.dylib`; `lsl.dll`) through the
+//!    dynamic loader's search path;
+//! 3. pylsl's bundled copy (`pylsl/lib/` of pylsl ≥ 1.16 wheels) in the site-packages of
+//!    `$VIRTUAL_ENV`, `$CONDA_PREFIX` and `~/.local`, and last the pylsl `python3` imports.
+//!
+//! When none loads, every LSL call fails with [`LiveError::LiblslNotFound`], which lists the
+//! places tried and says how to get it (`pip install pylsl`, or set `ODDBALL_LIBLSL`). The
+//! unsafe code of the calls into it is all in [`ffi`].
 //!
 //! liblsl reads its network settings from the file named by the environment variable
 //! `LSLAPICFG` (read once, at the first LSL call of the process); `tools/lsl/lsl_api.cfg` keeps
 //! everything on loopback for tests.
 //!
-//! All types are [`Send`]: a reader may run on its own thread. liblsl's inlets and outlets are
-//! C++ objects behind opaque handles with no thread affinity; the `lsl` crate only fails to say
-//! so because it stores raw pointers. They are not `Sync`: one thread at a time uses each.
+//! All types are [`Send`]: a reader may run on its own thread. They are not `Sync`: one thread
+//! at a time uses each.
 
 use std::collections::VecDeque;
 use std::fmt;
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 
-use lsl::{ExPushable, Pullable};
 use ndarray::{Array2, ArrayView2};
 use oddball_io::units::stream_microvolts_per;
 
 use crate::LiveError;
+use ffi::{Fault, Format, Inlet, Outlet, StreamInfo};
+
+pub mod ffi;
+pub mod find;
+
+pub use ffi::{load_from, Liblsl};
+pub use find::{candidates, liblsl_of_python, Candidate};
 
 /// Seconds of data liblsl buffers per inlet and outlet before dropping the oldest.
 const MAX_BUFFERED_S: i32 = 360;
@@ -42,6 +60,8 @@ const MAX_BUFFERED_S: i32 = 360;
 const CORRECTION_INTERVAL_S: f64 = 5.0;
 /// Longest single wait inside [`EegInlet::read`], s (the stall timeout is checked between).
 const POLL_S: f64 = 0.05;
+/// liblsl's nominal rate of an irregular stream.
+const IRREGULAR_RATE: f64 = 0.0;
 /// Default stall timeout of [`EegInlet::read`], s.
 pub const DEFAULT_STALL_TIMEOUT_S: f64 = 5.0;
 /// Marker stream type of the panel's markers.
@@ -49,9 +69,35 @@ pub const MARKER_TYPE: &str = "Markers";
 /// Marker stream type of the decisions.
 pub const DECISION_TYPE: &str = "oddball-decisions";
 
-/// LSL's clock (monotonic, shared by every LSL program on this machine), seconds.
+/// Samples pulled from liblsl at a time.
+const CHUNK: usize = 256;
+
+/// This process's liblsl ([`ffi::liblsl`]): loaded at the first call, the same one (or the same
+/// [`LiveError::LiblslNotFound`]) from then on.
+pub fn library() -> Result<&'static Liblsl, LiveError> {
+    ffi::liblsl()
+}
+
+/// What this build can do with LSL, for a version line: `liblsl 1.18.0 loaded from PATH`, or
+/// `liblsl not found — pip install pylsl, or set ODDBALL_LIBLSL` (loads liblsl to know).
+pub fn library_status() -> String {
+    match library() {
+        Ok(lib) => format!("liblsl {} loaded from {}", lib.version_text(), lib.place()),
+        Err(_) => "liblsl not found — pip install pylsl, or set ODDBALL_LIBLSL".to_string(),
+    }
+}
+
+/// LSL's clock (monotonic, shared by every LSL program on this machine), seconds. Without
+/// liblsl (see [`library`]) no LSL stream exists to agree with, and the process's own monotonic
+/// clock stands in.
 pub fn local_clock() -> f64 {
-    lsl::local_clock()
+    match library() {
+        Ok(lib) => lib.local_clock(),
+        Err(_) => {
+            static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+            START.get_or_init(Instant::now).elapsed().as_secs_f64()
+        }
+    }
 }
 
 /// Which stream to resolve.
@@ -101,26 +147,29 @@ impl FromStr for StreamQuery {
     }
 }
 
-fn lsl_error(what: impl fmt::Display, e: lsl::Error) -> LiveError {
+fn lsl_error(what: impl fmt::Display, e: Fault) -> LiveError {
     LiveError::Lsl(format!("{what}: {e}"))
 }
 
 /// Maps liblsl's errors on a connected stream; a lost stream is its own variant.
-fn stream_error(name: &str, e: lsl::Error) -> LiveError {
-    match e {
-        lsl::Error::StreamLost => LiveError::StreamLost {
+fn stream_error(name: &str, e: Fault) -> LiveError {
+    if e.is_lost() {
+        LiveError::StreamLost {
             name: name.to_string(),
-        },
-        e => lsl_error(format!("reading {name}"), e),
+        }
+    } else {
+        lsl_error(format!("reading {name}"), e)
     }
 }
 
-/// Resolves the first stream matching `query`, opens an inlet on it and fetches its full info
-/// (with `desc`). Returns the inlet, the info and the stream's name.
+/// Resolves the first stream matching `query`, opens an inlet on it (`recover`: wait for a
+/// stream with a source id that goes away, instead of failing) and fetches its full info (with
+/// `desc`). Returns the inlet, the info and the stream's name.
 fn open_inlet(
     query: &StreamQuery,
     timeout_s: f64,
-) -> Result<(lsl::StreamInlet, lsl::StreamInfo, String), LiveError> {
+    recover: bool,
+) -> Result<(Inlet, StreamInfo, String), LiveError> {
     let (prop, value) = query.prop();
     let not_found = || LiveError::StreamNotFound {
         query: query.to_string(),
@@ -133,17 +182,18 @@ fn open_inlet(
             reason: "seconds, finite and ≥ 0".to_string(),
         });
     }
-    let found = lsl::resolve_byprop(prop, value, 1, timeout_s)
+    let lib = library()?;
+    let found = ffi::resolve_byprop(lib, prop, value, 1, 1, timeout_s)
         .map_err(|e| lsl_error(format!("resolving {query}"), e))?;
     let info = found.into_iter().next().ok_or_else(not_found)?;
-    let name = info.stream_name();
-    let inlet = lsl::StreamInlet::new(&info, MAX_BUFFERED_S, 0, true)
+    let name = info.name();
+    let inlet = Inlet::new(&info, MAX_BUFFERED_S, 0, recover)
         .map_err(|e| lsl_error(format!("opening an inlet on {name}"), e))?;
     // The stream was just seen: its full info and the connection come within a few round
     // trips; allow at least a second even for a zero resolve timeout.
     let wait = timeout_s.max(1.0);
     let full = inlet
-        .info(wait)
+        .full_info(wait)
         .map_err(|e| lsl_error(format!("reading the description of {name}"), e))?;
     inlet
         .open_stream(wait)
@@ -160,7 +210,7 @@ struct ClockOffset {
 
 impl ClockOffset {
     /// A first estimate, waiting up to `timeout_s` for it (0 when none comes: same machine).
-    fn new(inlet: &lsl::StreamInlet, timeout_s: f64) -> Self {
+    fn new(inlet: &Inlet, timeout_s: f64) -> Self {
         let offset = inlet.time_correction(timeout_s).unwrap_or(0.0);
         Self {
             offset,
@@ -169,7 +219,7 @@ impl ClockOffset {
     }
 
     /// The current offset; liblsl measures it in the background, so this never waits.
-    fn get(&mut self, inlet: &lsl::StreamInlet) -> f64 {
+    fn get(&mut self, inlet: &Inlet) -> f64 {
         if Instant::now() >= self.next {
             if let Ok(c) = inlet.time_correction(0.0) {
                 self.offset = c;
@@ -183,7 +233,7 @@ impl ClockOffset {
 /// A live EEG stream: samples in µV with timestamps on this machine's LSL clock.
 #[derive(Debug)]
 pub struct EegInlet {
-    inlet: lsl::StreamInlet,
+    inlet: Inlet,
     name: String,
     sfreq: f64,
     ch_names: Vec<String>,
@@ -192,17 +242,15 @@ pub struct EegInlet {
     clock: ClockOffset,
     stall_timeout: f64,
     /// Samples pulled but not yet read: values (channel after channel) and timestamps.
-    pending: VecDeque<f32>,
+    pending: VecDeque<f64>,
     pending_ts: VecDeque<f64>,
-    sample: Vec<f32>,
+    /// liblsl's buffers: one sample, and a chunk of samples with their timestamps.
+    sample: Vec<f64>,
+    chunk: Vec<f64>,
+    chunk_ts: Vec<f64>,
     last_ts: Option<f64>,
     lost: u64,
 }
-
-// SAFETY: liblsl's inlet is a C++ object reached through an opaque handle, with no thread
-// affinity; `EegInlet` is not `Sync`, so only one thread at a time calls into it.
-#[allow(unsafe_code)]
-unsafe impl Send for EegInlet {}
 
 impl EegInlet {
     /// Finds the first stream matching `query` within `timeout_s` seconds and connects to it.
@@ -210,7 +258,7 @@ impl EegInlet {
     /// `desc/channels/channel/{label,unit}` (labels `ch1..chN` when missing; units µV when
     /// missing; volts, millivolts and nanovolts are converted).
     pub fn resolve(query: &StreamQuery, timeout_s: f64) -> Result<Self, LiveError> {
-        let (inlet, mut info, name) = open_inlet(query, timeout_s)?;
+        let (inlet, info, name) = open_inlet(query, timeout_s, true)?;
         let sfreq = info.nominal_srate();
         let n = usize::try_from(info.channel_count()).unwrap_or(0);
         let bad = |what: &'static str, value: String, reason: &str| LiveError::InvalidParameter {
@@ -229,10 +277,7 @@ impl EegInlet {
             return Err(bad("channel count", "0".into(), "no channels"));
         }
         let format = info.channel_format();
-        if matches!(
-            format,
-            lsl::ChannelFormat::String | lsl::ChannelFormat::Undefined
-        ) {
+        if matches!(format, Format::String | Format::Undefined) {
             return Err(bad(
                 "channel format",
                 format.to_string(),
@@ -241,10 +286,10 @@ impl EegInlet {
         }
         let (mut labels, mut units) = (Vec::new(), Vec::new());
         let mut ch = info.desc().child("channels").child("channel");
-        while !ch.empty() {
-            labels.push(ch.child_value_named("label"));
-            units.push(ch.child_value_named("unit"));
-            ch = ch.next_sibling_named("channel");
+        while !ch.is_empty() {
+            labels.push(ch.child_value("label"));
+            units.push(ch.child_value("unit"));
+            ch = ch.next_sibling("channel");
         }
         let described = labels.len() == n;
         let ch_names: Vec<String> = (0..n)
@@ -277,6 +322,8 @@ impl EegInlet {
             pending: VecDeque::new(),
             pending_ts: VecDeque::new(),
             sample: vec![0.0; n],
+            chunk: vec![0.0; n * CHUNK],
+            chunk_ts: vec![0.0; CHUNK],
             last_ts: None,
             lost: 0,
         })
@@ -349,7 +396,7 @@ impl EegInlet {
         let mut data = Array2::zeros((nc, n));
         for (i, mut col) in data.columns_mut().into_iter().enumerate() {
             for (c, v) in col.iter_mut().enumerate() {
-                *v = f64::from(self.pending[i * nc + c]) * self.scale[c];
+                *v = self.pending[i * nc + c] * self.scale[c];
             }
         }
         self.pending.drain(..n * nc);
@@ -359,43 +406,59 @@ impl EegInlet {
 
     /// Pulls what has arrived, waiting up to `wait` s for the first sample. Returns the count.
     fn pull(&mut self, wait: f64) -> Result<usize, LiveError> {
-        let mut timeout = wait;
-        let mut count = 0;
-        loop {
-            let ts = self
-                .inlet
-                .pull_sample_buf(&mut self.sample, timeout)
-                .map_err(|e| stream_error(&self.name, e))?;
-            if ts == 0.0 {
-                break;
-            }
-            timeout = 0.0;
-            let ts = ts + self.clock.get(&self.inlet);
-            if let Some(prev) = self.last_ts {
-                let periods = (ts - prev) * self.sfreq;
-                if periods > 1.5 {
-                    self.lost += (periods.round() as u64).saturating_sub(1);
-                }
-            }
-            self.last_ts = Some(ts);
-            self.pending.extend(&self.sample);
-            self.pending_ts.push_back(ts);
-            count += 1;
+        let ts = self
+            .inlet
+            .pull_sample_f64(&mut self.sample, wait)
+            .map_err(|e| stream_error(&self.name, e))?;
+        if ts == 0.0 {
+            return Ok(0);
         }
-        Ok(count)
+        let sample = std::mem::take(&mut self.sample);
+        self.push_pending(&sample, ts);
+        self.sample = sample;
+        let mut count = 1;
+        loop {
+            let n = self
+                .inlet
+                .pull_chunk_f64(&mut self.chunk, &mut self.chunk_ts)
+                .map_err(|e| stream_error(&self.name, e))?;
+            let (chunk, chunk_ts) = (
+                std::mem::take(&mut self.chunk),
+                std::mem::take(&mut self.chunk_ts),
+            );
+            let nc = self.n_channels();
+            for (i, &ts) in chunk_ts[..n].iter().enumerate() {
+                self.push_pending(&chunk[i * nc..(i + 1) * nc], ts);
+            }
+            (self.chunk, self.chunk_ts) = (chunk, chunk_ts);
+            count += n;
+            if n < CHUNK {
+                return Ok(count);
+            }
+        }
+    }
+
+    /// Keeps one pulled sample stamped `ts` (sender's clock), counting samples lost before it.
+    fn push_pending(&mut self, sample: &[f64], ts: f64) {
+        let ts = ts + self.clock.get(&self.inlet);
+        if let Some(prev) = self.last_ts {
+            let periods = (ts - prev) * self.sfreq;
+            if periods > 1.5 {
+                self.lost += (periods.round() as u64).saturating_sub(1);
+            }
+        }
+        self.last_ts = Some(ts);
+        self.pending.extend(sample);
+        self.pending_ts.push_back(ts);
     }
 }
 
 /// An irregular-rate, one-channel string stream of markers.
 #[derive(Debug)]
 pub struct MarkerOutlet {
-    outlet: lsl::StreamOutlet,
+    outlet: Outlet,
     name: String,
 }
-
-// SAFETY: as for `EegInlet`: an opaque liblsl handle without thread affinity, not `Sync`.
-#[allow(unsafe_code)]
-unsafe impl Send for MarkerOutlet {}
 
 impl MarkerOutlet {
     /// A marker stream of type `Markers` (the panel's `cue`, `flash`, `decision`, `abstain`,
@@ -407,18 +470,18 @@ impl MarkerOutlet {
     /// A marker stream of another type, e.g. [`DECISION_TYPE`].
     pub fn with_type(name: &str, stream_type: &str, source_id: &str) -> Result<Self, LiveError> {
         let what = || format!("creating the marker stream {name}");
-        let mut info = lsl::StreamInfo::new(
+        let info = StreamInfo::new(
+            library()?,
             name,
             stream_type,
             1,
-            lsl::IRREGULAR_RATE,
-            lsl::ChannelFormat::String,
+            IRREGULAR_RATE,
+            Format::String,
             source_id,
         )
         .map_err(|e| lsl_error(what(), e))?;
         info.desc().append_child_value("manufacturer", "oddball");
-        let outlet =
-            lsl::StreamOutlet::new(&info, 0, MAX_BUFFERED_S).map_err(|e| lsl_error(what(), e))?;
+        let outlet = Outlet::new(&info, 0, MAX_BUFFERED_S).map_err(|e| lsl_error(what(), e))?;
         Ok(Self {
             outlet,
             name: name.to_string(),
@@ -433,9 +496,7 @@ impl MarkerOutlet {
     /// time get it.
     pub fn push(&self, marker: &str, timestamp: f64) {
         // Only a wrong channel count could fail, and there is always one channel.
-        let _ = self
-            .outlet
-            .push_sample_ex(&vec![marker.to_string()], timestamp, true);
+        let _ = self.outlet.push_strings(&[marker], timestamp, true);
     }
 
     /// Whether a receiver is connected.
@@ -449,59 +510,116 @@ impl MarkerOutlet {
     }
 }
 
-/// A marker stream being received.
+/// A marker stream being received: strings, or numbers as their decimal text.
 #[derive(Debug)]
 pub struct MarkerInlet {
-    inlet: lsl::StreamInlet,
+    inlet: Inlet,
     name: String,
+    hostname: String,
+    values: MarkerValues,
     clock: ClockOffset,
 }
 
-// SAFETY: as for `EegInlet`.
-#[allow(unsafe_code)]
-unsafe impl Send for MarkerInlet {}
+/// The buffer one marker sample is pulled into, by the stream's channel format.
+#[derive(Debug)]
+enum MarkerValues {
+    Strings(usize, Vec<String>),
+    Float(Vec<f32>),
+    Double(Vec<f64>),
+    Int(Vec<i32>),
+}
 
 impl MarkerInlet {
     /// Finds the first stream matching `query` within `timeout_s` seconds and connects to it;
-    /// markers sent from then on are received.
+    /// markers sent from then on are received. Any channel format: strings, or numbers
+    /// (int8…int64, float32, double64) received as their decimal text. A stream that goes away
+    /// is not waited for: [`MarkerInlet::pull`] then fails with [`LiveError::StreamLost`].
     pub fn resolve(query: &StreamQuery, timeout_s: f64) -> Result<Self, LiveError> {
-        let (inlet, _info, name) = open_inlet(query, timeout_s)?;
+        let (inlet, info, name) = open_inlet(query, timeout_s, false)?;
+        let n = usize::try_from(info.channel_count()).unwrap_or(0).max(1);
+        let values = match info.channel_format() {
+            Format::String | Format::Undefined => MarkerValues::Strings(n, Vec::new()),
+            Format::Float32 => MarkerValues::Float(vec![0.0; n]),
+            // int64 through double: exact up to 2^53, far beyond any marker code.
+            Format::Double64 | Format::Int64 => MarkerValues::Double(vec![0.0; n]),
+            Format::Int32 | Format::Int16 | Format::Int8 => MarkerValues::Int(vec![0; n]),
+        };
         let clock = ClockOffset::new(&inlet, timeout_s.clamp(0.5, 2.0));
-        Ok(Self { inlet, name, clock })
+        Ok(Self {
+            inlet,
+            name,
+            hostname: info.hostname(),
+            values,
+            clock,
+        })
     }
 
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// The host the stream comes from (as its outlet reports it), for reports.
+    pub fn hostname(&self) -> &str {
+        &self.hostname
+    }
+
+    /// The current offset from the sender's clock to ours, s (≈ 0 on one machine), for reports;
+    /// [`MarkerInlet::pull`] adds it to every timestamp.
+    pub fn time_correction(&mut self) -> f64 {
+        self.clock.get(&self.inlet)
+    }
+
     /// The markers that have arrived, with their timestamps on this machine's LSL clock;
-    /// never waits. Multi-channel samples are joined with spaces.
+    /// never waits. Multi-channel samples are joined with spaces; a number is its shortest
+    /// decimal text (`3`, not `3.0`; `0.25`). Fails with [`LiveError::StreamLost`] once the
+    /// stream is gone.
     pub fn pull(&mut self) -> Result<Vec<(String, f64)>, LiveError> {
         let mut out = Vec::new();
         loop {
-            let (sample, ts): (Vec<String>, f64) = self
-                .inlet
-                .pull_sample(0.0)
-                .map_err(|e| stream_error(&self.name, e))?;
+            let inlet = &self.inlet;
+            let (ts, text) = match &mut self.values {
+                MarkerValues::Strings(n, buf) => {
+                    let ts = inlet.pull_sample_strings(*n, buf, 0.0);
+                    (ts, buf.join(" "))
+                }
+                MarkerValues::Float(buf) => {
+                    let ts = inlet.pull_sample_f32(buf, 0.0);
+                    (ts, join_numbers(buf))
+                }
+                MarkerValues::Double(buf) => {
+                    let ts = inlet.pull_sample_f64(buf, 0.0);
+                    (ts, join_numbers(buf))
+                }
+                MarkerValues::Int(buf) => {
+                    let ts = inlet.pull_sample_i32(buf, 0.0);
+                    (ts, join_numbers(buf))
+                }
+            };
+            let ts = ts.map_err(|e| stream_error(&self.name, e))?;
             if ts == 0.0 {
                 return Ok(out);
             }
-            out.push((sample.join(" "), ts + self.clock.get(&self.inlet)));
+            out.push((text, ts + self.clock.get(&self.inlet)));
         }
     }
+}
+
+/// Numbers as decimal text, joined with spaces (Rust's shortest form: `3` for 3.0).
+fn join_numbers<T: fmt::Display>(values: &[T]) -> String {
+    values
+        .iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A regular-rate float32 EEG stream with channel labels and units in its description.
 #[derive(Debug)]
 pub struct EegOutlet {
-    outlet: lsl::StreamOutlet,
+    outlet: Outlet,
     sfreq: f64,
     n_channels: usize,
 }
-
-// SAFETY: as for `EegInlet`.
-#[allow(unsafe_code)]
-unsafe impl Send for EegOutlet {}
 
 impl EegOutlet {
     /// An EEG stream (type `EEG`) of `ch_names` at `sfreq` Hz in µV.
@@ -537,18 +655,25 @@ impl EegOutlet {
             });
         }
         let what = || format!("creating the EEG stream {name}");
-        let mut info = lsl::StreamInfo::new(
+        let n_channels =
+            i32::try_from(ch_names.len()).map_err(|_| LiveError::InvalidParameter {
+                name: "channels",
+                value: ch_names.len().to_string(),
+                reason: "too many for an LSL stream".to_string(),
+            })?;
+        let info = StreamInfo::new(
+            library()?,
             name,
             "EEG",
-            ch_names.len() as u32,
+            n_channels,
             sfreq,
-            lsl::ChannelFormat::Float32,
+            Format::Float32,
             source_id,
         )
         .map_err(|e| lsl_error(what(), e))?;
-        let mut desc = info.desc();
+        let desc = info.desc();
         desc.append_child_value("manufacturer", "oddball");
-        let mut channels = desc.append_child("channels");
+        let channels = desc.append_child("channels");
         for label in ch_names {
             channels
                 .append_child("channel")
@@ -556,8 +681,7 @@ impl EegOutlet {
                 .append_child_value("unit", unit)
                 .append_child_value("type", "EEG");
         }
-        let outlet =
-            lsl::StreamOutlet::new(&info, 0, MAX_BUFFERED_S).map_err(|e| lsl_error(what(), e))?;
+        let outlet = Outlet::new(&info, 0, MAX_BUFFERED_S).map_err(|e| lsl_error(what(), e))?;
         Ok(Self {
             outlet,
             sfreq,
@@ -589,19 +713,13 @@ impl EegOutlet {
             data.nrows(),
             self.n_channels
         );
-        let n = data.ncols();
-        let mut sample = vec![0f32; self.n_channels];
-        for (i, col) in data.columns().into_iter().enumerate() {
-            for (s, v) in sample.iter_mut().zip(col) {
-                *s = *v as f32;
-            }
-            // Only a wrong channel count could fail, checked above.
-            let _ = self.outlet.push_sample_ex(
-                &sample,
-                first_timestamp + i as f64 / self.sfreq,
-                i + 1 == n,
-            );
-        }
+        // Sample after sample (the transpose of `data`), each with its own timestamp.
+        let values: Vec<f32> = data.t().iter().map(|v| *v as f32).collect();
+        let stamps: Vec<f64> = (0..data.ncols())
+            .map(|i| first_timestamp + i as f64 / self.sfreq)
+            .collect();
+        // Only a wrong channel count could fail, checked above.
+        let _ = self.outlet.push_chunk_f32(&values, &stamps, true);
     }
 }
 

@@ -27,14 +27,14 @@ pub enum SourceSpec {
     /// whose simulated panel port is PORT + 1.
     Nic(String),
     /// A Lab Streaming Layer EEG stream by name (`lsl:NAME`) or type (`lsl:type=EEG`); needs
-    /// the `lsl` feature.
+    /// liblsl at run time ([`crate::lsl`]).
     Lsl(String),
     /// A recording played back at its own rate from its first sample (`replay:FILE`).
     Replay(PathBuf),
 }
 
 /// The one help text of `--source`.
-pub const SOURCE_HELP: &str = "Where the EEG comes from: sim (the simulated subject in this process), nic:HOST:PORT (a NIC TCP data stream, e.g. from `oddball simulate --nic HOST:PORT`, whose panel port is PORT + 1), lsl:NAME or lsl:type=EEG (a Lab Streaming Layer EEG stream; needs the lsl feature), or replay:FILE (a recording in any format `oddball inspect` reads, played back at its own rate from its first sample; the session stops at the end of the file)";
+pub const SOURCE_HELP: &str = "Where the EEG comes from: sim (the simulated subject in this process), nic:HOST:PORT (a NIC TCP data stream, e.g. from `oddball simulate --nic HOST:PORT`, whose panel port is PORT + 1), lsl:NAME or lsl:type=EEG (a Lab Streaming Layer EEG stream; needs liblsl: pip install pylsl, or set ODDBALL_LIBLSL), or replay:FILE (a recording in any format `oddball inspect` reads, played back at its own rate from its first sample; the session stops at the end of the file)";
 
 impl FromStr for SourceSpec {
     type Err = LiveError;
@@ -130,7 +130,6 @@ pub enum AnySource {
     Sim(Box<SimSource>),
     Nic(NicSource),
     Playback(PlaybackSource),
-    #[cfg(feature = "lsl")]
     Lsl(crate::lsl_live::LslSource),
     /// Another source at another rate ([`AnySource::resampled`]).
     Resampled(Box<Resampled>),
@@ -314,7 +313,6 @@ impl SourceSpec {
                 }
                 Ok((AnySource::Playback(source), None))
             }
-            #[cfg(feature = "lsl")]
             Self::Lsl(query) => {
                 use crate::lsl::StreamQuery;
                 use crate::lsl_live::{LslMarkers, LslSource};
@@ -326,13 +324,6 @@ impl SourceSpec {
                 let markers: Box<dyn MarkerSink> = Box::new(markers);
                 Ok((AnySource::Lsl(source), Some(markers)))
             }
-            #[cfg(not(feature = "lsl"))]
-            Self::Lsl(_) => Err(LiveError::InvalidParameter {
-                name: "source",
-                value: self.to_string(),
-                reason: "built without the lsl feature: cargo build --release --features lsl"
-                    .into(),
-            }),
         }
     }
 }
@@ -355,7 +346,6 @@ macro_rules! each {
             AnySource::Sim($s) => $e,
             AnySource::Nic($s) => $e,
             AnySource::Playback($s) => $e,
-            #[cfg(feature = "lsl")]
             AnySource::Lsl($s) => $e,
             AnySource::Resampled($s) => $e,
         }

@@ -1,22 +1,28 @@
 //! Lab Streaming Layer on loopback: EEG and marker streams between this crate's outlets and
 //! inlets, and with real peers (Python pylsl, when `ODDBALL_PYLSL` names a python that has it;
-//! see tools/lsl/requirements.txt).
+//! see tools/lsl/requirements.txt); and where liblsl is looked for.
+//!
+//! liblsl is loaded at run time: from `ODDBALL_LIBLSL`, else (in these tests) from the pylsl of
+//! `ODDBALL_PYLSL`, else wherever `oddball_live::lsl` looks. A test that needs it and cannot load
+//! it prints `skipping …`, or fails under `ODDBALL_REQUIRE_DATA=1` (CI).
 //!
 //! Every stream name carries the process id, and liblsl is kept on this machine by
 //! tools/lsl/lsl_api.cfg (`LSLAPICFG`, set before the first LSL call).
-#![cfg(feature = "lsl")]
 
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::Once;
 use std::time::{Duration, Instant};
 
 use ndarray::Array2;
 use oddball_live::lsl::{
-    local_clock, EegInlet, EegOutlet, MarkerInlet, MarkerOutlet, StreamQuery, DECISION_TYPE,
+    candidates, liblsl_of_python, library, load_from, local_clock, Candidate, EegInlet, EegOutlet,
+    MarkerInlet, MarkerOutlet, StreamQuery, DECISION_TYPE,
 };
 use oddball_live::LiveError;
+use oddball_testkit::Need;
 
 fn lsl_config() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -25,10 +31,27 @@ fn lsl_config() -> PathBuf {
         .expect("tools/lsl/lsl_api.cfg")
 }
 
-/// Points liblsl at the loopback configuration before any test makes an LSL call.
-fn setup() {
+/// Points liblsl at the loopback configuration, and this process at the pylsl's liblsl of
+/// `ODDBALL_PYLSL` unless `ODDBALL_LIBLSL` names one, before any test makes an LSL call.
+/// Whether liblsl loads; when not, `test` is skipped (or fails, see the module documentation).
+fn setup(test: &str) -> bool {
     static ONCE: Once = Once::new();
-    ONCE.call_once(|| std::env::set_var("LSLAPICFG", lsl_config()));
+    ONCE.call_once(|| {
+        std::env::set_var("LSLAPICFG", lsl_config());
+        if std::env::var_os("ODDBALL_LIBLSL").is_none() {
+            let python = std::env::var_os("ODDBALL_PYLSL");
+            if let Some(lib) = python.and_then(|p| liblsl_of_python(Path::new(&p))) {
+                std::env::set_var("ODDBALL_LIBLSL", lib);
+            }
+        }
+    });
+    match library() {
+        Ok(_) => true,
+        Err(e) => {
+            oddball_testkit::missing(Need::Tool, test, &e.to_string());
+            false
+        }
+    }
 }
 
 fn unique(what: &str) -> String {
@@ -41,7 +64,9 @@ fn labels(n: usize) -> Vec<String> {
 
 #[test]
 fn eeg_round_trip_keeps_values_timestamps_and_labels() {
-    setup();
+    if !setup("eeg_round_trip_keeps_values_timestamps_and_labels") {
+        return;
+    }
     let name = unique("eeg");
     let chs = labels(8);
     let outlet = EegOutlet::new(&name, &chs, 500.0, &name).unwrap();
@@ -81,7 +106,9 @@ fn eeg_round_trip_keeps_values_timestamps_and_labels() {
 
 #[test]
 fn volts_millivolts_and_nanovolts_arrive_in_microvolts() {
-    setup();
+    if !setup("volts_millivolts_and_nanovolts_arrive_in_microvolts") {
+        return;
+    }
     for (unit, per_uv) in [("volts", 1e-6), ("millivolts", 1e-3), ("nanovolts", 1e3)] {
         let name = unique(&format!("unit-{unit}"));
         let outlet = EegOutlet::with_unit(&name, &labels(2), 100.0, &name, unit).unwrap();
@@ -120,7 +147,9 @@ fn pull_n(inlet: &mut MarkerInlet, n: usize) -> Vec<(String, f64)> {
 
 #[test]
 fn markers_and_decisions_round_trip() {
-    setup();
+    if !setup("markers_and_decisions_round_trip") {
+        return;
+    }
     let name = unique("markers");
     let outlet = MarkerOutlet::new(&name, &name).unwrap();
     let mut inlet = MarkerInlet::resolve(&StreamQuery::Name(name.clone()), 10.0).unwrap();
@@ -156,9 +185,56 @@ fn markers_and_decisions_round_trip() {
     assert!(got[0].1 >= before - 1e-3 && got[0].1 <= local_clock() + 1e-3);
 }
 
+/// Pulls `inlet` until liblsl gives its stream up: the pull fails with
+/// [`LiveError::StreamLost`] naming it within `within` s, and never blocks meanwhile.
+fn wait_lost(inlet: &mut MarkerInlet, name: &str, within: f64) {
+    let start = Instant::now();
+    loop {
+        let pulled_at = Instant::now();
+        let r = inlet.pull();
+        assert!(pulled_at.elapsed() < Duration::from_secs(1), "pull waited");
+        match r {
+            Err(LiveError::StreamLost { name: n }) => {
+                assert_eq!(n, name);
+                return;
+            }
+            Ok(m) => assert!(m.is_empty(), "{m:?}"),
+            Err(e) => panic!("expected StreamLost, got {e}"),
+        }
+        let waited = start.elapsed().as_secs_f64();
+        assert!(waited < within, "{name} still not lost after {waited:.1} s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_marker_stream_that_goes_away_is_lost_not_waited_for() {
+    if !setup("a_marker_stream_that_goes_away_is_lost_not_waited_for") {
+        return;
+    }
+    let name = unique("lost-markers");
+    let outlet = MarkerOutlet::new(&name, &name).unwrap();
+    let mut inlet = MarkerInlet::resolve(&StreamQuery::Name(name.clone()), 10.0).unwrap();
+    outlet.push("cue 1", 0.0);
+    let got = pull_n(&mut inlet, 1);
+    assert_eq!(got.len(), 1, "{got:?}");
+    assert_eq!(got[0].0, "cue 1");
+    // One machine: no clock offset, and a host name to report.
+    assert!(
+        inlet.time_correction().abs() < 1e-2,
+        "{}",
+        inlet.time_correction()
+    );
+    assert!(!inlet.hostname().is_empty());
+    drop(outlet);
+    wait_lost(&mut inlet, &name, 15.0);
+}
+
 #[test]
 fn a_stream_that_goes_away_stalls_the_reader() {
-    setup();
+    if !setup("a_stream_that_goes_away_stalls_the_reader") {
+        return;
+    }
     let name = unique("stall");
     let outlet = EegOutlet::new(&name, &labels(4), 250.0, &name).unwrap();
     let mut inlet = EegInlet::resolve(&StreamQuery::Name(name.clone()), 10.0).unwrap();
@@ -180,7 +256,9 @@ fn a_stream_that_goes_away_stalls_the_reader() {
 
 #[test]
 fn resolving_nothing_times_out_naming_the_query() {
-    setup();
+    if !setup("resolving_nothing_times_out_naming_the_query") {
+        return;
+    }
     let name = unique("nobody");
     let start = Instant::now();
     let err = EegInlet::resolve(&StreamQuery::Name(name.clone()), 0.5).unwrap_err();
@@ -236,6 +314,7 @@ fn spawn_python(python: &str, script_name: &str, args: &[&str]) -> Peer {
             .arg(script(script_name))
             .args(args)
             .env("LSLAPICFG", lsl_config())
+            .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .spawn()
             .unwrap_or_else(|e| panic!("starting {python} {script_name}: {e}")),
@@ -244,7 +323,9 @@ fn spawn_python(python: &str, script_name: &str, args: &[&str]) -> Peer {
 
 #[test]
 fn pylsl_eeg_is_read_with_its_values_timestamps_units_and_gap() {
-    setup();
+    if !setup("pylsl_eeg_is_read_with_its_values_timestamps_units_and_gap") {
+        return;
+    }
     let Some(python) = pylsl("pylsl_eeg_is_read_with_its_values_timestamps_units_and_gap") else {
         return;
     };
@@ -307,7 +388,9 @@ fn pylsl_eeg_is_read_with_its_values_timestamps_units_and_gap() {
 
 #[test]
 fn pylsl_reads_our_markers() {
-    setup();
+    if !setup("pylsl_reads_our_markers") {
+        return;
+    }
     let Some(python) = pylsl("pylsl_reads_our_markers") else {
         return;
     };
@@ -352,4 +435,169 @@ fn pylsl_reads_our_markers() {
         assert_eq!(m, gm);
         assert!((ts - gts).abs() < 1e-3, "{m}: {gts} vs {ts}");
     }
+}
+
+#[test]
+fn pylsl_numeric_markers_arrive_as_their_decimal_text() {
+    if !setup("pylsl_numeric_markers_arrive_as_their_decimal_text") {
+        return;
+    }
+    let Some(python) = pylsl("pylsl_numeric_markers_arrive_as_their_decimal_text") else {
+        return;
+    };
+    for (format, want) in [
+        ("int32", ["1", "2", "3", "-4", "100"]),
+        ("float32", ["3", "0.25", "-1.5", "12", "100"]),
+        ("int64", ["1", "2", "3", "-4", "100"]),
+        ("double64", ["3", "0.1", "-1.5", "12", "1000000"]),
+    ] {
+        let name = unique(&format!("pylsl-{format}-markers"));
+        let mut peer = spawn_python(
+            &python,
+            "push_markers.py",
+            &["--name", &name, "--format", format],
+        );
+        let mut inlet = MarkerInlet::resolve(&StreamQuery::Name(name.clone()), 20.0).unwrap();
+        let mut out = BufReader::new(peer.0.stdout.take().unwrap());
+        let mut line = String::new();
+        out.read_line(&mut line).unwrap();
+        let head: serde_json::Value = serde_json::from_str(&line).expect(&line);
+        let t0 = head["t0"].as_f64().expect(&line);
+        let got = pull_n(&mut inlet, want.len());
+        let texts: Vec<&str> = got.iter().map(|(m, _)| m.as_str()).collect();
+        assert_eq!(texts, want, "{format}");
+        for (k, (m, ts)) in got.iter().enumerate() {
+            let sent = t0 + 0.1 * k as f64;
+            assert!((ts - sent).abs() < 1e-3, "{format} {m}: {ts} vs {sent}");
+        }
+        assert_eq!(
+            Some(inlet.hostname()),
+            head["hostname"].as_str(),
+            "{format}"
+        );
+        assert!(inlet.time_correction().abs() < 1e-2, "{format}");
+        // The peer exits when its standard input closes: the stream is lost, not waited for.
+        drop(peer.0.stdin.take());
+        assert!(peer.0.wait().unwrap().success(), "{format}");
+        wait_lost(&mut inlet, &name, 15.0);
+    }
+}
+
+// ---- where liblsl is looked for (no liblsl needed) ----
+
+#[test]
+fn a_named_file_that_is_not_liblsl_is_refused_naming_it_and_the_fix() {
+    let tmp = oddball_testkit::TempDir::new("liblsl-named");
+    let fake = tmp.write("liblsl.so", b"not a library");
+    let env = |name: &str| (name == "ODDBALL_LIBLSL").then(|| OsString::from(&fake));
+    // ODDBALL_LIBLSL alone: the user chose that file.
+    let found = candidates(env);
+    assert_eq!(
+        found,
+        vec![Candidate {
+            file: fake.clone(),
+            origin: "ODDBALL_LIBLSL".into()
+        }]
+    );
+    let err = load_from(&found).unwrap_err();
+    let shown = fake.display().to_string();
+    match &err {
+        LiveError::LiblslNotFound { tried } => {
+            assert_eq!(tried.len(), 1, "{tried:?}");
+            assert!(
+                tried[0].starts_with(&format!("{shown} (ODDBALL_LIBLSL): ")),
+                "{tried:?}"
+            );
+        }
+        other => panic!("expected LiblslNotFound, got {other:?}"),
+    }
+    let text = err.to_string();
+    for part in [shown.as_str(), "pip install pylsl", "set ODDBALL_LIBLSL"] {
+        assert!(text.contains(part), "{part:?} not in {text}");
+    }
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_library_that_is_not_liblsl_is_refused_naming_the_function_missing() {
+    let c = Candidate {
+        file: "libm.so.6".into(),
+        origin: "a test".into(),
+    };
+    match load_from(&[c]) {
+        Err(LiveError::LiblslNotFound { tried }) => {
+            assert_eq!(tried.len(), 1);
+            assert!(
+                tried[0].starts_with("libm.so.6 (a test): it has no lsl_library_version"),
+                "{tried:?}"
+            );
+        }
+        other => panic!("expected LiblslNotFound, got {other:?}"),
+    }
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn pylsl_lib_then_the_system_then_a_virtual_envs_pylsl_are_tried() {
+    let tmp = oddball_testkit::TempDir::new("liblsl-venv");
+    let site = tmp.join("venv/lib/python3.11/site-packages/pylsl/lib");
+    std::fs::create_dir_all(&site).unwrap();
+    std::fs::create_dir_all(tmp.join("custom")).unwrap();
+    let bundled = site.join("liblsl.so");
+    std::fs::write(&bundled, b"x").unwrap();
+    let custom = tmp.write("custom/liblsl.so", b"x");
+    let venv = tmp.join("venv");
+    let env = |name: &str| match name {
+        "PYLSL_LIB" => Some(OsString::from(&custom)),
+        "VIRTUAL_ENV" => Some(OsString::from(&venv)),
+        _ => None,
+    };
+    let found: Vec<(String, String)> = candidates(env)
+        .into_iter()
+        .map(|c| (c.file.display().to_string(), c.origin))
+        .collect();
+    let pair = |f: &Path, o: &str| (f.display().to_string(), o.to_string());
+    assert_eq!(
+        found,
+        vec![
+            pair(&custom, "PYLSL_LIB"),
+            pair(Path::new("liblsl.so"), "the system"),
+            pair(Path::new("liblsl.so.2"), "the system"),
+            pair(Path::new("liblsl64.so"), "the system"),
+            pair(&bundled, "pylsl in $VIRTUAL_ENV"),
+        ]
+    );
+    // A PYLSL_LIB that names no file is passed over, as pylsl does.
+    let missing = tmp.join("nothing.so");
+    let env = |name: &str| (name == "PYLSL_LIB").then(|| OsString::from(&missing));
+    assert_eq!(candidates(env)[0].origin, "the system");
+}
+
+#[test]
+fn a_python_without_pylsl_has_no_liblsl() {
+    assert_eq!(liblsl_of_python(Path::new("/nonexistent/python3")), None);
+    let tmp = oddball_testkit::TempDir::new("liblsl-python");
+    assert_eq!(liblsl_of_python(&tmp.join("python")), None);
+}
+
+#[test]
+fn the_pylsl_of_oddball_pylsl_carries_a_liblsl_that_loads() {
+    let Some(python) = pylsl("the_pylsl_of_oddball_pylsl_carries_a_liblsl_that_loads") else {
+        return;
+    };
+    let file = liblsl_of_python(Path::new(&python)).expect("pylsl ≥ 1.16 bundles liblsl");
+    let c = Candidate {
+        file: file.clone(),
+        origin: "ODDBALL_PYLSL".into(),
+    };
+    let lib = load_from(&[c]).unwrap();
+    assert_eq!(lib.place(), file.display().to_string());
+    assert!(lib.version() >= 113, "{}", lib.version());
+    let short = format!("{}.{}", lib.version() / 100, lib.version() % 100);
+    assert!(
+        lib.version_text().starts_with(&short),
+        "{}",
+        lib.version_text()
+    );
+    assert!(lib.local_clock() > 0.0);
 }

@@ -6,7 +6,7 @@
 //!   the panel: the next port (PORT + 1, or `--panel-port`) takes the panel's flashes and clock
 //!   (`F onset code attended`, `T sample`); a real amplifier has no such port. The simulator
 //!   serves one session and exits.
-//! * `--lsl NAME` (cargo feature `lsl`): a Lab Streaming Layer EEG outlet (500 Hz, the subject's
+//! * `--lsl NAME` (liblsl loaded at run time, see `oddball_live::lsl`): a Lab Streaming Layer EEG outlet (500 Hz, the subject's
 //!   8 channels, µV) whose sample i is stamped t0 + i / sfreq on LSL's clock. The person watches
 //!   the panel through its marker stream (`--markers`, type `Markers`): `cue C` sets the bulb
 //!   attended (0 = none), `flash C` stamped t is a flash at sample round((t − t0) · sfreq),
@@ -18,7 +18,6 @@
 use std::net::SocketAddr;
 
 use anyhow::{bail, Context, Result};
-#[cfg(feature = "lsl")]
 use oddball_live::lsl_sim::SimEvent;
 use oddball_live::nic::serve_simulated;
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
@@ -38,7 +37,8 @@ pub struct SimulateArgs {
     #[arg(long, requires = "nic")]
     pub allow_remote: bool,
     /// Stream as a Lab Streaming Layer EEG outlet of this name, following the panel's marker
-    /// stream (needs the `lsl` feature; the name is printed on the first line).
+    /// stream (needs liblsl: pip install pylsl, or set ODDBALL_LIBLSL; the name is printed on
+    /// the first line).
     #[arg(long, value_name = "NAME")]
     pub lsl: Option<String>,
     /// LSL: name of the panel's marker stream to follow.
@@ -72,12 +72,6 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
 }
 
-#[cfg(not(feature = "lsl"))]
-fn run_lsl(_args: &SimulateArgs, name: &str, _preset: SubjectPreset) -> Result<()> {
-    bail!("--lsl {name}: built without the lsl feature: cargo build --features lsl")
-}
-
-#[cfg(feature = "lsl")]
 fn run_lsl(args: &SimulateArgs, name: &str, preset: SubjectPreset) -> Result<()> {
     if !(args.latency_ms.is_finite() && (0.0..=10_000.0).contains(&args.latency_ms)) {
         bail!("--latency-ms {}: expected 0..=10000", args.latency_ms);

@@ -33,12 +33,25 @@ mod progress;
 #[derive(Debug, Parser)]
 #[command(
     name = "oddball",
-    version,
+    version = version(),
     about = "P300 brain-computer interface driving a simulated robot arm"
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// The version; for `--version` also what LSL can do here (liblsl is loaded only then).
+fn version() -> &'static str {
+    const VERSION: &str = env!("CARGO_PKG_VERSION");
+    if std::env::args_os()
+        .skip(1)
+        .any(|a| a == "--version" || a == "-V")
+    {
+        let lsl = oddball_live::lsl::library_status();
+        return Box::leak(format!("{VERSION} (LSL: {lsl})").into_boxed_str());
+    }
+    VERSION
 }
 
 #[derive(Debug, Subcommand)]

@@ -3,22 +3,60 @@
 //! session (an EEG inlet). The flashes must show in the EEG exactly at their onset samples,
 //! attended ones with a P300 at Pz. Everything stays on loopback (tools/lsl/lsl_api.cfg).
 //!
-//! Run with `cargo test -p oddball --features lsl --test cli_lsl`; without the feature only the
-//! command-line checks run.
+//! liblsl is loaded at run time, by this test and by the program: from `ODDBALL_LIBLSL`, else
+//! the pylsl of `ODDBALL_PYLSL`, else wherever `oddball_live::lsl` looks. Without it the live
+//! test prints `skipping …` (or fails under `ODDBALL_REQUIRE_DATA=1`); the command-line checks
+//! and what a build without liblsl says always run.
 
+use std::path::Path;
 use std::process::Command;
 
-/// Runs `oddball ARGS…`: (exit code, stderr).
-fn oddball(args: &[&str]) -> (Option<i32>, String) {
+/// Runs `oddball ARGS…` with `env` added: (exit code, stdout, stderr).
+fn oddball_with(args: &[&str], env: &[(&str, &str)]) -> (Option<i32>, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .args(args)
+        .envs(env.iter().copied())
         .output()
         .expect("oddball runs");
     (
         out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Runs `oddball ARGS…`: (exit code, stderr).
+fn oddball(args: &[&str]) -> (Option<i32>, String) {
+    let (code, _, err) = oddball_with(args, &[]);
+    (code, err)
+}
+
+/// Sets `ODDBALL_LIBLSL` for this process and the programs it starts to the pylsl's liblsl of
+/// `ODDBALL_PYLSL` (unless it is set), and `LSLAPICFG` to the loopback settings, before the
+/// first LSL call; the liblsl this process loads, or `None` after a skip line (a failure under
+/// `ODDBALL_REQUIRE_DATA=1`).
+fn liblsl(test: &str) -> Option<&'static oddball_live::lsl::Liblsl> {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        std::env::set_var("LSLAPICFG", live::lsl_config());
+        if std::env::var_os("ODDBALL_LIBLSL").is_none() {
+            let python = std::env::var_os("ODDBALL_PYLSL");
+            let found = python.and_then(|p| oddball_live::lsl::liblsl_of_python(Path::new(&p)));
+            if let Some(lib) = found {
+                std::env::set_var("ODDBALL_LIBLSL", lib);
+            }
+        }
+    });
+    match oddball_live::lsl::library() {
+        Ok(lib) => Some(lib),
+        Err(e) => {
+            oddball_testkit::missing(oddball_testkit::Need::Tool, test, &e.to_string());
+            None
+        }
+    }
+}
+
+const NO_LIBLSL: &str = "/nonexistent/liblsl.so";
 
 #[test]
 fn one_of_nic_and_lsl_is_required() {
@@ -30,19 +68,55 @@ fn one_of_nic_and_lsl_is_required() {
     assert!(err.contains("cannot be used with"), "{err}");
 }
 
-#[cfg(not(feature = "lsl"))]
 #[test]
-fn without_the_feature_lsl_says_how_to_build_it() {
-    let (code, err) = oddball(&["simulate", "--lsl", "eeg"]);
+fn without_liblsl_lsl_says_where_it_looked_and_how_to_get_it() {
+    let (code, _, err) = oddball_with(
+        &["simulate", "--lsl", "eeg"],
+        &[("ODDBALL_LIBLSL", NO_LIBLSL)],
+    );
     assert_eq!(code, Some(1), "{err}");
+    for part in [
+        "creating the LSL stream eeg",
+        "/nonexistent/liblsl.so (ODDBALL_LIBLSL): ",
+        "pip install pylsl",
+        "set ODDBALL_LIBLSL",
+    ] {
+        assert!(err.contains(part), "{part:?} not in {err}");
+    }
+}
+
+#[test]
+fn the_version_says_what_lsl_can_do() {
+    let version = env!("CARGO_PKG_VERSION");
+    let (code, out, err) = oddball_with(&["--version"], &[("ODDBALL_LIBLSL", NO_LIBLSL)]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(
+        out.trim_end(),
+        format!(
+            "oddball {version} (LSL: liblsl not found — pip install pylsl, or set ODDBALL_LIBLSL)"
+        )
+    );
+    let Some(lib) = liblsl("the_version_says_what_lsl_can_do") else {
+        return;
+    };
+    let (code, out, err) = oddball_with(&["-V"], &[("ODDBALL_LIBLSL", lib.place())]);
+    assert_eq!(code, Some(0), "{err}");
+    assert_eq!(
+        out.trim_end(),
+        format!(
+            "oddball {version} (LSL: liblsl {} loaded from {})",
+            lib.version_text(),
+            lib.place()
+        )
+    );
     assert!(
-        err.contains("built without the lsl feature: cargo build --features lsl"),
-        "{err}"
+        lib.version_text().starts_with("1."),
+        "{}",
+        lib.version_text()
     );
 }
 
 /// The simulator as a live LSL amplifier, driven by this test as the panel.
-#[cfg(feature = "lsl")]
 mod live {
     use std::io::{BufRead, BufReader};
     use std::path::PathBuf;
@@ -56,7 +130,7 @@ mod live {
     /// Channel of Pz in the simulated montage.
     const PZ: usize = 3;
 
-    fn lsl_config() -> PathBuf {
+    pub(super) fn lsl_config() -> PathBuf {
         PathBuf::from(env!("CARGO_MANIFEST_DIR"))
             .join("../../tools/lsl/lsl_api.cfg")
             .canonicalize()
@@ -82,8 +156,10 @@ mod live {
 
     #[test]
     fn the_simulator_follows_the_panel_markers_with_a_p300() {
-        // Before the first LSL call of this process.
-        std::env::set_var("LSLAPICFG", lsl_config());
+        // Sets LSLAPICFG before the first LSL call of this process.
+        if super::liblsl("the_simulator_follows_the_panel_markers_with_a_p300").is_none() {
+            return;
+        }
         let pid = std::process::id();
         let (name, markers) = (
             format!("oddball-cli-eeg-{pid}"),

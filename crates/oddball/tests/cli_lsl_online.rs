@@ -1,17 +1,43 @@
 //! Two processes over Lab Streaming Layer: `oddball simulate --lsl` is the amplifier (it follows
 //! the panel's marker stream), `oddball online --source lsl:…` decodes it live and draws the
-//! letter G. Needs the `lsl` feature (`cargo test -p oddball --features lsl`); LSL stays on
-//! loopback (tools/lsl/lsl_api.cfg).
-#![cfg(feature = "lsl")]
+//! letter G. LSL stays on loopback (tools/lsl/lsl_api.cfg). Both load liblsl at run time: from
+//! `ODDBALL_LIBLSL`, else the pylsl of `ODDBALL_PYLSL`, else wherever `oddball_live::lsl`
+//! looks; without it the test prints `skipping …` (or fails under `ODDBALL_REQUIRE_DATA=1`).
 
 mod common;
 
 use std::io::{BufRead, BufReader, Read};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+
+/// The liblsl the two programs are to load (`ODDBALL_LIBLSL`, else the pylsl's of
+/// `ODDBALL_PYLSL`, else the one this process finds), or `None` after a skip line.
+fn liblsl(test: &str) -> Option<String> {
+    let named = std::env::var_os("ODDBALL_LIBLSL").map(PathBuf::from);
+    let python = std::env::var_os("ODDBALL_PYLSL");
+    let file =
+        named.or_else(|| python.and_then(|p| oddball_live::lsl::liblsl_of_python(Path::new(&p))));
+    let candidates = match file {
+        Some(f) => vec![oddball_live::lsl::Candidate {
+            file: f,
+            origin: "this test".into(),
+        }],
+        None => oddball_live::lsl::candidates(|name| std::env::var_os(name)),
+    };
+    match oddball_live::lsl::load_from(&candidates) {
+        Ok(lib) => Some(lib.place().to_string()),
+        Err(e) => {
+            oddball_testkit::missing(oddball_testkit::Need::Tool, test, &e.to_string());
+            None
+        }
+    }
+}
 
 #[test]
 fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
+    let Some(liblsl) = liblsl("simulate_lsl_and_online_lsl_in_two_processes_draw_the_g") else {
+        return;
+    };
     let root = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
     let cfg = root.join("tools/lsl/lsl_api.cfg");
     let id = std::process::id();
@@ -21,6 +47,7 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
     let markers = format!("oddball-test-markers-{id}");
     let mut sim = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .env("LSLAPICFG", &cfg)
+        .env("ODDBALL_LIBLSL", &liblsl)
         .args([
             "simulate",
             "--lsl",
@@ -38,6 +65,7 @@ fn simulate_lsl_and_online_lsl_in_two_processes_draw_the_g() {
     sim_out.read_line(&mut first).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_oddball"))
         .env("LSLAPICFG", &cfg)
+        .env("ODDBALL_LIBLSL", &liblsl)
         .args([
             "online",
             "--source",
