@@ -134,7 +134,6 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
     let ch_names = source.ch_names().to_vec();
     let mut listener = Listener::new(plan.listener.clone(), sfreq, &ch_names)?;
     let mut markers = Markers::open(&plan, &listener, clock)?;
-    #[cfg(feature = "lsl")]
     let outlet = match &plan.outlet {
         Some(name) => Some(crate::lsl::MarkerOutlet::with_type(
             name,
@@ -143,10 +142,6 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
         )?),
         None => None,
     };
-    #[cfg(not(feature = "lsl"))]
-    if plan.outlet.is_some() {
-        return Err(no_lsl());
-    }
     let t0 = Instant::now();
     let mut summary = DecodeSummary {
         decisions: 0,
@@ -164,7 +159,6 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
     let mut send = |outs: Vec<Output>, taken: Instant, summary: &mut DecodeSummary| {
         for o in outs {
             let json = json_of(&o, &labels, clock.now_ms() / 1e3);
-            #[cfg(feature = "lsl")]
             if let Some(outlet) = &outlet {
                 outlet.push(&json, crate::lsl::local_clock());
             }
@@ -241,18 +235,8 @@ fn end_reason(e: LiveError) -> Result<String, LiveError> {
     }
 }
 
-#[cfg(not(feature = "lsl"))]
-fn no_lsl() -> LiveError {
-    LiveError::InvalidParameter {
-        name: "LSL",
-        value: String::new(),
-        reason: "built without Lab Streaming Layer".into(),
-    }
-}
-
 fn open_source(plan: &DecodePlan, clock: Clock) -> Result<AnySource, LiveError> {
     match &plan.source {
-        #[cfg(feature = "lsl")]
         SourceSpec::Lsl(query) => {
             let query: crate::lsl::StreamQuery = query.parse()?;
             let s = crate::lsl_live::LslSource::resolve(&query, plan.resolve_timeout_s, clock)?;
@@ -289,7 +273,6 @@ fn open_source(plan: &DecodePlan, clock: Clock) -> Result<AnySource, LiveError> 
     }
 }
 
-#[cfg_attr(not(feature = "lsl"), allow(dead_code))]
 enum Incoming {
     Text(String),
     Kind(MarkerKind),
@@ -297,7 +280,6 @@ enum Incoming {
 
 /// The marker source of a run.
 enum Markers {
-    #[cfg(feature = "lsl")]
     Lsl {
         inlet: crate::lsl::MarkerInlet,
         /// LSL clock − session clock, s.
@@ -368,7 +350,6 @@ impl Markers {
                 })
             }
             (MarkerSpec::Recording, _) => unreachable!("checked by run"),
-            #[cfg(feature = "lsl")]
             (MarkerSpec::Lsl(q), _) => {
                 let query: crate::lsl::StreamQuery = q.parse()?;
                 let inlet = crate::lsl::MarkerInlet::resolve(&query, plan.resolve_timeout_s)?;
@@ -378,8 +359,6 @@ impl Markers {
                     lost: None,
                 })
             }
-            #[cfg(not(feature = "lsl"))]
-            (MarkerSpec::Lsl(_), _) => Err(no_lsl()),
         }
     }
 
@@ -392,7 +371,6 @@ impl Markers {
         last_time: f64,
     ) -> Result<Vec<(Incoming, f64)>, LiveError> {
         match self {
-            #[cfg(feature = "lsl")]
             Self::Lsl {
                 inlet,
                 offset_s,
@@ -434,7 +412,6 @@ impl Markers {
 
     fn state(&self) -> Option<String> {
         match self {
-            #[cfg(feature = "lsl")]
             Self::Lsl { lost, .. } => Some(lost.clone().unwrap_or_else(|| "connected".into())),
             Self::Recording { .. } => None,
         }

@@ -46,6 +46,10 @@ use crate::SessionError;
 pub const MAX_AHEAD_S: f64 = 5.0;
 /// A flag (target / non-target) belongs to the flash stamped within this of it, s.
 pub const FLAG_TOLERANCE_S: f64 = 0.002;
+/// A flag waits this long for its flash (it may arrive first), s after the newest sample.
+pub const MAX_FLAG_WAIT_S: f64 = 2.0;
+/// Flags waiting for their flash at most.
+pub const MAX_LOOSE_FLAGS: usize = 64;
 /// Markers kept while no EEG has arrived yet.
 pub const MAX_HELD_MARKERS: usize = 10_000;
 /// Trials open at once (announced and not yet decided) before the oldest is given up.
@@ -160,12 +164,16 @@ pub struct MarkerCounts {
 struct Flash {
     trial: usize,
     code: u32,
+    time: f64,
     target: Option<bool>,
 }
 
 #[derive(Debug)]
 struct Trial {
     number: usize,
+    /// The trial end marker's time: flashes stamped up to it are this trial's, in whatever
+    /// order they arrive; the trial is decided once the EEG has passed its last epoch.
+    end_time: Option<f64>,
     cue: Option<usize>,
     announced: usize,
     completed: usize,
@@ -207,6 +215,7 @@ pub struct Listener {
     flashes: BTreeMap<usize, Flash>,
     next_tag: usize,
     last_flash: Option<(usize, f64)>,
+    loose_flags: VecDeque<(f64, bool)>,
     trials: VecDeque<Trial>,
     trial_count: usize,
     next_cue: Option<usize>,
@@ -317,6 +326,7 @@ impl Listener {
             flashes: BTreeMap::new(),
             next_tag: 0,
             last_flash: None,
+            loose_flags: VecDeque::new(),
             trials: VecDeque::new(),
             trial_count: 0,
             next_cue: None,
@@ -404,6 +414,7 @@ impl Listener {
         for (text, time) in std::mem::take(&mut self.held) {
             self.marker(&text, time);
         }
+        self.drop_stale_flags();
         let ready = match &self.pick {
             Some(order) => self
                 .epocher
@@ -421,8 +432,11 @@ impl Listener {
     /// The streams ended: the trials still open are decided on what arrived.
     pub fn finish(&mut self) -> Result<Vec<Output>, SessionError> {
         let mut out = Vec::new();
+        self.counts.orphan_flags += self.loose_flags.len() as u64;
+        self.loose_flags.clear();
         for t in self.trials.iter_mut() {
             t.ended = true;
+            t.end_time = None;
             self.counts.after_decision += (t.announced - t.completed) as u64;
             t.announced = t.completed;
         }
@@ -446,6 +460,7 @@ impl Listener {
         let calibration = self.trial_count <= self.calibration_trials;
         self.trials.push_back(Trial {
             number: self.trial_count,
+            end_time: None,
             cue: self.next_cue.take(),
             announced: 0,
             completed: 0,
@@ -480,24 +495,29 @@ impl Listener {
             MarkerKind::Flash { code } => self.flash(code, time),
             MarkerKind::Flag { target } => {
                 let hit = self
-                    .last_flash
-                    .filter(|&(_, t)| (t - time).abs() <= FLAG_TOLERANCE_S)
-                    .and_then(|(tag, _)| self.flashes.get_mut(&tag));
+                    .flashes
+                    .values_mut()
+                    .rev()
+                    .find(|f| (f.time - time).abs() <= FLAG_TOLERANCE_S);
                 match hit {
                     Some(f) => f.target = Some(target),
-                    None => self.counts.orphan_flags += 1,
+                    // Its flash may still be on its way.
+                    None => {
+                        self.loose_flags.push_back((time, target));
+                        self.drop_stale_flags();
+                    }
                 }
             }
             MarkerKind::TrialStart => {
                 if self.current().is_some() {
                     self.counts.unended_trials += 1;
-                    self.end_current();
+                    self.end_current(None);
                 }
                 self.open_trial();
             }
             MarkerKind::TrialEnd => {
                 if self.current().is_some() {
-                    self.end_current();
+                    self.end_current(Some(time));
                 } else {
                     self.counts.stray_ends += 1;
                 }
@@ -509,10 +529,49 @@ impl Listener {
         }
     }
 
-    fn end_current(&mut self) {
+    /// A flag that arrived before its flash, for the flash at `time`.
+    fn take_loose_flag(&mut self, time: f64) -> Option<bool> {
+        let i = self
+            .loose_flags
+            .iter()
+            .position(|&(t, _)| (t - time).abs() <= FLAG_TOLERANCE_S)?;
+        self.loose_flags.remove(i).map(|(_, target)| target)
+    }
+
+    /// Flags whose flash never came (older than the samples an epoch can still use, or too
+    /// many waiting) are orphans.
+    fn drop_stale_flags(&mut self) {
+        let newest = self.anchor.map_or(f64::NEG_INFINITY, |(_, t)| t);
+        let horizon = newest - MAX_FLAG_WAIT_S;
+        while let Some(&(t, _)) = self.loose_flags.front() {
+            if t < horizon || self.loose_flags.len() > MAX_LOOSE_FLAGS {
+                self.loose_flags.pop_front();
+                self.counts.orphan_flags += 1;
+            } else {
+                break;
+            }
+        }
+    }
+
+    fn end_current(&mut self, time: Option<f64>) {
         if let Some(t) = self.current() {
             t.ended = true;
+            t.end_time = time;
         }
+    }
+
+    /// The trial a flash stamped `time` belongs to: an ended, undecided trial whose end marker
+    /// is stamped at or after it (the flash's marker came after the end's), else the open one.
+    fn trial_of(&mut self, time: f64) -> Option<usize> {
+        let late = self.trials.iter().position(|t| {
+            t.ended && !t.decided && t.end_time.is_some_and(|e| time <= e + FLAG_TOLERANCE_S)
+        });
+        late.or_else(|| {
+            self.trials
+                .back()
+                .filter(|t| !t.ended)
+                .map(|_| self.trials.len() - 1)
+        })
     }
 
     fn flash(&mut self, code: u32, time: f64) {
@@ -537,12 +596,16 @@ impl Listener {
                 self.counts.out_of_order += 1;
             }
         }
-        if self.current().is_none() {
-            self.counts.implicit_trials += 1;
-            self.open_trial();
-        }
+        let ti = match self.trial_of(time) {
+            Some(i) => i,
+            None => {
+                self.counts.implicit_trials += 1;
+                self.open_trial();
+                self.trials.len() - 1
+            }
+        };
         let tag = self.next_tag;
-        let trial = self.current().map_or(0, |t| t.number);
+        let trial = self.trials[ti].number;
         match self.epocher.push_marker(Marker {
             onset: onset as u64,
             code,
@@ -561,12 +624,14 @@ impl Listener {
         }
         self.next_tag += 1;
         self.counts.flashes += 1;
+        let target = self.take_loose_flag(time);
         self.flashes.insert(
             tag,
             Flash {
                 trial,
                 code,
-                target: None,
+                time,
+                target,
             },
         );
         self.last_flash = Some((tag, time));
@@ -574,11 +639,10 @@ impl Listener {
             TrialEnd::Flashes(n) => Some(n),
             TrialEnd::Marker => None,
         };
-        if let Some(t) = self.current() {
-            t.announced += 1;
-            if per_trial == Some(t.announced) {
-                t.ended = true;
-            }
+        let t = &mut self.trials[ti];
+        t.announced += 1;
+        if per_trial == Some(t.announced) {
+            t.ended = true;
         }
     }
 
@@ -587,7 +651,8 @@ impl Listener {
             self.counts.after_decision += 1;
             return Ok(());
         };
-        let completed_at = self.epocher.received().saturating_sub(1);
+        // The sample that completed this epoch (whatever block it came in).
+        let completed_at = (self.epocher.epoch_end(e.marker.onset) - 1).max(0) as u64;
         let Some(ti) = self.trials.iter().position(|t| t.number == flash.trial) else {
             self.counts.after_decision += 1;
             return Ok(());
@@ -654,7 +719,12 @@ impl Listener {
     /// counted as they arrive).
     fn settle(&mut self, out: &mut Vec<Output>) -> Result<(), SessionError> {
         while let Some(t) = self.trials.front() {
-            let complete = t.ended && t.completed >= t.announced;
+            let past_end = t.end_time.is_none_or(|e| {
+                self.onset_of(e).is_some_and(|o| {
+                    self.epocher.received() as i64 >= self.epocher.epoch_end(o.max(0) as u64)
+                })
+            });
+            let complete = t.ended && t.completed >= t.announced && past_end;
             if t.decided {
                 if !t.ended {
                     break;
@@ -833,4 +903,289 @@ fn choice_posterior(paradigm: &Paradigm, constraint: &Constraint, sets: &[Vec<f6
         p.iter_mut().for_each(|v| *v /= z);
     }
     p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::s;
+    use oddball_decode::preset::Preset;
+    use std::path::Path;
+
+    const PARADIGM: &str = r#"
+name = "four"
+[choices]
+labels = ["up", "right", "down", "left"]
+codes = [1, 2, 3, 4]
+[markers]
+flash = ["Stim/{code}", "{code}"]
+trial_start = "TrialStart"
+trial_end = "TrialEnd"
+cue = "Cue/{label}"
+[events]
+target = ["Target"]
+nontarget = ["NonTarget"]
+"#;
+
+    const SFREQ: f64 = 250.0;
+
+    /// A synthetic four-choice session: `n_trials` trials of 5 rounds of the four codes (a flash
+    /// every 0.24 s: whole samples, as a flash half-way between two samples could go to
+    /// either), 2 s apart; trial `k` attends choice `k % 4`, whose flashes evoke a 6 µV
+    /// half-sine 300–500 ms later on every channel over 10 µV peak-to-peak noise. Returns the
+    /// EEG `(4, n)` and the markers `(text, time s)` in time order.
+    fn session(n_trials: usize, seed: u64) -> (Array2<f64>, Vec<(String, f64)>) {
+        let mut markers = Vec::new();
+        let mut bumps = Vec::new();
+        let mut t = 1.0;
+        for k in 0..n_trials {
+            markers.push(("TrialStart".to_string(), t - 0.5));
+            for r in 0..5 {
+                for j in 0..4u32 {
+                    // A different order each round.
+                    let code = 1 + (j + r as u32 + k as u32) % 4;
+                    let target = (code - 1) as usize == k % 4;
+                    markers.push((format!("Stim/{code}"), t));
+                    let flag = if target { "Target" } else { "NonTarget" };
+                    markers.push((flag.to_string(), t));
+                    if target {
+                        bumps.push(t);
+                    }
+                    t += 0.24;
+                }
+            }
+            markers.push(("TrialEnd".to_string(), t - 0.24));
+            t += 2.0;
+        }
+        let n = ((t + 1.0) * SFREQ) as usize;
+        let mut state = seed;
+        let mut x = Array2::from_shape_fn((4, n), |_| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 10.0
+        });
+        for b in bumps {
+            let (a, e) = (((b + 0.3) * SFREQ) as usize, ((b + 0.5) * SFREQ) as usize);
+            for i in a..e {
+                let v = 6.0 * (std::f64::consts::PI * (i - a) as f64 / (e - a) as f64).sin();
+                x.column_mut(i).iter_mut().for_each(|s| *s += v);
+            }
+        }
+        (x, markers)
+    }
+
+    fn params(start: ListenerStart, rule: Option<DecisionRule>) -> ListenerParams {
+        ListenerParams {
+            paradigm: Paradigm::parse(PARADIGM, Path::new("four.toml")).unwrap(),
+            start,
+            rule,
+            decoder: DecoderParams {
+                pipeline: Preset::Lda,
+                preprocess: Preprocess::peer(),
+                rule: DecisionRule::Fixed { rounds: 5 },
+                cv_folds: 3,
+                chunk: 20,
+                seed: 0,
+                stopping: None,
+            },
+        }
+    }
+
+    fn names() -> Vec<String> {
+        ["Pz", "Oz", "P3", "P4"].map(String::from).to_vec()
+    }
+
+    /// Feeds `x` in blocks of `block(i)` samples; each marker is pushed once the EEG has
+    /// reached its time plus `delay(k)` s (late deliveries, out of order among themselves).
+    fn feed(
+        listener: &mut Listener,
+        x: &Array2<f64>,
+        markers: &[(String, f64)],
+        block: &mut dyn FnMut(usize) -> usize,
+        delay: &dyn Fn(usize) -> f64,
+    ) -> Vec<Output> {
+        let mut due: Vec<(f64, usize)> = markers
+            .iter()
+            .enumerate()
+            .map(|(k, (_, t))| {
+                let at = t + delay(k);
+                // Stamps that are no time (NaN) or far off arrive mid-session.
+                (if at.is_finite() && at < 1e3 { at } else { 10.0 }, k)
+            })
+            .collect();
+        due.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut next = 0;
+        let mut out = Vec::new();
+        let mut i = 0;
+        let n = x.ncols();
+        while i < n {
+            let m = block(i).clamp(1, n - i);
+            let last_time = (i + m - 1) as f64 / SFREQ;
+            while next < due.len() && due[next].0 <= last_time {
+                let (text, t) = &markers[due[next].1];
+                out.extend(listener.push_marker(text, *t).unwrap());
+                next += 1;
+            }
+            out.extend(
+                listener
+                    .push_eeg(x.slice(s![.., i..i + m]), last_time)
+                    .unwrap(),
+            );
+            i += m;
+        }
+        out.extend(listener.finish().unwrap());
+        out
+    }
+
+    fn decisions(out: &[Output]) -> Vec<&ListenerDecision> {
+        out.iter()
+            .filter_map(|o| match o {
+                Output::Decision(d) => Some(d),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The transport loses nothing: blocks of any size, markers delivered late and out of
+    /// order within the epoch window, give the same outputs bit for bit.
+    #[test]
+    fn blocks_and_late_markers_change_no_decision() {
+        let (x, markers) = session(12, 7);
+        let start = || ListenerStart::Calibrate { trials: 6 };
+        let mut a = Listener::new(params(start(), None), SFREQ, &names()).unwrap();
+        let reference = feed(&mut a, &x, &markers, &mut |_| 10, &|_| 0.0);
+        assert!(matches!(reference[0], Output::Calibrated { trials: 6, .. }));
+        let ds = decisions(&reference);
+        assert_eq!(ds.len(), 6);
+        for d in &ds {
+            assert_eq!(d.choice, Some((d.trial - 1) % 4), "{d:?}");
+            assert_eq!((d.flashes, d.flashes_shown, d.early), (20, 20, false));
+        }
+        let mut state = 3u64;
+        let mut random = move |_| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+            1 + (state >> 33) as usize % 97
+        };
+        let mut b = Listener::new(params(start(), None), SFREQ, &names()).unwrap();
+        let late = feed(&mut b, &x, &markers, &mut random, &|k| {
+            0.05 * ((k * 7919) % 6) as f64
+        });
+        let mut c = Listener::new(params(start(), None), SFREQ, &names()).unwrap();
+        let only_late = feed(&mut c, &x, &markers, &mut |_| 10, &|k| {
+            0.05 * ((k * 7919) % 6) as f64
+        });
+        let mut d = Listener::new(params(start(), None), SFREQ, &names()).unwrap();
+        let only_blocks = feed(&mut d, &x, &markers, &mut |_| 37, &|_| 0.0);
+        assert_eq!(only_blocks, reference, "blocks");
+        assert_eq!(only_late, reference, "late");
+        assert_eq!(late, reference);
+        assert!(b.counts().out_of_order == 0 && b.counts().orphan_flags == 0);
+    }
+
+    #[test]
+    fn dynamic_stopping_stops_early_with_the_same_choices() {
+        let (x, markers) = session(12, 11);
+        let cal = || ListenerStart::Calibrate { trials: 6 };
+        let mut fixed = Listener::new(params(cal(), None), SFREQ, &names()).unwrap();
+        let full = feed(&mut fixed, &x, &markers, &mut |_| 25, &|_| 0.0);
+        let mut dynamic = Listener::new(
+            params(cal(), Some(DecisionRule::dynamic(MAX_ROUNDS_TEST))),
+            SFREQ,
+            &names(),
+        )
+        .unwrap();
+        let out = feed(&mut dynamic, &x, &markers, &mut |_| 25, &|_| 0.0);
+        let (a, b) = (decisions(&full), decisions(&out));
+        assert_eq!(a.len(), b.len());
+        let mut fewer = 0;
+        for (f, d) in a.iter().zip(&b) {
+            assert_eq!(f.choice, d.choice);
+            if d.early {
+                fewer += 1;
+                assert!(d.flashes < 20);
+                // The stop for this trial came right before its decision.
+                let i = out
+                    .iter()
+                    .position(|o| matches!(o, Output::Decision(x) if x.trial == d.trial))
+                    .unwrap();
+                assert_eq!(out[i - 1], Output::Stop { trial: d.trial });
+            }
+        }
+        assert!(fewer >= 3, "{fewer} of {} trials stopped early", b.len());
+        // The epochs of flashes after a stop are counted, not decided again.
+        assert!(dynamic.counts().after_decision > 0);
+    }
+
+    const MAX_ROUNDS_TEST: usize = 5;
+
+    #[test]
+    fn bad_markers_are_counted_and_change_nothing() {
+        let (x, markers) = session(10, 5);
+        let cal = || ListenerStart::Calibrate { trials: 6 };
+        let mut clean = Listener::new(params(cal(), None), SFREQ, &names()).unwrap();
+        let reference = feed(&mut clean, &x, &markers, &mut |_| 10, &|_| 0.0);
+        let mut noisy = markers.clone();
+        let mid = noisy[noisy.len() / 2].1;
+        noisy.extend([
+            ("Hello".to_string(), mid),
+            ("Stim/9".to_string(), mid),
+            ("Target".to_string(), mid + 0.1234),
+            ("Stim/1".to_string(), mid + 1000.0),
+            (String::from_utf8(vec![b'x'; 5000]).unwrap(), mid),
+            ("Stim/2".to_string(), f64::NAN),
+        ]);
+        noisy.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let mut l = Listener::new(params(cal(), None), SFREQ, &names()).unwrap();
+        let out = feed(&mut l, &x, &noisy, &mut |_| 10, &|_| 0.0);
+        assert_eq!(decisions(&out), decisions(&reference));
+        let c = l.counts();
+        assert_eq!((c.unknown, c.orphan_flags, c.future), (4, 1, 1), "{c:?}");
+        // A flash whose epoch is long gone is too old.
+        let out = l.push_marker("Stim/3", 0.5).unwrap();
+        assert!(out.is_empty());
+        assert_eq!(l.counts().too_old, 1);
+    }
+
+    #[test]
+    fn hours_of_trials_keep_nothing_per_trial() {
+        let (x, markers) = session(40, 2);
+        let p = params(ListenerStart::Calibrate { trials: 4 }, None);
+        let mut l = Listener::new(p, SFREQ, &names()).unwrap();
+        let out = feed(&mut l, &x, &markers, &mut |_| 50, &|_| 0.0);
+        assert_eq!(decisions(&out).len(), 36);
+        assert!(
+            l.trials.is_empty() && l.flashes.is_empty(),
+            "{:?}",
+            l.trials
+        );
+        assert!(l.calibration.epochs.is_empty());
+    }
+
+    #[test]
+    fn a_start_the_paradigm_cannot_support_is_refused() {
+        let no_flags = PARADIGM.replace("cue = \"Cue/{label}\"\n", "").replace(
+            "[events]\ntarget = [\"Target\"]\nnontarget = [\"NonTarget\"]\n",
+            "",
+        );
+        let mut p = params(ListenerStart::Calibrate { trials: 3 }, None);
+        p.paradigm = Paradigm::parse(&no_flags, Path::new("x.toml")).unwrap();
+        let e = Listener::new(p, SFREQ, &names()).unwrap_err();
+        assert!(e.to_string().contains("nothing labels"), "{e}");
+        let groups = r#"
+name = "g"
+[choices]
+labels = ["a", "b", "c"]
+[groups]
+"1" = ["a", "b"]
+"2" = ["c"]
+[markers]
+flash = "{code}"
+trial_end = "end"
+"#;
+        let mut p = params(ListenerStart::Uncalibrated { params: None }, None);
+        p.paradigm = Paradigm::parse(groups, Path::new("g.toml")).unwrap();
+        let e = Listener::new(p, SFREQ, &names()).unwrap_err();
+        assert!(e.to_string().contains("one choice per flash"), "{e}");
+    }
 }

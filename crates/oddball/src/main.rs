@@ -76,7 +76,7 @@ enum Command {
     /// A live session: EEG from a live stream, the stimulus panel in a browser, recorded as it runs.
     #[command(after_help = "Examples:
   oddball online --source sim --calibrate --serve 127.0.0.1:8080
-  oddball online --source lsl:type=EEG --calibrate --serve 127.0.0.1:8080   # needs --features lsl
+  oddball online --source lsl:type=EEG --calibrate --serve 127.0.0.1:8080
   oddball online --source nic:127.0.0.1:1234 --model out/demo/model.json")]
     Online(Box<cmd_online::OnlineArgs>),
     /// Decode another program's P300 session: EEG and its stimulus markers over LSL in, decisions out (LSL outlet, JSON lines).
@@ -88,7 +88,7 @@ enum Command {
     /// Serve the simulated subject as a live amplifier stream: NIC's TCP protocol or an LSL outlet.
     #[command(after_help = "Examples:
   oddball simulate --nic 127.0.0.1:1234          # then: oddball demo --source nic:127.0.0.1:1234
-  oddball simulate --lsl oddball-sim             # needs --features lsl")]
+  oddball simulate --lsl oddball-sim          ")]
     Simulate(cmd_simulate::SimulateArgs),
     /// Summarise EEG recordings: channels, sfreq, events, targets, spelled text; optionally plot ERPs.
     #[command(after_help = "Examples:
