@@ -7,7 +7,7 @@
 Reads FILE with oddball's own readers (`oddball.read_raw`, so every format oddball reads plays)
 and opens two LSL outlets:
 
-* EEG (`--eeg NAME`, type `EEG`): float32, nominal rate = the file's, channel labels and unit
+* EEG (`--eeg NAME`, type `EEG`): float32 (or `--channel-format double64`), nominal rate = the file's, channel labels and unit
   `microvolts` in desc/channels. Stream sample k is stamped exactly `t0 + k / sfreq` and pushed
   in chunks of `--chunk-ms` (20 ms) once its time has come (`--speed X` pushes X times faster;
   the stamps stay on the recording's time base, so with X != 1 they run ahead of the clock).
@@ -75,6 +75,9 @@ def parse_args(argv):
                    help="a pause longer than S seconds between flashes starts a new trial "
                         "(default 3 x the median inter-flash interval)")
     p.add_argument("--speed", type=float, default=1.0, metavar="X", help="playback speed (default 1: real time)")
+    p.add_argument("--channel-format", choices=["float32", "double64"], default="float32",
+                   help="EEG sample format (default float32, as amplifiers send; double64 carries the "
+                        "recording's values exactly)")
     p.add_argument("--chunk-ms", type=float, default=20.0, metavar="MS", help="EEG chunk length (default 20)")
     p.add_argument("--tail", type=float, default=1.5, metavar="S", help="EEG after the last flash (default 1.5)")
     p.add_argument("--resume-before", type=float, default=0.5, metavar="S",
@@ -189,7 +192,7 @@ class Listener(threading.Thread):
 class Player:
     def __init__(self, a, rec):
         self.a = a
-        self.data = np.asarray(rec.data, dtype=np.float32)
+        self.data = np.asarray(rec.data, dtype=np.float64 if a.channel_format == "double64" else np.float32)
         self.sfreq = float(rec.sfreq)
         self.ch_names = list(rec.ch_names)
         order = np.argsort(rec.events[:, 0], kind="stable")
@@ -211,7 +214,7 @@ class Player:
     def open(self):
         a = self.a
         n_ch = self.data.shape[0]
-        info = pylsl.StreamInfo(a.eeg, "EEG", n_ch, self.sfreq, "float32", f"play_recording-{a.eeg}-{os.getpid()}")
+        info = pylsl.StreamInfo(a.eeg, "EEG", n_ch, self.sfreq, a.channel_format, f"play_recording-{a.eeg}-{os.getpid()}")
         chans = info.desc().append_child("channels")
         for label in self.ch_names:
             ch = chans.append_child("channel")

@@ -128,12 +128,8 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
         });
     }
     let clock = Clock::new();
-    let mut source = open_source(&plan, clock)?;
-    let labels = plan.listener.paradigm.labels.clone();
-    let sfreq = source.sfreq();
-    let ch_names = source.ch_names().to_vec();
-    let mut listener = Listener::new(plan.listener.clone(), sfreq, &ch_names)?;
-    let mut markers = Markers::open(&plan, &listener, clock)?;
+    // The decisions' outlet before anything else: a stimulus program may wait for it (to hear
+    // stops) before it sends its first sample.
     let outlet = match &plan.outlet {
         Some(name) => Some(crate::lsl::MarkerOutlet::with_type(
             name,
@@ -142,6 +138,14 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
         )?),
         None => None,
     };
+    // Then the marker inlet: a stimulus program may wait for both its streams to have a
+    // listener before it sends its first sample, which the EEG source waits for.
+    let mut markers = Markers::open(&plan, clock)?;
+    let mut source = open_source(&plan, clock)?;
+    let labels = plan.listener.paradigm.labels.clone();
+    let sfreq = source.sfreq();
+    let ch_names = source.ch_names().to_vec();
+    let mut listener = Listener::new(plan.listener.clone(), sfreq, &ch_names)?;
     let t0 = Instant::now();
     let mut summary = DecodeSummary {
         decisions: 0,
@@ -339,8 +343,7 @@ pub fn recording_markers(rec: &oddball_io::Recording) -> Vec<(u64, MarkerKind)> 
 }
 
 impl Markers {
-    fn open(plan: &DecodePlan, listener: &Listener, clock: Clock) -> Result<Self, LiveError> {
-        let _ = (listener, clock);
+    fn open(plan: &DecodePlan, clock: Clock) -> Result<Self, LiveError> {
         match (&plan.markers, &plan.source) {
             (MarkerSpec::Recording, SourceSpec::Replay(path)) => {
                 let rec = oddball_io::read(path)?;
