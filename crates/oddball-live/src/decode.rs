@@ -70,6 +70,10 @@ pub struct DecodeSummary {
     /// Milliseconds from taking the block that completed a decision's last epoch to the
     /// decision sent: median and 99th percentile (`None` without decisions).
     pub latency_ms: Option<(f64, f64)>,
+    /// Milliseconds from the time stamped on the sample that completed a decision's last epoch
+    /// (the amplifier's clock, mapped onto this machine's) to the decision sent: the above plus
+    /// the stream's own delivery (its chunks, the network). Live sources only.
+    pub latency_from_stamp_ms: Option<(f64, f64)>,
     /// Why the run ended (the recording's end, a stalled stream, a stop request).
     pub ended: String,
     /// The marker stream's state at the end (lost, or its time correction).
@@ -155,13 +159,28 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
         seconds: 0.0,
         markers: MarkerCounts::default(),
         latency_ms: None,
+        latency_from_stamp_ms: None,
         ended: String::new(),
         marker_stream: None,
     };
     let mut latencies = Vec::new();
+    let mut from_stamp = Vec::new();
+    let live = !matches!(plan.source, SourceSpec::Replay(_));
     let mut position: u64 = 0;
-    let mut send = |outs: Vec<Output>, taken: Instant, summary: &mut DecodeSummary| {
-        for o in outs {
+    // Each decision's completing sample's stamp (session ms), taken before the outputs go.
+    let stamps = |outs: &[Output], source: &AnySource| -> Vec<Option<f64>> {
+        outs.iter()
+            .map(|o| match o {
+                Output::Decision(d) => Some(source.time_of(d.completed_at)),
+                _ => None,
+            })
+            .collect()
+    };
+    let mut send = |outs: Vec<Output>,
+                    stamp: Vec<Option<f64>>,
+                    taken: Instant,
+                    summary: &mut DecodeSummary| {
+        for (o, stamp) in outs.into_iter().zip(stamp) {
             let json = json_of(&o, &labels, clock.now_ms() / 1e3);
             if let Some(outlet) = &outlet {
                 outlet.push(&json, crate::lsl::local_clock());
@@ -173,6 +192,9 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
                         summary.abstentions += 1;
                     }
                     latencies.push(taken.elapsed().as_secs_f64() * 1e3);
+                    if let (Some(ms), true) = (stamp, live) {
+                        from_stamp.push(clock.now_ms() - ms);
+                    }
                 }
                 Output::Stop { .. } => summary.stops += 1,
                 Output::Calibrated { .. } => {}
@@ -198,20 +220,24 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
                 Incoming::Text(t) => listener.push_marker(&t, time)?,
                 Incoming::Kind(k) => listener.push_event(k, time)?,
             };
-            send(outs, taken, &mut summary);
+            let at = stamps(&outs, &source);
+            send(outs, at, taken, &mut summary);
         }
         let outs = listener.push_eeg(block.view(), last_time)?;
-        send(outs, taken, &mut summary);
+        let at = stamps(&outs, &source);
+        send(outs, at, taken, &mut summary);
         position += plan.block as u64;
     };
     let outs = listener.finish()?;
-    send(outs, Instant::now(), &mut summary);
+    let at = vec![None; outs.len()];
+    send(outs, at, Instant::now(), &mut summary);
     summary.samples = position;
     summary.seconds = t0.elapsed().as_secs_f64();
     summary.markers = listener.counts().clone();
     summary.ended = ended;
     summary.marker_stream = markers.state();
     summary.latency_ms = percentiles(&mut latencies);
+    summary.latency_from_stamp_ms = percentiles(&mut from_stamp);
     Ok(summary)
 }
 

@@ -150,7 +150,13 @@ pub fn run(args: &DecodeArgs) -> Result<Option<String>> {
         },
         outlet: (args.outlet != "none").then(|| args.outlet.clone()),
         paced: !args.fast,
-        block: 10,
+        // A live stream sample by sample (a decision goes as soon as its last sample is in); a
+        // recording played back, ten at a time.
+        block: if matches!(args.source, SourceSpec::Replay(_)) {
+            10
+        } else {
+            1
+        },
         resolve_timeout_s: args.resolve_timeout,
         nic: NicFormat::starstim(NicMode::Binary),
         nic_sfreq: 500.0,
@@ -185,6 +191,9 @@ pub fn run(args: &DecodeArgs) -> Result<Option<String>> {
     );
     if let Some((median, p99)) = summary.latency_ms {
         eprintln!("latency (last epoch's block taken → decision sent): median {median:.2} ms, 99th percentile {p99:.2} ms");
+    }
+    if let Some((median, p99)) = summary.latency_from_stamp_ms {
+        eprintln!("latency (last epoch's sample stamped → decision sent): median {median:.2} ms, 99th percentile {p99:.2} ms");
     }
     if let Some(s) = &summary.marker_stream {
         eprintln!("marker stream: {s}");

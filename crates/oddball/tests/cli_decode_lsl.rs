@@ -213,10 +213,11 @@ fn assert_same(tag: &str, live: &[serde_json::Value], reference: &[serde_json::V
 }
 
 fn latency(tag: &str, summary: &serde_json::Value) {
-    let l = &summary["latency_ms"];
+    let (l, s) = (&summary["latency_ms"], &summary["latency_from_stamp_ms"]);
     println!(
-        "{tag}: latency median {} ms, 99th percentile {} ms; markers {}",
-        l[0], l[1], summary["markers"]
+        "{tag}: latency from the block taken: median {} ms, 99th percentile {} ms; from the \
+         sample's stamp: median {} ms, 99th percentile {} ms; markers {}",
+        l[0], l[1], s[0], s[1], summary["markers"]
     );
 }
 
