@@ -40,7 +40,12 @@ impl LslSource {
     pub fn resolve(query: &StreamQuery, timeout_s: f64, clock: Clock) -> Result<Self, LiveError> {
         let mut inlet = EegInlet::resolve(query, timeout_s)?;
         let offset_s = local_clock() - clock.now_ms() / 1e3;
+        // The first sample may take as long as finding the stream: a program (a stimulus
+        // program playing EEG, an amplifier's app) may wait for its listeners before it sends.
+        // From then on a quiet stream is a stalled one.
+        inlet.set_stall_timeout(timeout_s.max(crate::lsl::DEFAULT_STALL_TIMEOUT_S));
         let (d, ts) = inlet.read(1)?;
+        inlet.set_stall_timeout(crate::lsl::DEFAULT_STALL_TIMEOUT_S);
         let mut buf = VecDeque::new();
         buf.push_back(d.column(0).to_vec());
         Ok(Self {

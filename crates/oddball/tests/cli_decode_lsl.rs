@@ -401,3 +401,115 @@ fn a_demo_session_as_a_foreign_paradigm_decides_as_the_demo_and_stops_early_when
     );
     assert!(summary["stops"].as_u64().unwrap() > 0);
 }
+
+/// A stimulus program that misbehaves: unknown texts, a code no choice has, flashes stamped
+/// 100 s ahead and 100 s back, then its marker stream disappears, then its EEG stops. Nothing is
+/// fatal: the bad markers are counted, the lost marker stream is reported, and the run ends
+/// cleanly when the EEG stalls, with the trials decided before written.
+const BAD_PROGRAM: &str = r#"
+import sys, time, numpy as np, pylsl
+name = sys.argv[1]
+info = pylsl.StreamInfo(name + "-eeg", "EEG", 4, 250, "float32", name + "-e")
+ch = info.desc().append_child("channels")
+for label in ["Pz", "Oz", "P3", "P4"]:
+    c = ch.append_child("channel"); c.append_child_value("label", label); c.append_child_value("unit", "microvolts")
+eeg = pylsl.StreamOutlet(info)
+mk = pylsl.StreamOutlet(pylsl.StreamInfo(name + "-markers", "Markers", 1, 0, "string", name + "-m"))
+deadline = time.monotonic() + 120
+while not (eeg.have_consumers() and mk.have_consumers()) and time.monotonic() < deadline:
+    time.sleep(0.05)
+rng = np.random.default_rng(1)
+t0 = pylsl.local_clock()
+k = 0
+def until(t):
+    global k
+    while k / 250 < t:
+        n = 5
+        x = rng.uniform(-5, 5, (n, 4)).astype(np.float32)
+        stamps = [t0 + (k + j) / 250 for j in range(n)]
+        while pylsl.local_clock() < stamps[-1]:
+            time.sleep(0.002)
+        eeg.push_chunk(x, stamps)
+        k += n
+t = 1.0
+for trial in range(3):
+    until(t)
+    if trial == 2:
+        mk = None  # the marker stream disappears
+        time.sleep(1.0)
+    if mk is not None:
+        mk.push_sample(["TrialStart"], t0 + t - 0.1)
+        mk.push_sample(["Hello"], t0 + t)
+        mk.push_sample(["Stim/9"], t0 + t)
+        mk.push_sample(["Stim/1"], t0 + t + 100)
+        mk.push_sample(["Stim/2"], t0 + t - 100)
+    for r in range(5):
+        for code in [1, 2, 3, 4]:
+            until(t)
+            if mk is not None:
+                mk.push_sample([f"Stim/{code}"], t0 + t)
+            t += 0.24
+    if mk is not None:
+        mk.push_sample(["TrialEnd"], t0 + t - 0.24)
+    t += 1.0
+until(t + 2.0)
+"#;
+
+#[test]
+fn a_misbehaving_program_costs_counts_not_the_session() {
+    let test = "decode against a misbehaving program";
+    let Some((py, lib)) = python(test) else {
+        return;
+    };
+    let tmp = tmp_dir("cli-decode-lsl-bad");
+    let name = format!("bad-{}", std::process::id());
+    let cfg = repo().join("tools/lsl/lsl_api.cfg");
+    let out = tmp.join("d.jsonl");
+    let summary = tmp.join("s.json");
+    let decode = Command::new(env!("CARGO_BIN_EXE_oddball"))
+        .args(["decode", "--source", &format!("lsl:{name}-eeg")])
+        .args(["--markers", &format!("lsl:{name}-markers")])
+        .args(["--paradigm", &paradigm("four-bulb.toml")])
+        .args(["--calibration", "none", "--outlet", "none"])
+        .args(["--out", out.to_str().unwrap()])
+        .args(["--summary", summary.to_str().unwrap()])
+        .env("LSLAPICFG", &cfg)
+        .env("ODDBALL_LIBLSL", &lib)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let program = Command::new(&py)
+        .args(["-c", BAD_PROGRAM, &name])
+        .env("LSLAPICFG", &cfg)
+        .status()
+        .unwrap();
+    assert!(program.success());
+    let t0 = Instant::now();
+    let mut decode = decode;
+    while decode.try_wait().unwrap().is_none() {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "decode did not stop"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let o = decode.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    println!("{err}\n{s}");
+    let m = &s["markers"];
+    assert_eq!(m["unknown"], 4, "{m}"); // Hello and Stim/9, twice
+    assert_eq!(m["future"], 2, "{m}");
+    assert_eq!(m["too_old"], 2, "{m}");
+    assert_eq!(m["flashes"], 40, "{m}");
+    // The marker stream's end is reported (its outlet closed), and the session went on.
+    assert!(s["marker_stream"].as_str().unwrap().contains("gone"), "{s}");
+    let ended = s["ended"].as_str().unwrap();
+    assert!(ended.contains("nothing") || ended.contains("lost"), "{s}");
+    // The two trials with markers are decided and written.
+    let v = lines(&std::fs::read_to_string(&out).unwrap());
+    assert_eq!(decisions(&v).len(), 2, "{v:?}");
+}
