@@ -70,6 +70,10 @@ pub struct EvaluateArgs {
     /// 8 random starts only.
     #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
     pub em_start: EmStart,
+    /// With --unsupervised: band-pass causally, as a live session (`oddball decode
+    /// --calibration none`, `demo --calibration none`) can, instead of zero-phase.
+    #[arg(long, requires = "unsupervised")]
+    pub causal: bool,
     /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
     /// oddball session files (`session.dat` of `oddball demo`) get every online decision
     /// recomputed.
@@ -286,7 +290,11 @@ pub enum EmStart {
 
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
-    let pre = Preprocess::peer();
+    let pre = if args.causal {
+        Preprocess::peer().as_causal()
+    } else {
+        Preprocess::peer()
+    };
     let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
     let template = args.em_start == EmStart::Template;
     let mut shown: Option<Bar> = None;

@@ -141,6 +141,39 @@ fn a_demo_session_played_as_a_foreign_four_choice_paradigm_decides_as_the_demo_d
     }
 }
 
+/// In-stream calibration: the session's first 40 trials (its calibration, their flashes flagged
+/// Target/NonTarget) fit the decoder, which then decides the rest as the demo's own model did.
+#[test]
+fn a_demo_session_calibrated_in_stream_decides_its_commands() {
+    let tmp = tmp_dir("cli-decode-calibrate");
+    let out = tmp.join("demo");
+    oddball_ok(&[
+        "demo",
+        "--commands",
+        "up,right,down,left,left,up",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let session = out.join("session.dat");
+    let v = decode(
+        session.to_str().unwrap(),
+        &paradigm("four-bulb.toml"),
+        &["--calibration", "40"],
+        &[],
+    );
+    let calibrated = v
+        .iter()
+        .find(|o| o["type"] == "calibrated")
+        .expect("a calibration");
+    assert_eq!(calibrated["trials"], 40, "{calibrated}");
+    assert_eq!(calibrated["epochs"], 40 * 20, "{calibrated}");
+    assert!(calibrated["cv_auc"].as_f64().unwrap() > 0.8, "{calibrated}");
+    let ds = decisions(&v);
+    let choices: Vec<&str> = ds.iter().map(|d| d["choice"].as_str().unwrap()).collect();
+    assert_eq!(choices, ["up", "right", "down", "left", "left", "up"]);
+    assert_eq!(ds[0]["trial"], 41);
+}
+
 #[test]
 fn a_broken_paradigm_or_a_wrong_start_is_refused_before_any_stream() {
     let tmp = tmp_dir("cli-decode-refused");
@@ -176,4 +209,32 @@ fn a_broken_paradigm_or_a_wrong_start_is_refused_before_any_stream() {
         err.contains("--calibration") || err.contains("--model"),
         "{err}"
     );
+}
+
+/// Without calibration, a recording's characters as `decode` decides them online are the ones
+/// `evaluate --unsupervised --causal` decides online from the file: the same unsupervised
+/// refits, on the same causally band-passed epochs.
+#[test]
+fn without_calibration_decode_decides_as_evaluate_unsupervised_causal() {
+    let Some(d) = data_dir() else { return };
+    let file = d.join("bci2000-samplefiles-p300/eeg3_2.dat");
+    let f = file.to_str().unwrap();
+    let v = decode(
+        f,
+        &paradigm("speller-6x6-rows-first.toml"),
+        &["--calibration", "none"],
+        &[],
+    );
+    let best: String = decisions(&v)
+        .iter()
+        .map(|d| d["best"].as_str().unwrap().to_string())
+        .collect();
+    let out = oddball_ok(&["evaluate", "--unsupervised", "--causal", "--test", f]);
+    let online = out
+        .split("online ")
+        .nth(1)
+        .and_then(|s| s.split('(').nth(1))
+        .and_then(|s| s.split(')').next())
+        .unwrap_or_else(|| panic!("{out}"));
+    assert_eq!(best, online, "{out}");
 }
