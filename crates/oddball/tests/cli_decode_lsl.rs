@@ -15,20 +15,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use common::decode::{
+    choices as text, decisions, decode_file as offline, json_lines as lines, paradigm, repo,
+};
 use common::{data_dir, oddball_ok, tmp_dir};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn paradigm(name: &str) -> String {
-    repo()
-        .join("paradigms")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
 
 /// The player's Python, and the liblsl its pylsl carries for oddball (set for every child).
 fn python(test: &str) -> Option<(String, String)> {
@@ -41,27 +31,6 @@ fn python(test: &str) -> Option<(String, String)> {
     let lib = oddball_live::lsl::liblsl_of_python(Path::new(&py))
         .expect("the player's Python has pylsl with its liblsl");
     Some((py, lib.to_str().unwrap().to_string()))
-}
-
-fn lines(text: &str) -> Vec<serde_json::Value> {
-    text.lines()
-        .filter(|l| l.starts_with('{'))
-        .map(|l| serde_json::from_str(l).expect("a JSON line"))
-        .collect()
-}
-
-fn decisions(v: &[serde_json::Value]) -> Vec<serde_json::Value> {
-    v.iter()
-        .filter(|d| d["type"] == "decision")
-        .cloned()
-        .collect()
-}
-
-fn text(v: &[serde_json::Value]) -> String {
-    decisions(v)
-        .iter()
-        .map(|d| d["choice"].as_str().unwrap_or("-").to_string())
-        .collect()
 }
 
 /// One decode process and one player, started together.
@@ -161,25 +130,6 @@ fn finish(
         read(&r.summary),
         read(&r.played),
     )
-}
-
-/// What `oddball decode` decides from the file itself (no LSL).
-fn offline(file: &Path, paradigm: &str, decode_args: &[&str]) -> Vec<serde_json::Value> {
-    let source = format!("replay:{}", file.display());
-    let mut args = vec![
-        "decode",
-        "--source",
-        &source,
-        "--markers",
-        "recording",
-        "--paradigm",
-        paradigm,
-        "--fast",
-        "--outlet",
-        "none",
-    ];
-    args.extend(decode_args);
-    lines(&oddball_ok(&args))
 }
 
 /// The same decisions: trials, choices and flashes equal, every posterior within `tol`.

@@ -5,54 +5,11 @@ mod common;
 
 use std::path::Path;
 
+use common::decode::{choices as text, decisions, decode_file, paradigm};
 use common::{data_dir, oddball, oddball_ok, tmp_dir};
 
-/// The repository's paradigm files.
-fn paradigm(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../paradigms")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
-
-/// The JSON lines of a decode run's standard output.
-fn lines(out: &str) -> Vec<serde_json::Value> {
-    out.lines()
-        .filter(|l| l.starts_with('{'))
-        .map(|l| serde_json::from_str(l).expect("a JSON line"))
-        .collect()
-}
-
-fn decisions(v: &[serde_json::Value]) -> Vec<&serde_json::Value> {
-    v.iter().filter(|d| d["type"] == "decision").collect()
-}
-
-fn text(v: &[serde_json::Value]) -> String {
-    decisions(v)
-        .iter()
-        .map(|d| d["choice"].as_str().unwrap_or("-").to_string())
-        .collect()
-}
-
 fn decode(file: &str, paradigm: &str, start: &[&str], extra: &[&str]) -> Vec<serde_json::Value> {
-    let source = format!("replay:{file}");
-    let mut args = vec![
-        "decode",
-        "--source",
-        &source,
-        "--markers",
-        "recording",
-        "--paradigm",
-        paradigm,
-        "--fast",
-        "--outlet",
-        "none",
-    ];
-    args.extend(start);
-    args.extend(extra);
-    lines(&oddball_ok(&args))
+    decode_file(Path::new(file), paradigm, &[start, extra].concat())
 }
 
 #[test]

@@ -5,6 +5,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+pub mod decode;
+
 /// `../shared/data` beside the checkout (or `ODDBALL_DATA`); `None`, with a message, when absent
 /// (a failure under `ODDBALL_REQUIRE_DATA=1`, see `oddball_testkit`).
 pub fn data_dir() -> Option<PathBuf> {
