@@ -80,38 +80,6 @@ pub struct DecodeSummary {
     pub marker_stream: Option<String>,
 }
 
-/// A decision or stop as it goes out: the listener's output with the choices' labels and the
-/// time (s, session clock) it was sent.
-pub fn json_of(out: &Output, labels: &[String], time_s: f64) -> String {
-    let v = match out {
-        Output::Decision(d) => {
-            let posterior: serde_json::Map<String, serde_json::Value> = labels
-                .iter()
-                .zip(&d.posterior)
-                .map(|(l, p)| (l.clone(), serde_json::json!(p)))
-                .collect();
-            serde_json::json!({
-                "type": "decision",
-                "trial": d.trial,
-                "choice": d.choice.map(|c| labels[c].clone()),
-                "best": labels[d.best].clone(),
-                "posterior": posterior,
-                "p_none": d.p_none,
-                "flashes": d.flashes,
-                "flashes_shown": d.flashes_shown,
-                "early": d.early,
-                "time": time_s,
-            })
-        }
-        other => {
-            let mut v = serde_json::to_value(other).expect("outputs serialise");
-            v["time"] = serde_json::json!(time_s);
-            v
-        }
-    };
-    v.to_string()
-}
-
 /// Runs the plan until the EEG ends or a stop is asked; `emit(json)` after every decision or
 /// stop (in the order sent).
 pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary, LiveError> {
@@ -181,7 +149,7 @@ pub fn run(plan: DecodePlan, emit: &mut dyn FnMut(&str)) -> Result<DecodeSummary
                     taken: Instant,
                     summary: &mut DecodeSummary| {
         for (o, stamp) in outs.into_iter().zip(stamp) {
-            let json = json_of(&o, &labels, clock.now_ms() / 1e3);
+            let json = o.to_json(&labels, clock.now_ms() / 1e3);
             if let Some(outlet) = &outlet {
                 outlet.push(&json, crate::lsl::local_clock());
             }

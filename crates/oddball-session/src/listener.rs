@@ -100,6 +100,41 @@ pub enum Output {
     },
 }
 
+impl Output {
+    /// The message as it goes out to a stimulus program: JSON text with the choices' labels and
+    /// `time_s`, when it was sent (`{"type":"decision","trial":3,"choice":"M","posterior":{…},
+    /// "flashes":96,…}`, `{"type":"stop","trial":3,…}`).
+    pub fn to_json(&self, labels: &[String], time_s: f64) -> String {
+        let v = match self {
+            Output::Decision(d) => {
+                let posterior: serde_json::Map<String, serde_json::Value> = labels
+                    .iter()
+                    .zip(&d.posterior)
+                    .map(|(l, p)| (l.clone(), serde_json::json!(p)))
+                    .collect();
+                serde_json::json!({
+                    "type": "decision",
+                    "trial": d.trial,
+                    "choice": d.choice.map(|c| labels[c].clone()),
+                    "best": labels[d.best].clone(),
+                    "posterior": posterior,
+                    "p_none": d.p_none,
+                    "flashes": d.flashes,
+                    "flashes_shown": d.flashes_shown,
+                    "early": d.early,
+                    "time": time_s,
+                })
+            }
+            other => {
+                let mut v = serde_json::to_value(other).expect("outputs serialise");
+                v["time"] = serde_json::json!(time_s);
+                v
+            }
+        };
+        v.to_string()
+    }
+}
+
 /// One trial decided.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ListenerDecision {
@@ -171,6 +206,10 @@ struct Flash {
 #[derive(Debug)]
 struct Trial {
     number: usize,
+    /// Opened by a flash with no trial open: a start marker that arrives late adopts it.
+    implicit: bool,
+    /// The earliest flash's time.
+    first_time: f64,
     /// The trial end marker's time: flashes stamped up to it are this trial's, in whatever
     /// order they arrive; the trial is decided once the EEG has passed its last epoch.
     end_time: Option<f64>,
@@ -460,6 +499,8 @@ impl Listener {
         let calibration = self.trial_count <= self.calibration_trials;
         self.trials.push_back(Trial {
             number: self.trial_count,
+            implicit: false,
+            first_time: f64::INFINITY,
             end_time: None,
             cue: self.next_cue.take(),
             announced: 0,
@@ -509,6 +550,15 @@ impl Listener {
                 }
             }
             MarkerKind::TrialStart => {
+                // A start that comes after its trial's first flash (out of order) adopts the
+                // trial that flash opened.
+                if let Some(t) = self.current() {
+                    if t.implicit && t.first_time >= time - FLAG_TOLERANCE_S {
+                        t.implicit = false;
+                        self.counts.implicit_trials -= 1;
+                        return;
+                    }
+                }
                 if self.current().is_some() {
                     self.counts.unended_trials += 1;
                     self.end_current(None);
@@ -601,6 +651,9 @@ impl Listener {
             None => {
                 self.counts.implicit_trials += 1;
                 self.open_trial();
+                if let Some(t) = self.trials.back_mut() {
+                    t.implicit = true;
+                }
                 self.trials.len() - 1
             }
         };
@@ -640,6 +693,7 @@ impl Listener {
             TrialEnd::Marker => None,
         };
         let t = &mut self.trials[ti];
+        t.first_time = t.first_time.min(time);
         t.announced += 1;
         if per_trial == Some(t.announced) {
             t.ended = true;
@@ -939,7 +993,7 @@ nontarget = ["NonTarget"]
         let mut bumps = Vec::new();
         let mut t = 1.0;
         for k in 0..n_trials {
-            markers.push(("TrialStart".to_string(), t - 0.5));
+            markers.push(("TrialStart".to_string(), t - 0.001));
             for r in 0..5 {
                 for j in 0..4u32 {
                     // A different order each round.
