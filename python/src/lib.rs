@@ -645,7 +645,6 @@ impl OnlineDecoder {
         threshold: f64,
         paradigm_text: bool,
     ) -> PyResult<Self> {
-        use oddball_decode::decision::{DecisionRule, MAX_ROUNDS};
         use oddball_session::listener::{Listener, ListenerParams, ListenerStart};
         let paradigm = if paradigm_text {
             oddball_io::Paradigm::parse(paradigm, std::path::Path::new("<paradigm text>"))
@@ -665,37 +664,13 @@ impl OnlineDecoder {
             (None, 0) => ListenerStart::Uncalibrated { params: None },
             (None, trials) => ListenerStart::Calibrate { trials },
         };
-        let rule = dynamic_stopping.then(|| match DecisionRule::dynamic(MAX_ROUNDS) {
-            DecisionRule::Dynamic {
-                min_rounds,
-                max_rounds,
-                credible,
-                p_no_control,
-                ..
-            } => DecisionRule::Dynamic {
-                threshold,
-                min_rounds,
-                max_rounds,
-                credible,
-                p_no_control,
-            },
-            fixed => fixed,
-        });
         let labels = paradigm.labels.clone();
-        let params = ListenerParams {
+        let params = ListenerParams::new(
             paradigm,
             start,
-            rule,
-            decoder: oddball_session::decoder::DecoderParams {
-                pipeline: oddball_decode::preset::Preset::Lda,
-                preprocess: oddball_decode::pipeline::Preprocess::peer().as_causal(),
-                rule: DecisionRule::Fixed { rounds: MAX_ROUNDS },
-                cv_folds: 5,
-                chunk: 20,
-                seed: 0,
-                stopping: None,
-            },
-        };
+            oddball_decode::preset::Preset::Lda,
+            dynamic_stopping.then_some(threshold),
+        );
         let inner = Listener::new(params, sfreq, &ch_names)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(Self {

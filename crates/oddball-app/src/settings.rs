@@ -168,13 +168,7 @@ impl SessionSettings {
         let fixed = DecisionRule::Fixed {
             rounds: self.timed_paradigm()?.n_rounds,
         };
-        let dynamic = DecisionRule::Dynamic {
-            threshold: self.threshold,
-            min_rounds: 1,
-            max_rounds: self.max_rounds,
-            credible: 0.5,
-            p_no_control: 0.2,
-        };
+        let dynamic = DecisionRule::dynamic_at(self.threshold, self.max_rounds);
         dynamic.validate().map_err(SettingError::DynamicRule)?;
         if self.optimise_stopping {
             let search = self.stopping_search();

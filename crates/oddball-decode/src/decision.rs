@@ -222,8 +222,13 @@ impl DecisionRule {
     /// Dynamic stopping with the defaults: threshold 0.95, 1..=`max_rounds` rounds, abstain
     /// below 0.5, no-control prior 0.2.
     pub fn dynamic(max_rounds: usize) -> Self {
+        Self::dynamic_at(0.95, max_rounds)
+    }
+
+    /// Dynamic stopping at `threshold`, the other settings [`DecisionRule::dynamic`]'s.
+    pub fn dynamic_at(threshold: f64, max_rounds: usize) -> Self {
         DecisionRule::Dynamic {
-            threshold: 0.95,
+            threshold,
             min_rounds: 1,
             max_rounds,
             credible: 0.5,

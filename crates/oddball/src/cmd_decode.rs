@@ -6,14 +6,11 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use oddball_decode::decision::{DecisionRule, MAX_ROUNDS};
-use oddball_decode::pipeline::Preprocess;
 use oddball_decode::preset::Preset;
 use oddball_io::nic::{NicFormat, NicMode};
 use oddball_io::Paradigm;
 use oddball_live::decode::{self, DecodePlan, MarkerSpec};
 use oddball_live::source::SourceSpec;
-use oddball_session::decoder::DecoderParams;
 use oddball_session::listener::{ListenerParams, ListenerStart};
 
 use crate::load::load_model;
@@ -101,24 +98,6 @@ pub fn run(args: &DecodeArgs) -> Result<Option<String>> {
     if !(args.resolve_timeout > 0.0 && args.resolve_timeout <= 3600.0) {
         anyhow::bail!("--resolve-timeout {}: 0 to 3600 s", args.resolve_timeout);
     }
-    let rule = args
-        .dynamic_stopping
-        .then(|| match DecisionRule::dynamic(MAX_ROUNDS) {
-            DecisionRule::Dynamic {
-                min_rounds,
-                max_rounds,
-                credible,
-                p_no_control,
-                ..
-            } => DecisionRule::Dynamic {
-                threshold: args.threshold,
-                min_rounds,
-                max_rounds,
-                credible,
-                p_no_control,
-            },
-            fixed => fixed,
-        });
     let markers = if args.markers == "recording" {
         MarkerSpec::Recording
     } else {
@@ -133,21 +112,12 @@ pub fn run(args: &DecodeArgs) -> Result<Option<String>> {
     let plan = DecodePlan {
         source: args.source.clone(),
         markers,
-        listener: ListenerParams {
+        listener: ListenerParams::new(
             paradigm,
             start,
-            rule,
-            decoder: DecoderParams {
-                pipeline: args.pipeline,
-                // The peer stack's band and window (what `evaluate` and `train` use), run causally.
-                preprocess: Preprocess::peer().as_causal(),
-                rule: DecisionRule::Fixed { rounds: MAX_ROUNDS },
-                cv_folds: 5,
-                chunk: 20,
-                seed: 0,
-                stopping: None,
-            },
-        },
+            args.pipeline,
+            args.dynamic_stopping.then_some(args.threshold),
+        ),
         outlet: (args.outlet != "none").then(|| args.outlet.clone()),
         paced: !args.fast,
         // A live stream sample by sample (a decision goes as soon as its last sample is in); a
