@@ -17,7 +17,6 @@
 //! the summary says why it stopped. Bad markers and a marker stream that disappears are counted,
 //! never fatal.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use oddball_io::paradigm::MarkerKind;
@@ -413,11 +412,4 @@ impl Markers {
             Self::Recording { .. } => None,
         }
     }
-}
-
-/// Where JSON lines go.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum LinesOut {
-    Stdout,
-    File(PathBuf),
 }

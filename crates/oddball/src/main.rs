@@ -83,7 +83,7 @@ enum Command {
     #[command(after_help = "Examples:
   oddball decode --source lsl:EEG --markers lsl:MARKERS --paradigm paradigms/speller-6x6.toml --model M.json --out decisions.jsonl
   oddball decode --source lsl:type=EEG --markers lsl:type=Markers --paradigm paradigms/four-bulb.toml --calibration none
-  oddball decode --source replay:eeg3_2.dat --markers recording --paradigm paradigms/speller-6x6.toml --model M.json --fast")]
+  oddball decode --source replay:eeg3_2.dat --markers recording --paradigm paradigms/speller-6x6-rows-first.toml --model M.json --fast")]
     Decode(Box<cmd_decode::DecodeArgs>),
     /// Serve the simulated subject as a live amplifier stream: NIC's TCP protocol or an LSL outlet.
     #[command(after_help = "Examples:

@@ -56,9 +56,10 @@ fn eeg3_spells_its_text_with_a_model_and_stops_early_with_the_same_characters() 
     }
 }
 
-#[test]
-fn a_demo_session_played_as_a_foreign_four_choice_paradigm_decides_as_the_demo_did() {
-    let tmp = tmp_dir("cli-decode-demo");
+/// A quick demo session of six commands (after its 40 calibration trials): the temporary
+/// folder and the demo's report folder in it.
+fn demo_session(tag: &str) -> (oddball_testkit::TempDir, std::path::PathBuf) {
+    let tmp = tmp_dir(tag);
     let out = tmp.join("demo");
     oddball_ok(&[
         "demo",
@@ -67,6 +68,12 @@ fn a_demo_session_played_as_a_foreign_four_choice_paradigm_decides_as_the_demo_d
         "--out",
         out.to_str().unwrap(),
     ]);
+    (tmp, out)
+}
+
+#[test]
+fn a_demo_session_played_as_a_foreign_four_choice_paradigm_decides_as_the_demo_did() {
+    let (_tmp, out) = demo_session("cli-decode-demo");
     let session = out.join("session.dat");
     let model = out.join("model.json");
     let v = decode(
@@ -102,15 +109,7 @@ fn a_demo_session_played_as_a_foreign_four_choice_paradigm_decides_as_the_demo_d
 /// Target/NonTarget) fit the decoder, which then decides the rest as the demo's own model did.
 #[test]
 fn a_demo_session_calibrated_in_stream_decides_its_commands() {
-    let tmp = tmp_dir("cli-decode-calibrate");
-    let out = tmp.join("demo");
-    oddball_ok(&[
-        "demo",
-        "--commands",
-        "up,right,down,left,left,up",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (_tmp, out) = demo_session("cli-decode-calibrate");
     let session = out.join("session.dat");
     let v = decode(
         session.to_str().unwrap(),
