@@ -88,7 +88,7 @@ pub struct MarkerCounts {
     pub unknown: u64,
     /// Flashes whose epoch started before the samples still kept (far in the past).
     pub too_old: u64,
-    /// Flashes stamped more than [`MAX_AHEAD_S`] past the newest sample.
+    /// Flashes stamped more than [`super::MAX_AHEAD_S`] past the newest sample.
     pub future: u64,
     /// Flashes stamped before the previous flash.
     pub out_of_order: u64,
