@@ -181,7 +181,9 @@ impl Model {
     /// Checks that a recording's channels and rate are the ones the model was trained on, in
     /// its order. See [`Model::channel_order`] for matching a recording's channels by name.
     pub fn check_layout(&self, ch_names: &[String], sfreq: f64) -> Result<()> {
-        if ch_names != self.ch_names.as_slice() || (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
+        if ch_names != self.ch_names.as_slice()
+            || !oddball_signal::rate::same_sfreq(sfreq, self.sfreq)
+        {
             return Err(DecodeError::LayoutMismatch {
                 expected: format!("{} Hz, channels {:?}", self.sfreq, self.ch_names),
                 got: format!("{sfreq} Hz, channels {ch_names:?}"),
@@ -195,7 +197,7 @@ impl Model {
     /// recording may hold more channels, in any order). A missing channel or another rate is
     /// [`DecodeError::LayoutMismatch`] naming it.
     pub fn channel_order(&self, ch_names: &[String], sfreq: f64) -> Result<Vec<usize>> {
-        if (sfreq - self.sfreq).abs() > 1e-9 * self.sfreq {
+        if !oddball_signal::rate::same_sfreq(sfreq, self.sfreq) {
             return Err(DecodeError::LayoutMismatch {
                 expected: format!("{} Hz", self.sfreq),
                 got: format!("{sfreq} Hz"),

@@ -217,7 +217,9 @@ pub fn load_epochs<'a>(
     let mut epoched = Vec::new();
     for (path, how) in runs {
         let mut rec = read_labelled(path, how)?;
-        if let Some(to) = resample.filter(|&f| (rec.raw.sfreq() - f).abs() > 1e-9 * f) {
+        if let Some(to) =
+            resample.filter(|&f| !oddball_signal::rate::same_sfreq(rec.raw.sfreq(), f))
+        {
             rec.raw = oddball_signal::resample::resample_raw(&rec.raw, to).map_err(|source| {
                 DatasetError::Resample {
                     path: path.to_path_buf(),

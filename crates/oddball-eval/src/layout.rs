@@ -97,7 +97,7 @@ impl Layout {
                 })?;
         }
         let from = rec.raw.sfreq();
-        if (from - self.sfreq).abs() <= 1e-9 * self.sfreq {
+        if oddball_signal::rate::same_sfreq(from, self.sfreq) {
             return Ok((rec, None));
         }
         // Another rate is resampled (polyphase, as MNE's resample), not refused.

@@ -190,7 +190,7 @@ impl AnySource {
     /// changed.
     pub fn at_rate(self, sfreq: f64) -> Result<(AnySource, Option<RateChange>), LiveError> {
         let from_sfreq = self.sfreq();
-        if (from_sfreq - sfreq).abs() <= 1e-9 * sfreq {
+        if oddball_signal::rate::same_sfreq(from_sfreq, sfreq) {
             return Ok((self, None));
         }
         let change = |whole_file| RateChange {

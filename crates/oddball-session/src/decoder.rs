@@ -170,7 +170,7 @@ pub(crate) fn model_channels(
     ch_names: &[String],
     sfreq: f64,
 ) -> Result<Vec<usize>, SessionError> {
-    if (sfreq - model.sfreq).abs() > 1e-9 * model.sfreq {
+    if !oddball_signal::rate::same_sfreq(sfreq, model.sfreq) {
         return Err(SessionError::ModelRate {
             model_sfreq: model.sfreq,
             stream_sfreq: sfreq,

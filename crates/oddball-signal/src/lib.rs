@@ -10,6 +10,8 @@
 //! * [`resample`]: polyphase resampling by `up / down` (scipy's `resample_poly`), and a
 //!   recording moved to another rate with its events.
 //! * [`non_finite`]: NaN and ±∞ held at their channel's last finite value, and where they were.
+//! * [`rate`]: when two sampling rates are one, and the nominal rate behind one estimated from
+//!   timestamps.
 //! * [`preprocess`]: the one path from continuous EEG to epochs (held non-finite samples, detrend,
 //!   band-pass, cut, rejection), MNE's `Epochs(raw, events, tmin, tmax, reject, flat)`.
 //!
@@ -44,6 +46,7 @@ mod error;
 pub mod filter;
 pub mod non_finite;
 pub mod preprocess;
+pub mod rate;
 pub mod resample;
 mod types;
 

@@ -34,7 +34,8 @@ pub fn run(args: &InspectArgs) -> Result<()> {
     let read_options = args.events.read_options()?;
     let mut recordings = Vec::with_capacity(args.files.len());
     for path in &args.files {
-        let rec = oddball_eval::dataset::read_mapped(path, mapping.as_ref(), &read_options)?;
+        let rec = oddball_eval::dataset::read_mapped(path, mapping.as_ref(), &read_options)
+            .map_err(crate::load::with_flags)?;
         print!("{}", oddball_eval::text::recording(&rec));
         recordings.push(rec);
     }

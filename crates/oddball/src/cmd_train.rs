@@ -14,7 +14,7 @@ use oddball_eval::{dataset, sessions, unsupervised};
 use oddball_io::ReadOptions;
 use oddball_session::record::is_session;
 
-use crate::load::{load_epochs, load_model, EventArgs, Layout};
+use crate::load::{load_epochs, load_model, with_flags, EventArgs, Layout};
 use crate::preset_arg::{list_help, one_help, preset, PipelineList, DEFAULT_PIPELINE};
 use oddball_decode::preset::Preset;
 
@@ -211,7 +211,7 @@ pub fn run_evaluate(args: &EvaluateArgs) -> Result<()> {
     if let Some(path) = &args.model {
         let model = load_model(path)?;
         if let Some(first) = args.test.first() {
-            if is_session(&dataset::read(first, &ReadOptions::default())?) {
+            if is_session(&dataset::read(first, &ReadOptions::default()).map_err(with_flags)?) {
                 return evaluate_sessions(args, &model, path);
             }
         }

@@ -88,7 +88,7 @@ impl EventArgs {
 }
 
 /// A library error with the flags that would fix it named, as the message says them.
-fn with_flags(e: DatasetError) -> anyhow::Error {
+pub(crate) fn with_flags(e: DatasetError) -> anyhow::Error {
     match e {
         DatasetError::Resample { path, to, source } => anyhow::Error::new(source).context(format!(
             "resampling {} to --resample {to} Hz",
@@ -105,6 +105,14 @@ fn with_flags(e: DatasetError) -> anyhow::Error {
             )),
             l => l.into(),
         },
+        // A reader that could not find the rate (no time column, too few rows): the option
+        // that gives it.
+        DatasetError::Read { path, source } if source.to_string().contains("sampling rate") => {
+            anyhow::Error::new(*source).context(format!(
+                "reading {}; give its sampling rate with --sfreq HZ (in a manifest: [read] sfreq)",
+                path.display()
+            ))
+        }
         e => e.into(),
     }
 }

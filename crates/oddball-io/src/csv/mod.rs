@@ -8,7 +8,8 @@
 //! * Channel values are multiplied by [`CsvOptions::scale_to_uv`] (1 by default: the values are
 //!   taken to be µV, as in Muse files).
 //! * Sampling rate: [`CsvOptions::sfreq`] when given; else estimated from the time column as
-//!   `(n − 1) / (t_last − t_first)`, the mean rate. (The median interval is useless for Muse files:
+//!   `(n − 1) / (t_last − t_first)`, the mean rate, and taken as the nominal rate within 0.1 % of
+//!   it ([`oddball_signal::rate::nominal_sfreq`]: 240.0000073 Hz is 240 Hz). (The median interval is useless for Muse files:
 //!   their timestamps are rounded to 1 ms, so intervals are 3 or 4 ms and the median gives 250 Hz
 //!   instead of 256 Hz.) The estimate is kept in [`CsvInfo::estimated_sfreq`] either way.
 //! * Events: at each sample whose marker is non-zero and differs from the previous sample's
@@ -511,7 +512,7 @@ pub fn parse_csv(bytes: &[u8], path: &Path, options: &CsvOptions) -> Result<Reco
             })
         }
         None => match (time_idx, estimated_sfreq) {
-            (Some(_), Some(f)) => (f, true),
+            (Some(_), Some(f)) => (oddball_signal::rate::nominal_sfreq(f), true),
             (Some(j), None) => return Err(csv_err(
                 path,
                 n_times + 1,
