@@ -71,3 +71,50 @@ fn only_the_twelve_codes_make_a_speller() {
     let rec = read_mat(&speller).unwrap();
     assert!(rec.speller.is_some());
 }
+
+/// BCI Competition III data set II's layout (one block per character, `Signal` 3-D) against
+/// scipy's reading of a file scipy wrote (`tools/golden/mat/make_competition3.py`): the blocks one
+/// after the other, the flashes with their codes and targets, `TargetChar` as the spelled text.
+#[test]
+fn competition_iii_blocks_read_as_scipy_concatenates_them() {
+    #[derive(serde::Deserialize)]
+    struct Golden {
+        sfreq: f64,
+        data: Vec<Vec<f64>>,
+        events: Vec<(usize, u32, bool)>,
+        text: String,
+        flashes_per_character: usize,
+    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/mat");
+    let g: Golden = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("competition3_small.json")).unwrap(),
+    )
+    .unwrap();
+    let rec = read_mat(dir.join("competition3_small.mat")).unwrap();
+    assert_eq!(rec.raw.sfreq(), g.sfreq);
+    let data = rec.raw.data();
+    assert_eq!(data.dim(), (g.data.len(), g.data[0].len()));
+    for (c, row) in g.data.iter().enumerate() {
+        for (t, &v) in row.iter().enumerate() {
+            assert_eq!(data[[c, t]], v, "channel {c}, sample {t}");
+        }
+    }
+    let events: Vec<(usize, u32, bool)> = rec
+        .raw
+        .events()
+        .iter()
+        .map(|e| (e.onset, e.code, e.target.unwrap()))
+        .collect();
+    assert_eq!(events, g.events);
+    let sp = rec.speller.as_ref().expect("a speller: codes 1-12");
+    assert_eq!(sp.text_to_spell.as_deref(), Some(g.text.as_str()));
+    assert_eq!(sp.flashes_per_character, Some(g.flashes_per_character));
+    assert_eq!(sp.decode(rec.raw.events()), "CAT");
+    // The options still win.
+    let o = MatOptions {
+        text_to_spell: Some("DOG".into()),
+        ..Default::default()
+    };
+    let rec = read_mat_with(dir.join("competition3_small.mat"), &o).unwrap();
+    assert_eq!(rec.speller.unwrap().text_to_spell.as_deref(), Some("DOG"));
+}

@@ -15,6 +15,11 @@
 //! * The files store raw amplifier units and no gain; the samples are passed on unscaled (the
 //!   [`Recording`]'s "µV" are these units here; [`MatInfo::units`] says so).
 //!
+//! * BCI Competition III data set II's files, one block per character (`Signal`
+//!   `n_characters × n_times × n_channels`, states `n_characters × n_times`, `TargetChar`), are
+//!   read as the blocks one after the other (`competition3.rs`); the flashes per character and,
+//!   for training files, the spelled text come from the blocks and `TargetChar`.
+//!
 //! # Events and the speller
 //! * An event where `Flashing` goes 0 → 1 (a first sample of 1 counts); its code is
 //!   `StimulusCode` there (must be a whole number ≥ 1), its target flag `StimulusType != 0` there
@@ -36,6 +41,7 @@ use std::path::Path;
 use ndarray::Array2;
 use oddball_signal::Event;
 
+use super::competition3::PerCharacter;
 use super::file::{MatArray, MatFile, MatValue, MatVariable};
 pub use super::info::{MatInfo, MatVarSummary};
 use super::parse::parse_mat_file;
@@ -102,8 +108,9 @@ pub fn read_mat_with(path: impl AsRef<Path>, options: &MatOptions) -> Result<Rec
 
 /// Parses the bytes of a MAT file in the BCI Competition layout; `path` names it in errors.
 pub fn parse_mat(bytes: &[u8], path: &Path, options: &MatOptions) -> Result<Recording, IoError> {
-    let file = parse_mat_file(bytes, path)?;
-    recording(file, path, options)
+    let mut file = parse_mat_file(bytes, path)?;
+    let per_char = super::competition3::flatten(&mut file, &options.signal, path)?;
+    recording(file, path, options, per_char)
 }
 
 fn kind(a: &MatArray) -> String {
@@ -131,7 +138,12 @@ fn invalid(path: &Path, v: &MatVariable, field: &str, expected: &str, found: Str
     }
 }
 
-fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recording, IoError> {
+fn recording(
+    file: MatFile,
+    path: &Path,
+    options: &MatOptions,
+    per_char: Option<PerCharacter>,
+) -> Result<Recording, IoError> {
     let Some(sig) = file.get(&options.signal) else {
         return Err(IoError::Missing {
             path: path.to_path_buf(),
@@ -260,9 +272,13 @@ fn recording(file: MatFile, path: &Path, options: &MatOptions) -> Result<Recordi
         let mut sp = Speller::from_rows(&BCI_COMPETITION_MATRIX);
         if let Some(sp) = sp.as_mut() {
             sp.code_order = CodeOrder::ColumnsFirst;
-            sp.text_to_spell = options.text_to_spell.clone();
+            let (blocks, target_chars) = per_char
+                .map(|p| (p.flashes_per_character, p.text))
+                .unwrap_or_default();
+            sp.text_to_spell = options.text_to_spell.clone().or(target_chars);
             sp.flashes_per_character = options
                 .flashes_per_character
+                .or(blocks)
                 .or_else(|| flashes_per_character(&events));
         }
         sp

@@ -42,9 +42,10 @@
 //! # Layout
 //! `file.rs` holds the contents of a MAT file ([`MatFile`] and its arrays), `parse.rs` reads
 //! them from bytes, `info.rs` holds what a recording keeps of them ([`MatInfo`]), `bci.rs` makes a [`Recording`](crate::Recording) of the BCI Competition
-//! layout.
+//! layout, `competition3.rs` turns BCI Competition III's per-character blocks into that layout.
 
 pub mod bci;
+mod competition3;
 mod file;
 mod info;
 mod parse;
