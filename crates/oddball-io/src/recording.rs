@@ -7,6 +7,7 @@ use oddball_signal::Raw;
 use serde::{Deserialize, Serialize};
 
 use crate::bci2000::Bci2000Info;
+use crate::brainvision::BrainVisionInfo;
 use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
@@ -30,6 +31,8 @@ pub enum Format {
     Xdf,
     /// MATLAB MAT v5/v7 (BCI Competition layout).
     Mat,
+    /// BrainVision `.vhdr` + `.vmrk` + binary data.
+    BrainVision,
 }
 
 /// The format-specific contents of a recording.
@@ -41,6 +44,7 @@ pub enum Details {
     Easy(EasyInfo),
     Xdf(Box<XdfInfo>),
     Mat(Box<MatInfo>),
+    BrainVision(Box<BrainVisionInfo>),
 }
 
 /// A recording read from a file.
@@ -101,6 +105,14 @@ impl Recording {
     pub fn mat(&self) -> Option<&MatInfo> {
         match &self.details {
             Details::Mat(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Header settings, channels and markers, for BrainVision files.
+    pub fn brainvision(&self) -> Option<&BrainVisionInfo> {
+        match &self.details {
+            Details::BrainVision(b) => Some(b),
             _ => None,
         }
     }
