@@ -11,6 +11,7 @@ use crate::brainvision::BrainVisionInfo;
 use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
+use crate::eeglab::EeglabInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -33,6 +34,8 @@ pub enum Format {
     Mat,
     /// BrainVision `.vhdr` + `.vmrk` + binary data.
     BrainVision,
+    /// EEGLAB `.set` (+ `.fdt`).
+    Eeglab,
 }
 
 /// The format-specific contents of a recording.
@@ -45,6 +48,7 @@ pub enum Details {
     Xdf(Box<XdfInfo>),
     Mat(Box<MatInfo>),
     BrainVision(Box<BrainVisionInfo>),
+    Eeglab(Box<EeglabInfo>),
 }
 
 /// A recording read from a file.
@@ -113,6 +117,14 @@ impl Recording {
     pub fn brainvision(&self) -> Option<&BrainVisionInfo> {
         match &self.details {
             Details::BrainVision(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// MAT header, `EEG` fields, data file and events, for EEGLAB files.
+    pub fn eeglab(&self) -> Option<&EeglabInfo> {
+        match &self.details {
+            Details::Eeglab(e) => Some(e),
             _ => None,
         }
     }
