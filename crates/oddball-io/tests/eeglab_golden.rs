@@ -50,7 +50,10 @@ fn check(g: &Value) -> f64 {
                 assert_eq!(e.label, None);
             }
             Err(_) if desc == "3 nontarget: A" => {
-                assert_eq!((e.code, e.target, e.label.as_deref()), (3, Some(false), Some("A")));
+                assert_eq!(
+                    (e.code, e.target, e.label.as_deref()),
+                    (3, Some(false), Some("A"))
+                );
             }
             Err(_) => {
                 assert_eq!(e.label.as_deref(), Some(desc), "{file}");
@@ -138,7 +141,10 @@ fn renamed_set_reads_its_own_fdt() {
 #[test]
 fn epoched_is_refused_as_mne_refuses_it() {
     let gold = golden("eeglab/golden.json");
-    assert!(gold["epoched_mne"].as_str().unwrap().contains("number of trials is 2"));
+    assert!(gold["epoched_mne"]
+        .as_str()
+        .unwrap()
+        .contains("number of trials is 2"));
     let e = read(fixture("eeglab/epoched.set")).unwrap_err();
     assert!(matches!(e, IoError::Unsupported { .. }), "{e}");
     assert!(e.to_string().contains("EEG.trials = 2"), "{e}");

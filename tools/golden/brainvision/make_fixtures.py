@@ -8,9 +8,10 @@ Writes into crates/oddball-io/tests/fixtures/brainvision/ (run from the workspac
 * pybv_int16.{vhdr,vmrk,eeg}: pybv.write_brainvision(fmt="binary_int16", resolution 0.5 µV and, for
   one channel in mV, 0.0005 mV) with Stimulus and Response events;
 * hand_int32_vec.{vhdr,vmrk,eeg}: written byte by byte here: INT_32, VECTORIZED, DataPoints,
-  Codepage=ANSI (cp1252 bytes µV, °C in the header; the marker file stays ASCII, as MNE reads it as UTF-8 when looking for the date), a `\\1` comma in a channel name, an empty resolution,
-  a non-voltage channel (°C), a fractional sampling interval, a text Stimulus description, a
-  New Segment with a date and a marker beyond the data.
+  Codepage=ANSI (cp1252 bytes µV, °C in the header; the marker file stays ASCII, since MNE
+  reads it as UTF-8 when looking for the date), a `\\1` comma in a channel name, an empty
+  resolution, a non-voltage channel (°C), a fractional sampling interval, text Stimulus
+  descriptions, a New Segment with a date and a marker beyond the data.
 
 Each gets a JSON with what mne.io.read_raw_brainvision reads: channel names, sfreq, the data
 (µV for voltage channels, the file's own unit for the others), annotations (onset in samples,

@@ -12,13 +12,16 @@ use super::ini;
 use super::read::marker_events;
 use super::types::BvMarker;
 
+/// Every marker, the events, the codes of the texts.
+pub(super) type Markers = (Vec<BvMarker>, Vec<Event>, BTreeMap<String, u32>);
+
 /// The markers of a `.vmrk` file in file order, the events of those inside the recording's
 /// `n_times` samples, and the codes given to non-numeric descriptions.
 pub(super) fn parse_markers(
     bytes: &[u8],
     path: &Path,
     n_times: usize,
-) -> Result<(Vec<BvMarker>, Vec<Event>, BTreeMap<String, u32>), IoError> {
+) -> Result<Markers, IoError> {
     let ini = ini::parse(bytes, path, "Marker")?;
     let mut markers = Vec::new();
     for e in ini.section("Marker Infos") {
