@@ -6,10 +6,10 @@ use std::path::Path;
 
 use oddball_signal::Event;
 
+use crate::events::LabelCodes;
 use crate::IoError;
 
 use super::ini;
-use super::read::marker_events;
 use super::types::BvMarker;
 
 /// Every marker, the events, the codes of the texts.
@@ -17,11 +17,7 @@ pub(super) type Markers = (Vec<BvMarker>, Vec<Event>, BTreeMap<String, u32>);
 
 /// The markers of a `.vmrk` file in file order, the events of those inside the recording's
 /// `n_times` samples, and the codes given to non-numeric descriptions.
-pub(super) fn parse_markers(
-    bytes: &[u8],
-    path: &Path,
-    n_times: usize,
-) -> Result<Markers, IoError> {
+pub(super) fn parse_markers(bytes: &[u8], path: &Path, n_times: usize) -> Result<Markers, IoError> {
     let ini = ini::parse(bytes, path, "Marker")?;
     let mut markers = Vec::new();
     for e in ini.section("Marker Infos") {
@@ -98,4 +94,40 @@ pub(super) fn parse_markers(
     }
     let (events, codes) = marker_events(&mut markers, n_times);
     Ok((markers, events, codes))
+}
+
+/// The events of the markers: `Stimulus` `S n` → code n, `Response` `R n` → code 1000 + n
+/// (MNE's numbering), any other `Stimulus`/`Response` description → a code from
+/// [`LabelCodes`]; each labelled `Type/Description` as MNE names its annotation.
+fn marker_events(markers: &mut [BvMarker], n_times: usize) -> (Vec<Event>, BTreeMap<String, u32>) {
+    let numeric: Vec<Option<u32>> = markers.iter().map(numeric_code).collect();
+    let max = numeric.iter().flatten().copied().max().unwrap_or(0);
+    let mut labels = LabelCodes::after(max);
+    let mut events = Vec::new();
+    for (m, num) in markers.iter_mut().zip(numeric) {
+        if m.kind != "Stimulus" && m.kind != "Response" {
+            continue;
+        }
+        let label = format!("{}/{}", m.kind, m.description);
+        let code = num.unwrap_or_else(|| labels.code(&label));
+        m.code = Some(code);
+        if m.onset < n_times {
+            events.push(Event::new(m.onset, code).with_label(label));
+        }
+    }
+    (events, labels.into_map())
+}
+
+/// `S  1` of a `Stimulus` → 1, `R 12` of a `Response` → 1012; `None` for anything else.
+fn numeric_code(m: &BvMarker) -> Option<u32> {
+    let (letter, offset) = match m.kind.as_str() {
+        "Stimulus" => ('S', 0u32),
+        "Response" => ('R', 1000),
+        _ => return None,
+    };
+    let digits = m.description.strip_prefix(letter)?.trim();
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse::<u32>().ok()?.checked_add(offset)
 }

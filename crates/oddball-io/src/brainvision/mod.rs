@@ -26,7 +26,9 @@
 //!
 //! The **data file** must be exactly `NumberOfChannels × n_times × bytes per value` long: a
 //! file cut inside a sample is an [`IoError::Truncated`](crate::IoError::Truncated) naming the
-//! sample and its byte offset.
+//! sample and its byte offset. With `DataPoints` in the header every cut is an error; without
+//! it (pybv and MNE do not write it) the file's length is all that gives `n_times`, so a file
+//! cut exactly between two samples cannot be told from a shorter recording.
 //!
 //! The **marker file** (`.vmrk`, same INI form, `Marker` for `Header` in its first line) lists
 //! `[Marker Infos]` `MkN=Type,Description,Position,Size,Channel[,Date]` with a 1-based
@@ -58,3 +60,55 @@ mod types;
 
 pub use read::{parse_brainvision, read_brainvision};
 pub use types::{BrainVisionInfo, BvBinaryFormat, BvChannel, BvMarker, BvOrientation};
+
+#[cfg(test)]
+mod tests {
+    use super::ini::*;
+    use std::path::Path;
+
+    #[test]
+    fn encodings() {
+        assert_eq!(
+            Encoding::Cp1252.decode(b"\x80 \xb5V \xb0C \x81"),
+            "€ µV °C \u{81}"
+        );
+        assert_eq!(Encoding::Latin1.decode(b"\x80\xb5"), "\u{80}µ");
+        let ini = parse(
+            b"Brain Vision Data Exchange Header File Version 1.0\nCodepage=ANSI\n[S]\nk=\xb5V\n",
+            Path::new("x.vhdr"),
+            "Header",
+        )
+        .unwrap();
+        assert_eq!(ini.encoding, Encoding::Cp1252);
+        assert_eq!(ini.text(ini.get("s", "K").unwrap()), "µV");
+        // Not valid UTF-8 and no codepage: Latin-1.
+        let ini = parse(
+            b"BrainVision Data Header File\n[S]\nk=\xb5\n",
+            Path::new("x"),
+            "Header",
+        )
+        .unwrap();
+        assert_eq!(ini.encoding, Encoding::Latin1);
+    }
+
+    #[test]
+    fn fields_keep_their_offsets() {
+        let text = b"Brain Vision Data Exchange Header File Version 1.0\r\n[Channel Infos]\r\nCh1= a\\1b,ref,,uV \r\n";
+        let ini = parse(text, Path::new("x.vhdr"), "Header").unwrap();
+        let e = ini.get("channel infos", "ch1").unwrap();
+        let f = ini.fields(e);
+        let texts: Vec<&str> = f.iter().map(|x| x.text.as_str()).collect();
+        assert_eq!(texts, ["a,b", "ref", "", "uV"]);
+        for x in &f[1..] {
+            assert_eq!(&text[x.at..x.at + x.text.len()], x.text.as_bytes());
+        }
+        assert_eq!(f[0].at, 74);
+        assert!(parse(
+            b"Brain Vision Data Exchange Marker File\n",
+            Path::new("x"),
+            "Header"
+        )
+        .is_err());
+        assert!(parse(b"", Path::new("x"), "Header").is_err());
+    }
+}

@@ -3,13 +3,10 @@
 
 use std::path::{Component, Path, PathBuf};
 
-use ndarray::Array2;
-use oddball_signal::Event;
-
-use crate::events::LabelCodes;
 use crate::files::read_file;
 use crate::units::microvolts_per;
 use crate::{Details, Format, IoError, Recording};
+use ndarray::Array2;
 
 use super::ini::{self, Ini};
 use super::types::*;
@@ -356,43 +353,4 @@ fn channels(ini: &Ini<'_>) -> Result<Vec<BvChannel>, IoError> {
         });
     }
     Ok(out)
-}
-
-/// The events of the markers: `Stimulus` `S n` → code n, `Response` `R n` → code 1000 + n
-/// (MNE's numbering), any other `Stimulus`/`Response` description → a code from
-/// [`LabelCodes`]; each labelled `Type/Description` as MNE names its annotation.
-pub(super) fn marker_events(
-    markers: &mut [BvMarker],
-    n_times: usize,
-) -> (Vec<Event>, std::collections::BTreeMap<String, u32>) {
-    let numeric: Vec<Option<u32>> = markers.iter().map(numeric_code).collect();
-    let max = numeric.iter().flatten().copied().max().unwrap_or(0);
-    let mut labels = LabelCodes::after(max);
-    let mut events = Vec::new();
-    for (m, num) in markers.iter_mut().zip(numeric) {
-        if m.kind != "Stimulus" && m.kind != "Response" {
-            continue;
-        }
-        let label = format!("{}/{}", m.kind, m.description);
-        let code = num.unwrap_or_else(|| labels.code(&label));
-        m.code = Some(code);
-        if m.onset < n_times {
-            events.push(Event::new(m.onset, code).with_label(label));
-        }
-    }
-    (events, labels.into_map())
-}
-
-/// `S  1` of a `Stimulus` → 1, `R 12` of a `Response` → 1012; `None` for anything else.
-fn numeric_code(m: &BvMarker) -> Option<u32> {
-    let (letter, offset) = match m.kind.as_str() {
-        "Stimulus" => ('S', 0u32),
-        "Response" => ('R', 1000),
-        _ => return None,
-    };
-    let digits = m.description.strip_prefix(letter)?.trim();
-    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    digits.parse::<u32>().ok()?.checked_add(offset)
 }

@@ -29,6 +29,11 @@
 //!   appearance from one above the largest numeric code ([`EeglabInfo::label_codes`], the rule
 //!   of EDF+ annotations). EEGLAB's `boundary` events are events like any other text.
 //!
+//! A MAT file holds no count of its variables: a `.set` of top-level variables cut exactly
+//! between two variables after the ones needed still reads (with all its samples, which
+//! `nbchan × pnts` checks, but without the variables cut off, `event` among them). A struct
+//! `EEG` is one variable, so any cut of it is an error.
+//!
 //! MAT v7.3 (HDF5) `.set` files are refused with an error naming the version (no HDF5 reader
 //! here). Every error names the `.set` (or `.fdt`), the `EEG` field, and the byte offset of the
 //! variable holding it (for a struct `EEG`, that variable's offset). Values are checked against
