@@ -25,7 +25,7 @@ printf '{"t":"on","id":7,"code":2,"on_ms":1000.0}' > "$corpus/panel/on"
 printf '{"t":"off","id":7,"off_ms":1100.2}' > "$corpus/panel/off"
 printf '{"t":"hello","frame_ms":16.7,"agent":"HeadlessChrome"}' > "$corpus/panel/hello"
 
-for t in bci2000 csv edf easy nic model xdf panel mat; do mkdir -p "$corpus/$t"; done
+for t in bci2000 csv edf easy nic model xdf panel mat brainvision eeglab; do mkdir -p "$corpus/$t"; done
 
 # ---------------------------------------------------------------- mat
 # The MAT fixtures (v5, v7 compressed, narrow types, big-endian, BCI layout, v7.3 header) and the
@@ -34,6 +34,23 @@ cp "$fixtures"/mat/*.mat "$corpus/mat/"
 if [ -f "$data/bci-competition-ii-iib/AAS010R01.mat" ]; then
     head -c 65536 "$data/bci-competition-ii-iib/AAS010R01.mat" > "$corpus/mat/AAS010R01_head.mat"
 fi
+
+# ---------------------------------------------------------------- brainvision, eeglab
+# Each BrainVision fixture as one input: u16 LE header length, u16 LE marker length, the
+# header, the markers, the data. Each EEGLAB .set with its .fdt (or none) at the end, behind
+# the .fdt's u16 LE length.
+u16le() { printf '\\x%02x\\x%02x' $(($1 & 255)) $(($1 >> 8)); }
+for stem in mne_float32 pybv_int16 hand_int32_vec; do
+    b="$fixtures/brainvision/$stem"
+    { printf "$(u16le "$(wc -c < "$b.vhdr")")$(u16le "$(wc -c < "$b.vmrk")")"
+      cat "$b.vhdr" "$b.vmrk" "$b.eeg"; } > "$corpus/brainvision/$stem"
+done
+for set in mne_export struct_fdt epoched; do
+    fdt="$fixtures/eeglab/$set.fdt"
+    n=0; [ -f "$fdt" ] && n=$(wc -c < "$fdt")
+    { printf "$(u16le "$n")"; cat "$fixtures/eeglab/$set.set"
+      if [ -f "$fdt" ]; then cat "$fdt"; fi; } > "$corpus/eeglab/$set"
+done
 
 # ---------------------------------------------------------------- bci2000
 # A BCI2000 v1.1 file: 2 channels of `fmt` (each sample the bytes `sample`, printf escapes),
@@ -140,6 +157,6 @@ if [ "${SKIP_MODEL:-0}" != 1 ]; then
         -- --exact write_model_seeds --nocapture
 fi
 
-for t in bci2000 csv edf easy nic model xdf panel mat; do
+for t in bci2000 csv edf easy nic model xdf panel mat brainvision eeglab; do
     printf '%-8s %3d seeds\n' "$t" "$(ls "$corpus/$t" | wc -l)"
 done

@@ -280,6 +280,42 @@ impl crate::Recording {
     }
 }
 
+/// Codes for event texts that carry none (EDF+ annotations, EEGLAB event types, BrainVision
+/// marker descriptions that are not numbers): one code per distinct text, in order of first
+/// appearance, counting up from one above the largest numeric code of the file. The one home
+/// of that rule for every reader.
+#[derive(Debug, Default)]
+pub(crate) struct LabelCodes {
+    codes: BTreeMap<String, u32>,
+    next: u32,
+}
+
+impl LabelCodes {
+    /// Codes starting at `max_numeric_code + 1` (saturating).
+    pub(crate) fn after(max_numeric_code: u32) -> Self {
+        Self {
+            codes: BTreeMap::new(),
+            next: max_numeric_code.saturating_add(1),
+        }
+    }
+
+    /// The code of `text`: the one it already has, else the next free one.
+    pub(crate) fn code(&mut self, text: &str) -> u32 {
+        if let Some(&c) = self.codes.get(text) {
+            return c;
+        }
+        let c = self.next;
+        self.next = self.next.saturating_add(1);
+        self.codes.insert(text.to_string(), c);
+        c
+    }
+
+    /// Every text with its code.
+    pub(crate) fn into_map(self) -> BTreeMap<String, u32> {
+        self.codes
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -384,5 +420,18 @@ mod tests {
         let big = "x".repeat(10_000);
         let ev = Events::new(vec![Event::new(0, 1).with_label(big)]);
         assert!(describe_events(&ev).len() < 80);
+    }
+
+    #[test]
+    fn label_codes_in_order_of_first_appearance() {
+        let mut c = LabelCodes::after(7);
+        assert_eq!(c.code("b"), 8);
+        assert_eq!(c.code("a"), 9);
+        assert_eq!(c.code("b"), 8);
+        let map = c.into_map();
+        assert_eq!(map.len(), 2);
+        assert_eq!(map["a"], 9);
+        let mut top = LabelCodes::after(u32::MAX);
+        assert_eq!(top.code("x"), u32::MAX);
     }
 }

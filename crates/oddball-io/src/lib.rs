@@ -13,9 +13,11 @@
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
 //! | `.mat` | [`mat`]: MATLAB v5/v7 (uncompressed and zlib); a recording from the BCI Competition layout (`signal` + BCI2000 states, 240 Hz unless given) | `Flashing` 0 → 1 (else `StimulusCode` 0 → non-zero), target from `StimulusType` |
+//! | `.vhdr` | [`brainvision`]: BrainVision 1.0 header + `.vmrk` markers + binary data (INT_16, INT_32, IEEE_FLOAT_32; multiplexed or vectorized) | `Stimulus` `S n` → n, `Response` `R n` → 1000 + n |
+//! | `.set` | [`eeglab`]: EEGLAB continuous data set (MAT v5/v7, `EEG` as variables or a struct), samples inside or in the `.fdt` | `EEG.event`: numeric `type` → code, text `type` → EDF+ annotation rule |
 //! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
-//! All six readers are written from scratch in this crate (each module says why). They share
+//! All eight readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
@@ -39,10 +41,12 @@
 //! ```
 
 pub mod bci2000;
+pub mod brainvision;
 pub mod csv;
 mod dispatch;
 pub mod easy;
 pub mod edf;
+pub mod eeglab;
 mod error;
 pub mod events;
 mod files;
@@ -65,6 +69,7 @@ pub use bci2000::{
     Bci2000WriteSummary, DataFormat, Parameter, Parameters, StateColumn, StateDef, StateRun,
     StateRuns, States,
 };
+pub use brainvision::{parse_brainvision, read_brainvision, BrainVisionInfo};
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
 pub use dispatch::read;
 pub use easy::{
@@ -75,6 +80,7 @@ pub use edf::{
     read_edf, read_edf_with, write_edf_plus, write_edf_plus_with, Annotation, EdfHeader, EdfInfo,
     EdfOptions, EdfSignal, EdfWriteOptions, EdfWriteSummary,
 };
+pub use eeglab::{parse_eeglab, read_eeglab, EeglabInfo};
 pub use error::{bounded, IoError, StateProblem, MAX_ECHO_CHARS};
 pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
 pub use files::{check_file, RECORDING_EXTENSIONS};

@@ -7,9 +7,11 @@ use oddball_signal::Raw;
 use serde::{Deserialize, Serialize};
 
 use crate::bci2000::Bci2000Info;
+use crate::brainvision::BrainVisionInfo;
 use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
+use crate::eeglab::EeglabInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -30,6 +32,10 @@ pub enum Format {
     Xdf,
     /// MATLAB MAT v5/v7 (BCI Competition layout).
     Mat,
+    /// BrainVision `.vhdr` + `.vmrk` + binary data.
+    BrainVision,
+    /// EEGLAB `.set` (+ `.fdt`).
+    Eeglab,
 }
 
 /// The format-specific contents of a recording.
@@ -41,6 +47,8 @@ pub enum Details {
     Easy(EasyInfo),
     Xdf(Box<XdfInfo>),
     Mat(Box<MatInfo>),
+    BrainVision(Box<BrainVisionInfo>),
+    Eeglab(Box<EeglabInfo>),
 }
 
 /// A recording read from a file.
@@ -101,6 +109,22 @@ impl Recording {
     pub fn mat(&self) -> Option<&MatInfo> {
         match &self.details {
             Details::Mat(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Header settings, channels and markers, for BrainVision files.
+    pub fn brainvision(&self) -> Option<&BrainVisionInfo> {
+        match &self.details {
+            Details::BrainVision(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// MAT header, `EEG` fields, data file and events, for EEGLAB files.
+    pub fn eeglab(&self) -> Option<&EeglabInfo> {
+        match &self.details {
+            Details::Eeglab(e) => Some(e),
             _ => None,
         }
     }

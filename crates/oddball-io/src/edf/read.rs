@@ -1,11 +1,11 @@
 //! Reading an EDF/EDF+/BDF/BDF+ file: header, data records, annotations as events.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
 use oddball_signal::Event;
 
+use crate::events::LabelCodes;
 use crate::files::read_file;
 use crate::units::microvolts_per;
 use crate::{Details, Format, IoError, Recording};
@@ -222,20 +222,12 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         .map(|a| parse_event_text(&a.text))
         .collect();
     let max_code = parsed.iter().flatten().map(|p| p.0).max().unwrap_or(0);
-    let mut label_codes: BTreeMap<String, u32> = BTreeMap::new();
-    let mut next = max_code.saturating_add(1);
+    let mut label_codes = LabelCodes::after(max_code);
     let mut events = Vec::new();
     for (a, p) in annotations.iter().zip(&parsed) {
         let (code, target, label) = match p {
             Some((c, t, l)) => (*c, *t, l.clone()),
-            None => {
-                let code = *label_codes.entry(a.text.clone()).or_insert_with(|| {
-                    let c = next;
-                    next = next.saturating_add(1);
-                    c
-                });
-                (code, None, Some(a.text.clone()))
-            }
+            None => (label_codes.code(&a.text), None, Some(a.text.clone())),
         };
         let pos = ((a.onset - start_offset) * sfreq).round();
         if pos >= 0.0 && pos < n_times as f64 {
@@ -265,7 +257,7 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         details: Details::Edf(Box::new(EdfInfo {
             header,
             annotations,
-            label_codes,
+            label_codes: label_codes.into_map(),
             start_offset,
             dropped_signals: dropped,
             non_voltage_signals: non_voltage,
