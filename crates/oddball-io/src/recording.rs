@@ -10,6 +10,7 @@ use crate::bci2000::Bci2000Info;
 use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
+use crate::fif::FifInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -30,6 +31,8 @@ pub enum Format {
     Xdf,
     /// MATLAB MAT v5/v7 (BCI Competition layout).
     Mat,
+    /// MNE / Neuromag FIF raw.
+    Fif,
 }
 
 /// The format-specific contents of a recording.
@@ -41,6 +44,7 @@ pub enum Details {
     Easy(EasyInfo),
     Xdf(Box<XdfInfo>),
     Mat(Box<MatInfo>),
+    Fif(Box<FifInfo>),
 }
 
 /// A recording read from a file.
@@ -101,6 +105,14 @@ impl Recording {
     pub fn mat(&self) -> Option<&MatInfo> {
         match &self.details {
             Details::Mat(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Channel records, trigger channels, annotations, skips and split parts, for FIF files.
+    pub fn fif(&self) -> Option<&FifInfo> {
+        match &self.details {
+            Details::Fif(f) => Some(f),
             _ => None,
         }
     }

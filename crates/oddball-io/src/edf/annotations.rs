@@ -1,5 +1,7 @@
 //! EDF+ annotations: time-stamped annotation lists (TALs) and the event text `CODE [target|nontarget][: LABEL]`.
 
+use std::collections::BTreeMap;
+
 use oddball_signal::Event;
 
 use crate::IoError;
@@ -115,6 +117,42 @@ pub(crate) fn parse_event_text(text: &str) -> Option<EventText> {
         return None;
     }
     Some((code, target, label))
+}
+
+/// The code, target flag and label of each annotation text, and the codes given to the texts
+/// that do not have the form `CODE [target|nontarget][: LABEL]`: one code per distinct text, in
+/// order of first appearance, counting up from one above the largest code in the texts and
+/// `other_max` (the largest code the recording's events have otherwise, so none is shared).
+/// EDF+ and FIF annotations both get their codes here.
+pub(crate) fn text_codes<'a>(
+    texts: impl IntoIterator<Item = &'a str>,
+    other_max: u32,
+) -> (Vec<EventText>, BTreeMap<String, u32>) {
+    let texts: Vec<&str> = texts.into_iter().collect();
+    let parsed: Vec<Option<EventText>> = texts.iter().map(|t| parse_event_text(t)).collect();
+    let max_code = parsed
+        .iter()
+        .flatten()
+        .map(|p| p.0)
+        .fold(other_max, u32::max);
+    let mut label_codes: BTreeMap<String, u32> = BTreeMap::new();
+    let mut next = max_code.saturating_add(1);
+    let out = texts
+        .iter()
+        .zip(parsed)
+        .map(|(text, p)| match p {
+            Some(p) => p,
+            None => {
+                let code = *label_codes.entry(text.to_string()).or_insert_with(|| {
+                    let c = next;
+                    next = next.saturating_add(1);
+                    c
+                });
+                (code, None, Some(text.to_string()))
+            }
+        })
+        .collect();
+    (out, label_codes)
 }
 
 /// The annotation text [`write_edf_plus`](super::write_edf_plus) writes for an event: `CODE [target|nontarget][: LABEL]`.

@@ -1,6 +1,5 @@
 //! Reading an EDF/EDF+/BDF/BDF+ file: header, data records, annotations as events.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use ndarray::Array2;
@@ -217,26 +216,9 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
             })
         })
         .collect();
-    let parsed: Vec<Option<EventText>> = annotations
-        .iter()
-        .map(|a| parse_event_text(&a.text))
-        .collect();
-    let max_code = parsed.iter().flatten().map(|p| p.0).max().unwrap_or(0);
-    let mut label_codes: BTreeMap<String, u32> = BTreeMap::new();
-    let mut next = max_code.saturating_add(1);
+    let (texts, label_codes) = text_codes(annotations.iter().map(|a| a.text.as_str()), 0);
     let mut events = Vec::new();
-    for (a, p) in annotations.iter().zip(&parsed) {
-        let (code, target, label) = match p {
-            Some((c, t, l)) => (*c, *t, l.clone()),
-            None => {
-                let code = *label_codes.entry(a.text.clone()).or_insert_with(|| {
-                    let c = next;
-                    next = next.saturating_add(1);
-                    c
-                });
-                (code, None, Some(a.text.clone()))
-            }
-        };
+    for (a, (code, target, label)) in annotations.iter().zip(texts) {
         let pos = ((a.onset - start_offset) * sfreq).round();
         if pos >= 0.0 && pos < n_times as f64 {
             events.push(Event {
