@@ -17,6 +17,9 @@ pub(super) struct Meas {
     pub channels: Vec<FifChannel>,
     /// Byte offset of each channel's `FIFF_CH_INFO` tag, for messages.
     pub channel_pos: Vec<usize>,
+    /// Byte offset of each channel's range and cal: in its record, or the extended block's
+    /// `FIFF_CH_CAL` / `FIFF_CH_RANGE` tag that replaced them.
+    pub scale_pos: Vec<usize>,
     /// (seconds, microseconds).
     pub meas_date: Option<(i64, i64)>,
 }
@@ -113,11 +116,13 @@ pub(super) fn read_meas_info(ctx: &Ctx<'_>, info: &Node) -> Result<Meas, IoError
             sfreq.to_string(),
         ));
     }
-    extended_channels(ctx, info, &mut channels)?;
+    let mut scale_pos: Vec<usize> = channel_pos.iter().map(|p| p + 16 + 12).collect();
+    extended_channels(ctx, info, &mut channels, &mut scale_pos)?;
     Ok(Meas {
         sfreq,
         channels,
         channel_pos,
+        scale_pos,
         meas_date,
     })
 }
@@ -175,6 +180,7 @@ fn extended_channels(
     ctx: &Ctx<'_>,
     info: &Node,
     channels: &mut [FifChannel],
+    scale_pos: &mut [usize],
 ) -> Result<(), IoError> {
     let blocks = info.find(block::CH_INFO);
     if blocks.is_empty() {
@@ -188,7 +194,7 @@ fn extended_channels(
             blocks.len().to_string(),
         ));
     }
-    for (b, ch) in blocks.iter().zip(channels.iter_mut()) {
+    for ((b, ch), scale_at) in blocks.iter().zip(channels.iter_mut()).zip(scale_pos) {
         for t in &b.tags {
             let f32_of = |name: &str| -> Result<f32, IoError> {
                 match ctx.floats(t, name)? {
@@ -200,8 +206,14 @@ fn extended_channels(
                 kind::CH_SCAN_NO => ch.scan_no = ctx.int(t, "FIFF_CH_SCAN_NO")?,
                 kind::CH_LOGICAL_NO => ch.logical_no = ctx.int(t, "FIFF_CH_LOGICAL_NO")?,
                 kind::CH_KIND => ch.kind = ctx.int(t, "FIFF_CH_KIND")?,
-                kind::CH_RANGE => ch.range = f32_of("FIFF_CH_RANGE")?,
-                kind::CH_CAL => ch.cal = f32_of("FIFF_CH_CAL")?,
+                kind::CH_RANGE => {
+                    ch.range = f32_of("FIFF_CH_RANGE")?;
+                    *scale_at = t.data_pos();
+                }
+                kind::CH_CAL => {
+                    ch.cal = f32_of("FIFF_CH_CAL")?;
+                    *scale_at = t.data_pos();
+                }
                 kind::CH_COIL_TYPE => ch.coil_type = ctx.int(t, "FIFF_CH_COIL_TYPE")?,
                 kind::CH_UNIT => ch.unit = ctx.int(t, "FIFF_CH_UNIT")?,
                 kind::CH_UNIT_MUL => ch.unit_mul = ctx.int(t, "FIFF_CH_UNIT_MUL")?,

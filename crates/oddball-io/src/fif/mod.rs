@@ -94,3 +94,74 @@ mod types;
 
 pub use read::{parse_fif, read_fif};
 pub use types::{FifAnnotation, FifChannel, FifDataType, FifInfo, FifSkip};
+
+#[cfg(test)]
+mod tests {
+    use super::events::*;
+    use super::tags::decode_string;
+
+    #[test]
+    fn strings_decode_as_mne_decodes_them() {
+        assert_eq!(decode_string(b"Fz"), "Fz");
+        assert_eq!(decode_string(b"caf\xe9"), "café");
+        // MNE writes characters beyond Latin-1 as decimal references; they are decoded when
+        // one has six digits (MNE's test), as `html.unescape` would.
+        assert_eq!(decode_string(b"&#128512; ok &#233;"), "😀 ok é");
+        assert_eq!(decode_string(b"&#233; alone"), "&#233; alone");
+        assert_eq!(
+            decode_string(b"&#128512;&#;&#x41;&#99999999999;"),
+            "😀&#;A&#99999999999;"
+        );
+    }
+
+    #[test]
+    fn trigger_steps_follow_find_events_defaults() {
+        let ch = vec![2, 2, 0, 3, 5, 4, 0, 0, 1, 1, 7];
+        assert_eq!(
+            stim_events(&[ch.clone()]),
+            [(3, 3), (4, 5), (8, 1), (10, 7)]
+        );
+        // A second channel with a step at the same sample and code: one event.
+        let other = vec![0, 0, 0, 3, 0, 0, 0, 0, 0, 0, 0];
+        assert_eq!(stim_events(&[ch, other]).len(), 4);
+        assert!(stim_events(&[vec![]]).is_empty());
+    }
+
+    #[test]
+    fn annotation_samples_are_cropped_and_rounded_as_mne_does() {
+        // MNE 1.13.2, by hand: a 400-sample RawArray at 250 Hz, meas_date 1700000000.5, cropped
+        // from 0.4 s (first_samp 100), annotations (onset, duration) (0.41, 0), (0.414, 0),
+        // (0.35, 0.02), (0.35, 0.1), (0.4 + 300/250, 0), (0.4 + 299/250, 0):
+        // `events_from_annotations` gives samples 2, 3, –, 0, 300, 299 (from first_samp).
+        let m = 1_700_000_000_500_000;
+        let t = Timing {
+            sfreq: 250.0,
+            first_samp: 100,
+            n_times: 300,
+            meas_us: Some(m),
+        };
+        let at = |onset: f64, duration: f64| annotation_sample(&t, onset, duration, Some(m));
+        assert_eq!(at(0.41, 0.0), Some(2)); // 2.5 samples: half to even
+        assert_eq!(at(0.414, 0.0), Some(3)); // 3.4999…
+        assert_eq!(at(0.35, 0.02), None); // ends before the first sample
+        assert_eq!(at(0.35, 0.1), Some(0)); // reaches it: clipped
+        assert_eq!(at(0.4 + 300.0 / 250.0, 0.0), None); // MNE's 300 is past the data
+        assert_eq!(at(0.4 + 299.0 / 250.0, 0.0), Some(299));
+        assert_eq!(at(f64::NAN, 0.0), None);
+        assert_eq!(at(1e300, 0.0), None);
+        // Another orig_time (0.4 s later): onsets count from it; MNE (by hand, as above) gives
+        // 3 and 8 for 0.01 and 0.03 (0.01 + 0.4 − 0.4 is 2.5000000000000107 samples).
+        assert_eq!(annotation_sample(&t, 0.01, 0.0, Some(m + 400_000)), Some(3));
+        assert_eq!(annotation_sample(&t, 0.03, 0.0, Some(m + 400_000)), Some(8));
+        // No dates: onsets count from acquisition sample 0. MNE (by hand: the same raw without
+        // meas_date, saved and read back) stores 0.4099999964237213 and 0.414000004529953
+        // (float32) and gives samples 3 and 4.
+        let t = Timing { meas_us: None, ..t };
+        assert_eq!(
+            annotation_sample(&t, 0.4099999964237213, f64::NAN, None),
+            Some(3)
+        );
+        assert_eq!(annotation_sample(&t, 0.414000004529953, 0.0, None), Some(4));
+        assert_eq!(annotation_sample(&t, 0.2, 0.0, None), None);
+    }
+}

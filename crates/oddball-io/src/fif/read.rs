@@ -160,7 +160,7 @@ fn parse_part(bytes: &[u8], path: &Path) -> Result<Part, IoError> {
     }
     let scale = |i: usize| -> Result<f64, IoError> {
         let c = &meas.channels[i];
-        let at = meas.channel_pos[i] + 16 + 12;
+        let at = meas.scale_pos[i];
         if !(c.range.is_finite() && c.cal.is_finite()) {
             return Err(ctx.invalid(
                 format!("range and cal of channel {:?}", c.name),
