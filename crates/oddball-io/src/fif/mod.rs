@@ -2,11 +2,15 @@
 //! format, read from scratch.
 //!
 //! # Why not a crate
-//! No Rust crate reads FIF (crates.io has none for MNE/Neuromag files as of 2026-11). The layout
-//! is a plain chain of tagged records, so it is read here; it was learnt from MNE-Python 1.13.2
-//! (`mne/_fiff/tag.py`, `open.py`, `tree.py`, `meas_info.py`, `mne/io/fiff/raw.py`,
-//! `mne/annotations.py`) and is checked against files MNE writes and what `mne.io.read_raw_fif`
-//! reads from them (`tools/golden/fif/`).
+//! Two crates read FIF (judged from their docs.rs pages and sources, not built here): `fiff`
+//! 0.1.0 documents the tag tree, tags and measurement info (its docs send anything further to
+//! MNE-Python), and `exg` 0.0.6 carries a FIF reader (`open_raw`, `read_all_data`) inside an
+//! EEG preprocessing pipeline (RustFFT and more), with `anyhow` string errors. Neither gives this
+//! crate's errors (the file, the field and the byte offset of what is wrong) nor MNE's
+//! annotations and trigger events, and the raw layout is small, so it is read here. It was
+//! learnt from MNE-Python 1.13.2 (`mne/_fiff/tag.py`, `open.py`, `tree.py`, `meas_info.py`,
+//! `mne/io/fiff/raw.py`, `mne/annotations.py`, `mne/event.py`) and is checked against files MNE
+//! writes and what `mne.io.read_raw_fif` reads from them (`tools/golden/fif/`).
 //!
 //! # Format
 //! A FIF file is a chain of tags. Each tag is a 16-byte big-endian header — `kind` (i32),
@@ -118,7 +122,7 @@ mod tests {
     fn trigger_steps_follow_find_events_defaults() {
         let ch = vec![2, 2, 0, 3, 5, 4, 0, 0, 1, 1, 7];
         assert_eq!(
-            stim_events(&[ch.clone()]),
+            stim_events(std::slice::from_ref(&ch)),
             [(3, 3), (4, 5), (8, 1), (10, 7)]
         );
         // A second channel with a step at the same sample and code: one event.

@@ -253,7 +253,7 @@ impl Ctx<'_> {
 pub(super) fn decode_string(bytes: &[u8]) -> String {
     let text: String = bytes.iter().map(|&b| b as char).collect();
     let has_six = text.match_indices("&#").any(|(i, _)| {
-        let rest = text[i + 2..].as_bytes();
+        let rest = &text.as_bytes()[i + 2..];
         rest.len() >= 7 && rest[..6].iter().all(u8::is_ascii_hexdigit) && rest[6] == b';'
     });
     if !has_six {
