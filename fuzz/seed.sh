@@ -19,6 +19,10 @@ corpus="$fuzz/corpus"
 mkdir -p "$corpus/xdf" "$corpus/panel"
 cp "$fixtures/xdf/python_small.xdf" "$corpus/xdf/"
 
+# ---------------------------------------------------------------- fif
+mkdir -p "$corpus/fif"
+cp "$fixtures"/fif/*.fif "$corpus/fif/"
+
 # ---------------------------------------------------------------- panel (WebSocket messages)
 printf '{"t":"ping","id":3,"page_ms":12.5}' > "$corpus/panel/ping"
 printf '{"t":"on","id":7,"code":2,"on_ms":1000.0}' > "$corpus/panel/on"

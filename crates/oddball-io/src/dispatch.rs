@@ -8,6 +8,7 @@ use crate::csv::read_csv_auto;
 use crate::easy::read_easy;
 use crate::edf::read_edf;
 use crate::eeglab::read_eeglab;
+use crate::fif::read_fif;
 use crate::files::check_file;
 use crate::mat::read_mat;
 use crate::xdf::{self, read_xdf};
@@ -17,7 +18,8 @@ use crate::{IoError, Recording};
 /// `.csv` → CSV with [`CsvOptions::detect`](crate::CsvOptions::detect), `.edf`/`.bdf` → EDF/BDF (the header decides which),
 /// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]),
 /// `.mat` → MAT in the BCI Competition layout ([`read_mat`], 240 Hz), `.vhdr` → BrainVision
-/// ([`read_brainvision`]), `.set` → EEGLAB ([`read_eeglab`]); a file
+/// ([`read_brainvision`]), `.set` → EEGLAB ([`read_eeglab`]), `.fif` → FIF raw ([`read_fif`], its
+/// split parts too; `.fif.gz` refused: decompress it first); a file
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
@@ -35,6 +37,15 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         Some("mat") => read_mat(path),
         Some("vhdr") => read_brainvision(path),
         Some("set") => read_eeglab(path),
+        Some("fif") => read_fif(path),
+        Some("gz")
+            if path
+                .to_string_lossy()
+                .to_ascii_lowercase()
+                .ends_with(".fif.gz") =>
+        {
+            read_fif(path)
+        }
         Some("xdfz") => Err(IoError::Unsupported {
             path: path.to_path_buf(),
             what: "gzip-compressed XDF (.xdfz); decompress it to .xdf first".into(),

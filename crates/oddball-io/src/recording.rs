@@ -12,6 +12,7 @@ use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
 use crate::eeglab::EeglabInfo;
+use crate::fif::FifInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -36,6 +37,8 @@ pub enum Format {
     BrainVision,
     /// EEGLAB `.set` (+ `.fdt`).
     Eeglab,
+    /// MNE / Neuromag FIF raw.
+    Fif,
 }
 
 /// The format-specific contents of a recording.
@@ -49,6 +52,7 @@ pub enum Details {
     Mat(Box<MatInfo>),
     BrainVision(Box<BrainVisionInfo>),
     Eeglab(Box<EeglabInfo>),
+    Fif(Box<FifInfo>),
 }
 
 /// A recording read from a file.
@@ -125,6 +129,14 @@ impl Recording {
     pub fn eeglab(&self) -> Option<&EeglabInfo> {
         match &self.details {
             Details::Eeglab(e) => Some(e),
+            _ => None,
+        }
+    }
+
+    /// Channel records, trigger channels, annotations, skips and split parts, for FIF files.
+    pub fn fif(&self) -> Option<&FifInfo> {
+        match &self.details {
+            Details::Fif(f) => Some(f),
             _ => None,
         }
     }

@@ -1,7 +1,10 @@
 //! EDF+ annotations: time-stamped annotation lists (TALs) and the event text `CODE [target|nontarget][: LABEL]`.
 
+use std::collections::BTreeMap;
+
 use oddball_signal::Event;
 
+use crate::events::LabelCodes;
 use crate::IoError;
 
 use super::header::*;
@@ -115,6 +118,34 @@ pub(crate) fn parse_event_text(text: &str) -> Option<EventText> {
         return None;
     }
     Some((code, target, label))
+}
+
+/// The code, target flag and label of each annotation text, and the codes given to the texts
+/// that do not have the form `CODE [target|nontarget][: LABEL]`: one code per distinct text, in
+/// order of first appearance, counting up from one above the largest code in the texts and
+/// `other_max` (the largest code the recording's events have otherwise, so none is shared).
+/// EDF+ and FIF annotations both get their codes here.
+pub(crate) fn text_codes<'a>(
+    texts: impl IntoIterator<Item = &'a str>,
+    other_max: u32,
+) -> (Vec<EventText>, BTreeMap<String, u32>) {
+    let texts: Vec<&str> = texts.into_iter().collect();
+    let parsed: Vec<Option<EventText>> = texts.iter().map(|t| parse_event_text(t)).collect();
+    let max_code = parsed
+        .iter()
+        .flatten()
+        .map(|p| p.0)
+        .fold(other_max, u32::max);
+    let mut label_codes = LabelCodes::after(max_code);
+    let out = texts
+        .iter()
+        .zip(parsed)
+        .map(|(text, p)| match p {
+            Some(p) => p,
+            None => (label_codes.code(text), None, Some(text.to_string())),
+        })
+        .collect();
+    (out, label_codes.into_map())
 }
 
 /// The annotation text [`write_edf_plus`](super::write_edf_plus) writes for an event: `CODE [target|nontarget][: LABEL]`.

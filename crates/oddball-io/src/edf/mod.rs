@@ -52,7 +52,7 @@ mod types;
 mod write;
 
 pub use annotations::event_annotation_text;
-pub(crate) use annotations::{parse_event_text, EventText};
+pub(crate) use annotations::{parse_event_text, text_codes, EventText};
 pub use read::{parse_edf, read_edf, read_edf_with};
 pub use types::{Annotation, EdfHeader, EdfInfo, EdfOptions, EdfSignal};
 pub use write::{write_edf_plus, write_edf_plus_with, EdfStart, EdfWriteOptions, EdfWriteSummary};

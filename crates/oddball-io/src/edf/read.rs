@@ -5,7 +5,6 @@ use std::path::Path;
 use ndarray::Array2;
 use oddball_signal::Event;
 
-use crate::events::LabelCodes;
 use crate::files::read_file;
 use crate::units::microvolts_per;
 use crate::{Details, Format, IoError, Recording};
@@ -217,18 +216,9 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
             })
         })
         .collect();
-    let parsed: Vec<Option<EventText>> = annotations
-        .iter()
-        .map(|a| parse_event_text(&a.text))
-        .collect();
-    let max_code = parsed.iter().flatten().map(|p| p.0).max().unwrap_or(0);
-    let mut label_codes = LabelCodes::after(max_code);
+    let (texts, label_codes) = text_codes(annotations.iter().map(|a| a.text.as_str()), 0);
     let mut events = Vec::new();
-    for (a, p) in annotations.iter().zip(&parsed) {
-        let (code, target, label) = match p {
-            Some((c, t, l)) => (*c, *t, l.clone()),
-            None => (label_codes.code(&a.text), None, Some(a.text.clone())),
-        };
+    for (a, (code, target, label)) in annotations.iter().zip(texts) {
         let pos = ((a.onset - start_offset) * sfreq).round();
         if pos >= 0.0 && pos < n_times as f64 {
             events.push(Event {
@@ -257,7 +247,7 @@ pub fn parse_edf(bytes: &[u8], path: &Path, options: &EdfOptions) -> Result<Reco
         details: Details::Edf(Box::new(EdfInfo {
             header,
             annotations,
-            label_codes: label_codes.into_map(),
+            label_codes,
             start_offset,
             dropped_signals: dropped,
             non_voltage_signals: non_voltage,
