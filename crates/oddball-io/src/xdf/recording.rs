@@ -1,6 +1,5 @@
 //! Making a [`Recording`] of an XDF file: the EEG stream, clock synchronisation, markers as events.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use oddball_signal::Event;
@@ -323,21 +322,13 @@ pub fn parse_xdf_with(
         })
         .collect();
     let max_code = parsed.iter().flatten().map(|p| p.0).max().unwrap_or(0);
-    let mut text_codes: BTreeMap<String, u32> = BTreeMap::new();
-    let mut next = max_code.saturating_add(1);
+    let mut text_codes = crate::events::LabelCodes::after(max_code);
     let mut markers = Vec::with_capacity(raw_markers.len());
     let mut events = Vec::new();
     for (m, p) in raw_markers.into_iter().zip(parsed) {
         let (code, target, label) = match p {
             Some(p) => p,
-            None => {
-                let code = *text_codes.entry(m.text.clone()).or_insert_with(|| {
-                    let c = next;
-                    next = next.saturating_add(1);
-                    c
-                });
-                (code, None, Some(m.text.clone()))
-            }
+            None => (text_codes.code(&m.text), None, Some(m.text.clone())),
         };
         if !m.synced.is_finite() {
             return Err(IoError::Unsupported {
