@@ -7,6 +7,7 @@ use crate::csv::read_csv_auto;
 use crate::easy::read_easy;
 use crate::edf::read_edf;
 use crate::files::check_file;
+use crate::gdf::read_gdf;
 use crate::mat::read_mat;
 use crate::xdf::{self, read_xdf};
 use crate::{IoError, Recording};
@@ -14,7 +15,8 @@ use crate::{IoError, Recording};
 /// Reads a recording, choosing the reader by extension (case-insensitive): `.dat` → BCI2000,
 /// `.csv` → CSV with [`CsvOptions::detect`](crate::CsvOptions::detect), `.edf`/`.bdf` → EDF/BDF (the header decides which),
 /// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]),
-/// `.mat` → MAT in the BCI Competition layout ([`read_mat`], 240 Hz); a file
+/// `.mat` → MAT in the BCI Competition layout ([`read_mat`], 240 Hz), `.gdf` → GDF 1.x/2.x
+/// ([`read_gdf`]); a file
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
@@ -30,6 +32,7 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         Some("easy") => read_easy(path),
         Some("xdf") => read_xdf(path),
         Some("mat") => read_mat(path),
+        Some("gdf") => read_gdf(path),
         Some("xdfz") => Err(IoError::Unsupported {
             path: path.to_path_buf(),
             what: "gzip-compressed XDF (.xdfz); decompress it to .xdf first".into(),

@@ -7,7 +7,8 @@ use crate::IoError;
 
 /// The extensions [`crate::read`] dispatches on (any case), as `IoError::UnknownFormat` lists
 /// them.
-pub const RECORDING_EXTENSIONS: [&str; 7] = ["dat", "csv", "edf", "bdf", "easy", "xdf", "mat"];
+pub const RECORDING_EXTENSIONS: [&str; 8] =
+    ["dat", "csv", "edf", "bdf", "easy", "xdf", "mat", "gdf"];
 
 /// Refuses, before any reading, a path that does not exist, is a directory (naming the
 /// recordings inside it), or is not a regular file (a device such as `/dev/zero`, a pipe, a

@@ -4,7 +4,7 @@
 //! as an [`oddball_signal::Raw`] in µV `(n_channels, n_times)` with their stimulus events, the
 //! [`Format`], a [`Speller`] layout for P300-speller files, and the format's own [`Details`]
 //! (BCI2000 parameters and states, CSV timestamps, EDF headers and annotations, NIC timestamps
-//! and accelerometer).
+//! and accelerometer, GDF event tables).
 //!
 //! | extension | reader | events |
 //! |---|---|---|
@@ -13,9 +13,10 @@
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
 //! | `.mat` | [`mat`]: MATLAB v5/v7 (uncompressed and zlib); a recording from the BCI Competition layout (`signal` + BCI2000 states, 240 Hz unless given) | `Flashing` 0 → 1 (else `StimulusCode` 0 → non-zero), target from `StimulusType` |
+//! | `.gdf` | [`gdf`]: GDF 1.x and 2.x (all integer and float types, 24-bit included) | the event table; OpenViBE label codes 0x8101… as flashes 1…, target from 0x8205/0x8206 at the same time |
 //! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
-//! All six readers are written from scratch in this crate (each module says why). They share
+//! All seven readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
@@ -44,6 +45,7 @@ mod dispatch;
 pub mod easy;
 pub mod edf;
 mod error;
+pub mod gdf;
 pub mod events;
 mod files;
 pub mod manifest;
@@ -78,6 +80,7 @@ pub use edf::{
 pub use error::{bounded, IoError, StateProblem, MAX_ECHO_CHARS};
 pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
 pub use files::{check_file, RECORDING_EXTENSIONS};
+pub use gdf::{parse_gdf, read_gdf, read_gdf_with, GdfInfo, GdfOptions};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,

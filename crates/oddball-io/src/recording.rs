@@ -10,6 +10,7 @@ use crate::bci2000::Bci2000Info;
 use crate::csv::CsvInfo;
 use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
+use crate::gdf::GdfInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -30,6 +31,8 @@ pub enum Format {
     Xdf,
     /// MATLAB MAT v5/v7 (BCI Competition layout).
     Mat,
+    /// GDF 1.x or 2.x (the version is in [`GdfInfo::header`]).
+    Gdf,
 }
 
 /// The format-specific contents of a recording.
@@ -41,6 +44,7 @@ pub enum Details {
     Easy(EasyInfo),
     Xdf(Box<XdfInfo>),
     Mat(Box<MatInfo>),
+    Gdf(Box<GdfInfo>),
 }
 
 /// A recording read from a file.
@@ -101,6 +105,14 @@ impl Recording {
     pub fn mat(&self) -> Option<&MatInfo> {
         match &self.details {
             Details::Mat(m) => Some(m),
+            _ => None,
+        }
+    }
+
+    /// Header, event table and OpenViBE stimulations, for GDF files.
+    pub fn gdf(&self) -> Option<&GdfInfo> {
+        match &self.details {
+            Details::Gdf(g) => Some(g),
             _ => None,
         }
     }
