@@ -46,7 +46,11 @@ fn assert_samples(rec: &Recording, g: &Value, what: &str) -> f64 {
         .collect();
     assert_eq!(raw.ch_names(), names.as_slice(), "{what}");
     assert_eq!(raw.sfreq(), g["sfreq"].as_f64().unwrap(), "{what}");
-    assert_eq!(raw.n_times() as u64, g["n_times"].as_u64().unwrap(), "{what}");
+    assert_eq!(
+        raw.n_times() as u64,
+        g["n_times"].as_u64().unwrap(),
+        "{what}"
+    );
     let mut worst = 0.0f64;
     for (c, row) in g["data_uV"].as_array().unwrap().iter().enumerate() {
         for (t, want) in f64s(row).into_iter().enumerate() {
@@ -69,9 +73,16 @@ fn assert_table(rec: &Recording, g: &Value) {
     for (k, e) in table.events.iter().enumerate() {
         let want = pos0[k].as_u64().unwrap();
         assert_eq!(u64::from(e.position.wrapping_sub(1)), want, "event {k}");
-        assert_eq!(u64::from(e.typ), t["type"][k].as_u64().unwrap(), "event {k}");
+        assert_eq!(
+            u64::from(e.typ),
+            t["type"][k].as_u64().unwrap(),
+            "event {k}"
+        );
         assert_eq!(u64::from(e.channel), t["channel"][k].as_u64().unwrap());
-        assert_eq!(u64::from(e.duration.max(1)), t["duration"][k].as_u64().unwrap());
+        assert_eq!(
+            u64::from(e.duration.max(1)),
+            t["duration"][k].as_u64().unwrap()
+        );
     }
 }
 
@@ -129,7 +140,10 @@ fn gdf1_int16_with_openvibe_codes_reads_as_mne_reads_it_and_pairs_flags_by_time(
     let worst = assert_samples(&rec, &g, "small_v1");
     eprintln!("small_v1: max |diff| vs MNE {worst:e} µV");
     let info = rec.gdf().unwrap();
-    assert_eq!((info.header.major, info.header.version.as_str()), (1, "1.25"));
+    assert_eq!(
+        (info.header.major, info.header.version.as_str()),
+        (1, "1.25")
+    );
     assert_eq!(info.header.start, "2024010212304500");
     assert_eq!(info.header.channels[0].prefiltering, "HP:0.1Hz LP:40Hz");
     let table = info.event_table.as_ref().unwrap();
@@ -182,7 +196,10 @@ fn gdf1_int16_with_openvibe_codes_reads_as_mne_reads_it_and_pairs_flags_by_time(
         ov["duplicate_labels"].as_u64().unwrap()
     );
     assert_eq!(o.orphan_flags as u64, ov["orphan_flags"].as_u64().unwrap());
-    assert_eq!((o.duplicate_labels, o.orphan_flags, o.unflagged_labels), (1, 3, 2));
+    assert_eq!(
+        (o.duplicate_labels, o.orphan_flags, o.unflagged_labels),
+        (1, 3, 2)
+    );
     assert_eq!(o.trial_starts, [10]);
     assert_eq!(o.flashes_per_trial, [8]);
     assert_eq!(o.other_codes[&0x8001], 2);
@@ -269,7 +286,10 @@ fn every_truncation_is_an_error_with_an_offset_or_keeps_all_samples() {
                 }
                 Err(e) => {
                     assert!(e.offset().is_some(), "{name} cut at {cut}: {e}");
-                    assert!(e.offset().unwrap() <= cut as u64, "{name} cut at {cut}: {e}");
+                    assert!(
+                        e.offset().unwrap() <= cut as u64,
+                        "{name} cut at {cut}: {e}"
+                    );
                     assert!(e.to_string().contains("t.gdf"), "{e}");
                     assert!(matches!(e, IoError::Truncated { .. }), "{name} {cut}: {e}");
                 }
@@ -296,8 +316,16 @@ fn expect_err(b: &[u8], offset: u64, text: &str) {
 fn absurd_counts_are_refused_before_allocation() {
     // Records: int64 at 236.
     for n in [i64::MAX, 1 << 40, 1_000_000] {
-        expect_err(&patched("small_v1.gdf", 236, &n.to_le_bytes()), 256 * 4, "data records");
-        expect_err(&patched("small_v2.gdf", 236, &n.to_le_bytes()), 256 * 5, "data records");
+        expect_err(
+            &patched("small_v1.gdf", 236, &n.to_le_bytes()),
+            256 * 4,
+            "data records",
+        );
+        expect_err(
+            &patched("small_v2.gdf", 236, &n.to_le_bytes()),
+            256 * 5,
+            "data records",
+        );
     }
     expect_err(
         &patched("small_v1.gdf", 236, &(-1i64).to_le_bytes()),
@@ -315,10 +343,17 @@ fn absurd_counts_are_refused_before_allocation() {
         256,
         "channel headers",
     );
-    expect_err(&patched("small_v1.gdf", 252, &0u32.to_le_bytes()), 252, "number of channels");
+    expect_err(
+        &patched("small_v1.gdf", 252, &0u32.to_le_bytes()),
+        252,
+        "number of channels",
+    );
     // Samples per record of every channel 2³² − 1, and records of (2³² − 1)/16 s (so 16 Hz):
     // 1.x fields at 256 + 3 × 216, 2.x at 256 + 4 × 216.
-    for (name, ns, at) in [("small_v1.gdf", 3, 256 + 3 * 216), ("small_v2.gdf", 4, 256 + 4 * 216)] {
+    for (name, ns, at) in [
+        ("small_v1.gdf", 3, 256 + 3 * 216),
+        ("small_v2.gdf", 4, 256 + 4 * 216),
+    ] {
         let mut b = patched(name, 244, &u32::MAX.to_le_bytes());
         for c in 0..ns {
             b[at + 4 * c..at + 4 * c + 4].copy_from_slice(&u32::MAX.to_le_bytes());
@@ -328,10 +363,18 @@ fn absurd_counts_are_refused_before_allocation() {
     // Event counts: 1.x uint32 at table + 4; 2.x 24-bit at table + 1.
     let b = bytes_of("small_v1.gdf");
     let at = data_end(&b);
-    expect_err(&patched("small_v1.gdf", at + 4, &u32::MAX.to_le_bytes()), at as u64, "event table");
+    expect_err(
+        &patched("small_v1.gdf", at + 4, &u32::MAX.to_le_bytes()),
+        at as u64,
+        "event table",
+    );
     let b = bytes_of("small_v2.gdf");
     let at = data_end(&b);
-    expect_err(&patched("small_v2.gdf", at + 1, &[0xFF, 0xFF, 0xFF]), at as u64, "event table");
+    expect_err(
+        &patched("small_v2.gdf", at + 1, &[0xFF, 0xFF, 0xFF]),
+        at as u64,
+        "event table",
+    );
 }
 
 #[test]
@@ -339,12 +382,32 @@ fn corrupt_fields_name_their_byte_offset() {
     expect_err(&patched("small_v1.gdf", 0, b"GDF 3.00"), 0, "version");
     expect_err(&patched("small_v1.gdf", 0, b"0       "), 0, "version");
     // Header length: 1.x int64 at 184, 2.x uint16 blocks at 184.
-    expect_err(&patched("small_v1.gdf", 184, &1000i64.to_le_bytes()), 184, "bytes in header");
-    expect_err(&patched("small_v2.gdf", 184, &2u16.to_le_bytes()), 184, "header length");
-    expect_err(&patched("small_v2.gdf", 184, &60000u16.to_le_bytes()), 0, "header");
+    expect_err(
+        &patched("small_v1.gdf", 184, &1000i64.to_le_bytes()),
+        184,
+        "bytes in header",
+    );
+    expect_err(
+        &patched("small_v2.gdf", 184, &2u16.to_le_bytes()),
+        184,
+        "header length",
+    );
+    expect_err(
+        &patched("small_v2.gdf", 184, &60000u16.to_le_bytes()),
+        0,
+        "header",
+    );
     // Record duration 0/4 and 1/0.
-    expect_err(&patched("small_v2.gdf", 244, &0u32.to_le_bytes()), 244, "duration");
-    expect_err(&patched("small_v2.gdf", 248, &0u32.to_le_bytes()), 244, "duration");
+    expect_err(
+        &patched("small_v2.gdf", 244, &0u32.to_le_bytes()),
+        244,
+        "duration",
+    );
+    expect_err(
+        &patched("small_v2.gdf", 248, &0u32.to_le_bytes()),
+        244,
+        "duration",
+    );
     // Channel 2's data type (1.x: 256 + 3 × 220 + 4); 2.x channel 3's (256 + 4 × 220 + 8).
     expect_err(
         &patched("small_v1.gdf", 256 + 3 * 220 + 4, &99u32.to_le_bytes()),
@@ -372,7 +435,11 @@ fn corrupt_fields_name_their_byte_offset() {
     // Event table mode 2; a 2.x table rate of -1 Hz.
     let b = bytes_of("small_v2.gdf");
     let at = data_end(&b);
-    expect_err(&patched("small_v2.gdf", at, &[2]), at as u64, "event table mode");
+    expect_err(
+        &patched("small_v2.gdf", at, &[2]),
+        at as u64,
+        "event table mode",
+    );
     expect_err(
         &patched("small_v2.gdf", at + 4, &(-1f32).to_le_bytes()),
         (at + 4) as u64,

@@ -108,7 +108,12 @@ pub(super) struct TableEvents {
 
 /// The 0-based data sample of a table position (1-based, at the table's rate; a rate of 0 or
 /// the data's own means samples of the data), if inside the recording.
-pub(super) fn sample_of(position: u32, table_rate: f64, sfreq: f64, n_times: usize) -> Option<usize> {
+pub(super) fn sample_of(
+    position: u32,
+    table_rate: f64,
+    sfreq: f64,
+    n_times: usize,
+) -> Option<usize> {
     let p = f64::from(position.checked_sub(1)?);
     let s = if table_rate > 0.0 && table_rate != sfreq {
         (p * sfreq / table_rate).round()
@@ -132,7 +137,11 @@ fn is_flag(t: u16) -> bool {
     t == OPENVIBE_TARGET || t == OPENVIBE_NONTARGET
 }
 
-pub(super) fn table_events(table: Option<&GdfEventTable>, sfreq: f64, n_times: usize) -> TableEvents {
+pub(super) fn table_events(
+    table: Option<&GdfEventTable>,
+    sfreq: f64,
+    n_times: usize,
+) -> TableEvents {
     let Some(table) = table else {
         return TableEvents {
             events: Vec::new(),

@@ -27,7 +27,12 @@ impl Ctx<'_> {
         IoError::invalid_field(self.path, field, offset as u64, expected, found)
     }
 
-    pub(super) fn truncated(&self, field: impl Into<String>, offset: usize, needed: u64) -> IoError {
+    pub(super) fn truncated(
+        &self,
+        field: impl Into<String>,
+        offset: usize,
+        needed: u64,
+    ) -> IoError {
         IoError::Truncated {
             path: self.path.to_path_buf(),
             field: field.into(),
@@ -41,9 +46,7 @@ impl Ctx<'_> {
     pub(super) fn slice(&self, field: &str, off: usize, len: usize) -> Result<&[u8], IoError> {
         off.checked_add(len)
             .and_then(|end| self.bytes.get(off..end))
-            .ok_or_else(|| {
-                self.truncated(field, off, off as u64 + len as u64)
-            })
+            .ok_or_else(|| self.truncated(field, off, off as u64 + len as u64))
     }
 
     fn array<const N: usize>(&self, field: &str, off: usize) -> Result<[u8; N], IoError> {

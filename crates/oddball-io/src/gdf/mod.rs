@@ -110,7 +110,10 @@ mod tests {
         assert_eq!(dimension_text(0), "");
         assert_eq!(dimension_text(512), "code 512");
         assert_eq!(dimension_text(4257), "code 4257");
-        assert_eq!(crate::units::microvolts_per(&dimension_text(4274)), Some(1e3));
+        assert_eq!(
+            crate::units::microvolts_per(&dimension_text(4274)),
+            Some(1e3)
+        );
         assert_eq!(crate::units::microvolts_per(&dimension_text(512)), None);
     }
 
@@ -122,7 +125,10 @@ mod tests {
         assert_eq!(sample_of(11, 256.0, 256.0, 10), None);
         // A table at half the data's rate.
         assert_eq!(sample_of(4, 128.0, 256.0, 10), Some(6));
-        assert_eq!(sample_of(u32::MAX, 1.0, 1e6, usize::MAX), Some(4294967294000000));
+        assert_eq!(
+            sample_of(u32::MAX, 1.0, 1e6, usize::MAX),
+            Some(4294967294000000)
+        );
     }
 
     #[test]

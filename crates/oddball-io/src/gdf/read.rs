@@ -104,10 +104,7 @@ pub fn parse_gdf(bytes: &[u8], path: &Path, options: &GdfOptions) -> Result<Reco
         .filter(|&end| end <= bytes.len() as u64)
         .ok_or_else(|| {
             ctx.truncated(
-                format!(
-                    "data records ({} × {record_bytes} bytes)",
-                    header.n_records
-                ),
+                format!("data records ({} × {record_bytes} bytes)", header.n_records),
                 header.header_bytes,
                 (header.n_records as u128 * record_bytes as u128 + header.header_bytes as u128)
                     .min(u64::MAX as u128) as u64,
