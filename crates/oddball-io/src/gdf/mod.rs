@@ -33,9 +33,9 @@
 //! of the unit: GDF 1.x's text (`uV`, `mV`, …), GDF 2.x's code turned into text (the code's
 //! high bits 4256 are volts, its five low bits the decimal prefix: 4256 V, 4259 kV, 4274 mV,
 //! 4275 µV, 4276 nV). Channels with another unit are kept unscaled and listed in
-//! [`GdfInfo::non_voltage_channels`]. MNE differs there: it takes any 1.x unit not starting
-//! with `uV` as volts, and any 2.x code but µV and mV as dimensionless. NaN samples of float
-//! channels are kept as NaN (as MNE does).
+//! [`GdfInfo::non_voltage_channels`]. MNE differs there: it scales a 1.x unit not starting with
+//! `uV` (`mV` included) as volts, and a 2.x code other than µV and mV by 1 (right for V, not
+//! for kV or nV). NaN samples of float channels are kept as NaN (as MNE does).
 //!
 //! # Event table
 //! Mode byte (1 or 3), then in 1.x a 24-bit sample rate and a uint32 count, in 2.x a 24-bit
