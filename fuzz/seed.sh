@@ -154,6 +154,15 @@ else
     { printf '\x06\x08\x11'; head -c 2048 "$fixtures/numpy_small.bdf"; } > "$corpus/nic/binary_starstim8"
 fi
 
+# ---------------------------------------------------------------- gdf
+# The GDF fixtures (1.25 with OpenViBE codes, 2.20 with a mode-3 table, every data type) and the
+# header and first 256 records of the real OpenViBE file (cut before its event table).
+mkdir -p "$corpus/gdf"
+cp "$fixtures"/gdf/*.gdf "$fixtures"/gdf/types/*.gdf "$corpus/gdf/"
+if [ -f "$data/openvibe-p300-gdf/data_sample_8ch.gdf" ]; then
+    head -c $(( 2304 + 256 * 64 )) "$data/openvibe-p300-gdf/data_sample_8ch.gdf" > "$corpus/gdf/openvibe_head.gdf"
+fi
+
 # ---------------------------------------------------------------- model
 if [ "${SKIP_MODEL:-0}" != 1 ]; then
     ODDBALL_MODEL_SEED_DIR="$corpus/model" \

@@ -10,6 +10,7 @@ use crate::edf::read_edf;
 use crate::eeglab::read_eeglab;
 use crate::fif::read_fif;
 use crate::files::check_file;
+use crate::gdf::read_gdf;
 use crate::mat::read_mat;
 use crate::xdf::{self, read_xdf};
 use crate::{IoError, Recording};
@@ -19,7 +20,7 @@ use crate::{IoError, Recording};
 /// `.easy` → NIC with the `.info` beside it ([`read_easy`]), `.xdf` → XDF ([`read_xdf`]),
 /// `.mat` → MAT in the BCI Competition layout ([`read_mat`], 240 Hz), `.vhdr` → BrainVision
 /// ([`read_brainvision`]), `.set` → EEGLAB ([`read_eeglab`]), `.fif` → FIF raw ([`read_fif`], its
-/// split parts too; `.fif.gz` refused: decompress it first); a file
+/// split parts too; `.fif.gz` refused: decompress it first), `.gdf` → GDF 1.x/2.x ([`read_gdf`]); a file
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
@@ -46,6 +47,7 @@ pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
         {
             read_fif(path)
         }
+        Some("gdf") => read_gdf(path),
         Some("xdfz") => Err(IoError::Unsupported {
             path: path.to_path_buf(),
             what: "gzip-compressed XDF (.xdfz); decompress it to .xdf first".into(),

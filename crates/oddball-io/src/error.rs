@@ -248,7 +248,7 @@ pub enum StateProblem {
 
 /// The formats [`crate::read`] knows, for messages.
 const KNOWN_FORMATS: &str =
-    ".dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7), .vhdr (BrainVision), .set (EEGLAB), .fif (MNE)";
+    ".dat (BCI2000), .csv, .edf, .bdf, .easy (NIC), .xdf (LSL), .mat (MATLAB v5/v7), .vhdr (BrainVision), .set (EEGLAB), .fif (MNE), .gdf";
 
 fn extension_text(extension: &Option<String>) -> String {
     match extension {

@@ -7,8 +7,8 @@ use crate::IoError;
 
 /// The extensions [`crate::read`] dispatches on (any case), as `IoError::UnknownFormat` lists
 /// them.
-pub const RECORDING_EXTENSIONS: [&str; 10] = [
-    "dat", "csv", "edf", "bdf", "easy", "xdf", "mat", "vhdr", "set", "fif",
+pub const RECORDING_EXTENSIONS: [&str; 11] = [
+    "dat", "csv", "edf", "bdf", "easy", "xdf", "mat", "vhdr", "set", "fif", "gdf",
 ];
 
 /// Refuses, before any reading, a path that does not exist, is a directory (naming the

@@ -4,7 +4,7 @@
 //! as an [`oddball_signal::Raw`] in µV `(n_channels, n_times)` with their stimulus events, the
 //! [`Format`], a [`Speller`] layout for P300-speller files, and the format's own [`Details`]
 //! (BCI2000 parameters and states, CSV timestamps, EDF headers and annotations, NIC timestamps
-//! and accelerometer, FIF channel records and annotations).
+//! and accelerometer, FIF channel records and annotations, GDF event tables).
 //!
 //! | extension | reader | events |
 //! |---|---|---|
@@ -16,9 +16,10 @@
 //! | `.vhdr` | [`brainvision`]: BrainVision 1.0 header + `.vmrk` markers + binary data (INT_16, INT_32, IEEE_FLOAT_32; multiplexed or vectorized) | `Stimulus` `S n` → n, `Response` `R n` → 1000 + n |
 //! | `.set` | [`eeglab`]: EEGLAB continuous data set (MAT v5/v7, `EEG` as variables or a struct), samples inside or in the `.fdt` | `EEG.event`: numeric `type` → code, text `type` → EDF+ annotation rule |
 //! | `.fif` | [`fif`]: MNE / Neuromag FIF raw (`*_raw.fif`, `*_eeg.fif`; split parts followed; EEG channels kept) | STIM channel steps up (MNE's `find_events`), MNE annotations |
+//! | `.gdf` | [`gdf`]: GDF 1.x and 2.x (all integer and float types, 24-bit included) | the event table; OpenViBE label codes 0x8101… as flashes 1…, target from 0x8205/0x8206 within 2 samples; other tables: their codes |
 //! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
-//! All nine readers are written from scratch in this crate (each module says why). They share
+//! All ten readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
 //! shortened recording; header counts are checked against the file length before anything is
@@ -52,6 +53,7 @@ mod error;
 pub mod events;
 pub mod fif;
 mod files;
+pub mod gdf;
 pub mod manifest;
 pub mod mat;
 pub mod montage;
@@ -87,6 +89,7 @@ pub use error::{bounded, IoError, StateProblem, MAX_ECHO_CHARS};
 pub use events::{EventKey, EventMapError, EventMapping, LabelError, MappingReport};
 pub use fif::{parse_fif, read_fif, FifAnnotation, FifChannel, FifDataType, FifInfo, FifSkip};
 pub use files::{check_file, RECORDING_EXTENSIONS};
+pub use gdf::{parse_gdf, read_gdf, read_gdf_with, GdfInfo, GdfOptions};
 pub use manifest::{Manifest, ManifestError, SpellerSpec};
 pub use mat::{
     parse_mat, parse_mat_file, read_mat, read_mat_file, read_mat_with, MatFile, MatInfo, MatOptions,

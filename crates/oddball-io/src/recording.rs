@@ -13,6 +13,7 @@ use crate::easy::EasyInfo;
 use crate::edf::EdfInfo;
 use crate::eeglab::EeglabInfo;
 use crate::fif::FifInfo;
+use crate::gdf::GdfInfo;
 use crate::mat::MatInfo;
 use crate::speller::Speller;
 use crate::xdf::XdfInfo;
@@ -39,6 +40,8 @@ pub enum Format {
     Eeglab,
     /// MNE / Neuromag FIF raw.
     Fif,
+    /// GDF 1.x or 2.x (the version is in [`GdfInfo::header`]).
+    Gdf,
 }
 
 /// The format-specific contents of a recording.
@@ -53,6 +56,7 @@ pub enum Details {
     BrainVision(Box<BrainVisionInfo>),
     Eeglab(Box<EeglabInfo>),
     Fif(Box<FifInfo>),
+    Gdf(Box<GdfInfo>),
 }
 
 /// A recording read from a file.
@@ -137,6 +141,14 @@ impl Recording {
     pub fn fif(&self) -> Option<&FifInfo> {
         match &self.details {
             Details::Fif(f) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// Header, event table and OpenViBE stimulations, for GDF files.
+    pub fn gdf(&self) -> Option<&GdfInfo> {
+        match &self.details {
+            Details::Gdf(g) => Some(g),
             _ => None,
         }
     }

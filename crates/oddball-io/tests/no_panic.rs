@@ -187,11 +187,13 @@ fn read_dispatches_by_extension() {
     let bdf = tmp.write("x.bdf", &std::fs::read(fixture("numpy_small.bdf")).unwrap());
     assert_eq!(read(&bdf).unwrap().format, oddball_io::Format::BdfPlus);
     let e = read(tmp.write("x.gdf", b"")).unwrap_err();
+    assert!(matches!(&e, IoError::Truncated { offset: 0, .. }), "{e}");
+    let e = read(tmp.write("x.qqq", b"")).unwrap_err();
     assert!(
-        matches!(&e, IoError::UnknownFormat { extension: Some(x), .. } if x == "gdf"),
+        matches!(&e, IoError::UnknownFormat { extension: Some(x), .. } if x == "qqq"),
         "{e}"
     );
-    assert!(e.to_string().contains("extension .gdf"), "{e}");
+    assert!(e.to_string().contains("extension .qqq"), "{e}");
     let e = read(tmp.write("noext", b"")).unwrap_err();
     assert!(e.to_string().contains("(no extension)"), "{e}");
     let e = read(tmp.path().join("missing.edf")).unwrap_err();
