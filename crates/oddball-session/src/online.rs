@@ -147,12 +147,16 @@ impl OnlineEpocher {
         onset as i64 + self.first + self.n_times as i64
     }
 
+    /// Whether the samples of an epoch at `onset` are still buffered (or still to come).
+    pub fn is_kept(&self, onset: u64) -> bool {
+        onset as i64 + self.first >= self.buf_start as i64
+    }
+
     /// Registers a marker. Refused when its epoch starts before the first buffered sample or
     /// before the stream's start. A marker already waiting with the same onset and code (a
     /// marker delivered twice) is ignored: it returns `Ok(false)`.
     pub fn push_marker(&mut self, marker: Marker) -> Result<bool, SessionError> {
-        let start = marker.onset as i64 + self.first;
-        if start < self.buf_start as i64 {
+        if !self.is_kept(marker.onset) {
             return Err(SessionError::MarkerTooLate {
                 onset: marker.onset,
                 oldest_kept: self.buf_start,

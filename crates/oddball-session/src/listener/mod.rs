@@ -128,6 +128,8 @@ struct Trial {
     implicit: bool,
     /// The earliest flash's time.
     first_time: f64,
+    /// The start marker's time: a flash stamped before it is not this trial's.
+    start_time: Option<f64>,
     /// The trial end marker's time: flashes stamped up to it are this trial's, in whatever
     /// order they arrive; the trial is decided once the EEG has passed its last epoch.
     end_time: Option<f64>,
@@ -172,6 +174,9 @@ pub struct Listener {
     flashes: BTreeMap<usize, Flash>,
     next_tag: usize,
     last_flash: Option<(usize, f64)>,
+    /// The latest end marker's time among the trials already settled: a flash stamped before
+    /// it that arrives late belongs to a finished trial, not to a new one.
+    settled_end: Option<f64>,
     loose_flags: VecDeque<(f64, bool)>,
     trials: VecDeque<Trial>,
     trial_count: usize,
@@ -283,6 +288,7 @@ impl Listener {
             flashes: BTreeMap::new(),
             next_tag: 0,
             last_flash: None,
+            settled_end: None,
             loose_flags: VecDeque::new(),
             trials: VecDeque::new(),
             trial_count: 0,
@@ -420,6 +426,7 @@ impl Listener {
             implicit: false,
             first_time: f64::INFINITY,
             end_time: None,
+            start_time: None,
             cue: self.next_cue.take(),
             announced: 0,
             completed: 0,
@@ -473,6 +480,7 @@ impl Listener {
                 if let Some(t) = self.current() {
                     if t.implicit && t.first_time >= time - FLAG_TOLERANCE_S {
                         t.implicit = false;
+                        t.start_time = Some(time);
                         self.counts.implicit_trials -= 1;
                         return;
                     }
@@ -482,6 +490,9 @@ impl Listener {
                     self.end_current(None);
                 }
                 self.open_trial();
+                if let Some(t) = self.trials.back_mut() {
+                    t.start_time = Some(time);
+                }
             }
             MarkerKind::TrialEnd => {
                 if self.current().is_some() {
@@ -529,15 +540,22 @@ impl Listener {
     }
 
     /// The trial a flash stamped `time` belongs to: an ended, undecided trial whose end marker
-    /// is stamped at or after it (the flash's marker came after the end's), else the open one.
+    /// is stamped at or after it (the flash's marker came after the end's), else the open one —
+    /// unless the flash is stamped before the open one started and within a trial already
+    /// settled (`None`: its marker came after its trial was decided and ended).
     fn trial_of(&mut self, time: f64) -> Option<usize> {
         let late = self.trials.iter().position(|t| {
             t.ended && !t.decided && t.end_time.is_some_and(|e| time <= e + FLAG_TOLERANCE_S)
         });
+        let settled = self.settled_end;
         late.or_else(|| {
             self.trials
                 .back()
                 .filter(|t| !t.ended)
+                .filter(|t| {
+                    let before_start = t.start_time.is_some_and(|s| time < s - FLAG_TOLERANCE_S);
+                    !(before_start && settled.is_some_and(|e| time <= e + FLAG_TOLERANCE_S))
+                })
                 .map(|_| self.trials.len() - 1)
         })
     }
@@ -566,6 +584,18 @@ impl Listener {
         }
         let ti = match self.trial_of(time) {
             Some(i) => i,
+            // A late marker of a flash of a trial already decided and ended.
+            None if self
+                .settled_end
+                .is_some_and(|e| time <= e + FLAG_TOLERANCE_S) =>
+            {
+                if self.epocher.is_kept(onset as u64) {
+                    self.counts.after_decision += 1;
+                } else {
+                    self.counts.too_old += 1;
+                }
+                return;
+            }
             None => {
                 self.counts.implicit_trials += 1;
                 self.open_trial();
@@ -686,6 +716,13 @@ impl Listener {
         Ok(())
     }
 
+    /// Remembers the end of a trial taken off the open ones.
+    fn settled(&mut self, end: Option<f64>) {
+        if let Some(e) = end {
+            self.settled_end = Some(self.settled_end.map_or(e, |s| s.max(e)));
+        }
+    }
+
     /// Decides every trial whose flashes are all in, oldest first; fits the calibration once
     /// its trials are. A trial decided early goes once it has ended (its later epochs are
     /// counted as they arrive).
@@ -701,13 +738,15 @@ impl Listener {
                 if !t.ended {
                     break;
                 }
-                self.trials.pop_front();
+                let t = self.trials.pop_front().expect("front exists");
+                self.settled(t.end_time);
                 continue;
             }
             if !complete {
                 break;
             }
             let mut t = self.trials.pop_front().expect("front exists");
+            self.settled(t.end_time);
             if t.announced == 0 {
                 self.counts.empty_trials += 1;
                 continue;
@@ -1087,6 +1126,25 @@ nontarget = ["NonTarget"]
         assert!(fewer >= 3, "{fewer} of {} trials stopped early", b.len());
         // The epochs of flashes after a stop are counted, not decided again.
         assert!(dynamic.counts().after_decision > 0);
+        // Markers up to half a second late and out of order — also the late flashes of a trial
+        // already stopped, decided and ended, which arrive after the next trial's start — decide
+        // the same (they join no new trial).
+        let mut late = Listener::new(
+            params(cal(), Some(DecisionRule::dynamic(MAX_ROUNDS_TEST))),
+            SFREQ,
+            &names(),
+        )
+        .unwrap();
+        let shuffled = feed(&mut late, &x, &markers, &mut |_| 25, &|k| {
+            ((k * 7919) % 500) as f64 / 1000.0
+        });
+        let strip = |d: Vec<&ListenerDecision>| -> Vec<_> {
+            d.into_iter()
+                .map(|d| (d.trial, d.choice, d.flashes, d.early))
+                .collect()
+        };
+        assert_eq!(strip(decisions(&shuffled)), strip(b));
+        assert_eq!(late.counts().implicit_trials, 0, "{:?}", late.counts());
     }
 
     const MAX_ROUNDS_TEST: usize = 5;
