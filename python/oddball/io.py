@@ -8,7 +8,7 @@ import numpy as np
 
 from . import _oddball
 
-__all__ = ["Raw", "read_raw"]
+__all__ = ["Epochs", "Raw", "read_epochs", "read_raw"]
 
 
 @dataclass
@@ -100,4 +100,42 @@ def read_raw(path, events=None, text=None) -> Raw:
         data=d["data"], sfreq=d["sfreq"], ch_names=list(d["ch_names"]), events=ev.reshape(-1, 3),
         event_targets=np.asarray(d["targets"], dtype=np.int8), event_labels=list(d["labels"]),
         format=d["format"], path=os.fspath(path),
+    )
+
+
+@dataclass
+class Epochs:
+    """A recording's flashes as ``oddball evaluate`` epochs them: ``data``
+    ``(n_epochs, n_channels, n_times)`` µV (band-passed), ``sfreq`` Hz, ``tmin`` s, ``ch_names``,
+    each epoch's stimulus ``codes`` and ``targets`` (1, 0, -1 unknown); for a speller recording
+    also ``trials`` (each flash's character, from 0), ``sets`` (the rows' and the columns' codes:
+    what competes in a trial) and ``matrix`` (its symbols by row), else None."""
+
+    data: np.ndarray
+    sfreq: float
+    tmin: float
+    ch_names: list
+    codes: np.ndarray
+    targets: np.ndarray
+    trials: np.ndarray | None
+    sets: list | None
+    matrix: list | None
+
+    def symbol(self, choice) -> str:
+        """The speller symbol of ``(row code, column code)``."""
+        r, c = (int(v) for v in choice)
+        return self.matrix[self.sets[0].index(r)][self.sets[1].index(c)]
+
+
+def read_epochs(path, preprocess="peer", text=None) -> Epochs:
+    """Reads a recording and cuts an epoch at each flash the way ``oddball evaluate`` does (the
+    peer stack's 0.5–20 Hz band-pass, zero-phase, or ``preprocess="peer-causal"`` as a live
+    session filters; 0.8 s from each onset). ``text``: for a speller run recorded without labels,
+    the text it spelled."""
+    d = _oddball.read_epochs(os.fspath(path), preprocess, text)
+    trials = None if d["trials"] is None else np.asarray(d["trials"], dtype=np.int64)
+    return Epochs(
+        data=d["data"], sfreq=d["sfreq"], tmin=d["tmin"], ch_names=list(d["ch_names"]),
+        codes=np.asarray(d["codes"], dtype=np.int64), targets=np.asarray(d["targets"], dtype=np.int8),
+        trials=trials, sets=d["sets"], matrix=d["matrix"],
     )

@@ -1,5 +1,7 @@
-"""Linear discriminant analysis: scikit-learn's ``LinearDiscriminantAnalysis`` (lsqr solver) and
-``toeplitzlda``'s ``ToeplitzLDA``, computed in Rust; binary (target vs non-target)."""
+"""Linear discriminant analysis: scikit-learn's ``LinearDiscriminantAnalysis`` (lsqr solver),
+``toeplitzlda``'s ``ToeplitzLDA``, and oddball's ``AdaptiveLDA`` (a calibrated LDA that keeps
+learning from a session through ``partial_fit``), computed in Rust; binary (target vs
+non-target)."""
 from __future__ import annotations
 
 import numbers
@@ -11,7 +13,20 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from . import _oddball
 from ._base import binary_labels, predict_from_decision, proba_columns
 
-__all__ = ["LinearDiscriminantAnalysis", "ToeplitzLDA"]
+__all__ = ["AdaptiveLDA", "LinearDiscriminantAnalysis", "ToeplitzLDA"]
+
+
+def _shrinkage(s, owner):
+    """``(fixed weight or None, auto)`` from scikit-learn's ``shrinkage`` values."""
+    if isinstance(s, str):
+        if s != "auto":
+            raise ValueError(f"{owner}(shrinkage={s!r}): expected None, 'auto' or a float in [0, 1]")
+        return None, True
+    if s is None:
+        return None, False
+    if isinstance(s, numbers.Real) and not isinstance(s, bool) and 0.0 <= s <= 1.0:
+        return float(s), False
+    raise ValueError(f"{owner}(shrinkage={s!r}): expected None, 'auto' or a float in [0, 1]")
 
 
 class _LinearBinary(ClassifierMixin, BaseEstimator):
@@ -79,17 +94,7 @@ class LinearDiscriminantAnalysis(_LinearBinary):
         for name in ("priors", "covariance_estimator"):
             if getattr(self, name) is not None:
                 raise ValueError(f"LinearDiscriminantAnalysis({name}=...) is not implemented in oddball")
-        s = self.shrinkage
-        if isinstance(s, str):
-            if s != "auto":
-                raise ValueError(f"shrinkage={s!r}: expected None, 'auto' or a float in [0, 1]")
-            shrink, auto = None, True
-        elif s is None:
-            shrink, auto = None, False
-        elif isinstance(s, numbers.Real) and not isinstance(s, bool) and 0.0 <= s <= 1.0:
-            shrink, auto = float(s), False
-        else:
-            raise ValueError(f"shrinkage={s!r}: expected None, 'auto' or a float in [0, 1]")
+        shrink, auto = _shrinkage(self.shrinkage, type(self).__name__)
         X, y = validate_data(self, X, y, dtype=np.float64, order="C")
         classes, target = binary_labels(y, X.shape[0])
         self._model = _oddball.Lda.fit(X, target, shrink, auto)
@@ -140,4 +145,64 @@ class ToeplitzLDA(_LinearBinary):
         self.coef_ = coef[np.newaxis, :]
         self.intercept_ = np.array([self._model.intercept])
         self.shrinkage_ = self._model.shrinkage
+        return self
+
+
+class AdaptiveLDA(_LinearBinary):
+    """A shrinkage LDA calibrated by ``fit`` whose class means keep learning from the session:
+    ``partial_fit(X, y)`` takes in labelled rows (e.g. a decision's epochs, labelled by the
+    decision) through incremental statistics, with the calibration's covariance — the engine of
+    ``oddball demo/online --adapt``. An update that would turn the weights below ``min_cosine``
+    with the calibrated weights (a run of wrong labels) is undone.
+
+    The first ``partial_fit`` of an unfitted model calibrates it (as ``fit``); ``classes`` is
+    accepted as scikit-learn's ``partial_fit`` takes it, and must match the labels.
+
+    Fitted: ``classes_``, ``coef_``, ``intercept_``, ``means_`` ``(2, n_features)``,
+    ``counts_`` (epochs per class taken in), ``cosine_`` (weights vs calibrated),
+    ``n_updates_``, ``n_rejected_``, ``n_features_in_``.
+    """
+
+    def __init__(self, shrinkage="auto", min_cosine=0.8):
+        self.shrinkage = shrinkage
+        self.min_cosine = min_cosine
+
+    def _sync(self):
+        m = self._model
+        self.coef_ = m.coef[np.newaxis, :]
+        self.intercept_ = np.array([m.intercept])
+        self.means_ = m.means
+        self.counts_ = m.counts
+        self.cosine_ = m.cosine
+
+    def fit(self, X, y):
+        shrink, auto = _shrinkage(self.shrinkage, "AdaptiveLDA")
+        mc = self.min_cosine
+        if not isinstance(mc, numbers.Real) or isinstance(mc, bool) or not -1.0 <= mc <= 1.0:
+            raise ValueError(f"AdaptiveLDA(min_cosine={mc!r}): expected a cosine in [-1, 1]")
+        X, y = validate_data(self, X, y, dtype=np.float64, order="C")
+        classes, target = binary_labels(y, X.shape[0])
+        self._model = _oddball.AdaptiveLda.fit(X, target, shrink, auto, float(mc))
+        self.classes_ = classes
+        self.n_updates_ = 0
+        self.n_rejected_ = 0
+        self._sync()
+        return self
+
+    def partial_fit(self, X, y, classes=None):
+        if not hasattr(self, "classes_"):
+            return self.fit(X, y)
+        if classes is not None and not np.array_equal(np.unique(classes), self.classes_):
+            raise ValueError(f"classes={list(classes)}: the model was fitted on {list(self.classes_)}")
+        X = self._rows(X, reset=False)
+        y = np.asarray(y)
+        if y.ndim != 1 or y.shape[0] != X.shape[0]:
+            raise ValueError(f"y: expected {X.shape[0]} labels, got shape {y.shape}")
+        unknown = set(np.unique(y).tolist()) - set(self.classes_.tolist())
+        if unknown:
+            raise ValueError(f"y has labels {sorted(unknown)} the model was not fitted on {list(self.classes_)}")
+        accepted, _ = self._model.partial_fit(X, np.ascontiguousarray(y == self.classes_[1]))
+        self.n_updates_ += 1
+        self.n_rejected_ += int(not accepted)
+        self._sync()
         return self

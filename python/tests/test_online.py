@@ -8,6 +8,9 @@ and out of order within the epoch window must change no decision.
 from __future__ import annotations
 
 
+import json
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -82,6 +85,40 @@ def test_random_blocks_and_late_markers_change_no_decision(eeg3, calibration):
         assert d["flashes"] == 180
 
 
+@pytest.mark.parametrize("stopping", [False, True])
+def test_same_decisions_as_oddball_decode_for_the_same_file_and_model(eeg3, tmp_path, stopping):
+    """eeg3_2 fed in random chunks with markers up to 0.5 s late and out of order (within the
+    epoch window; with dynamic stopping, a stopped trial's last flashes arrive after the next
+    trial's start) decides what `oddball decode --source replay:eeg3_2.dat --markers recording` decides with
+    the model `oddball train` made from eeg3_1: every decision's choice, posterior, flashes."""
+    from test_learning import oddball_bin
+
+    exe, model = str(oddball_bin()), tmp_path / "eeg3_1.json"
+    subprocess.run([exe, "train", str(data_file("bci2000-samplefiles-p300/eeg3_1.dat")), "-o", str(model)],
+                   check=True, capture_output=True)
+    extra = ["--dynamic-stopping"] if stopping else []
+    cli = subprocess.run(
+        [exe, "decode", "--source", f"replay:{data_file('bci2000-samplefiles-p300/eeg3_2.dat')}",
+         "--markers", "recording", "--paradigm", str(PARADIGM), "--model", str(model), "--fast",
+         "--outlet", "none", *extra], check=True, capture_output=True, text=True).stdout
+    want = [json.loads(line) for line in cli.splitlines() if line.startswith("{")]
+    want = [m for m in want if m["type"] in ("decision", "stop")]
+    rng = np.random.default_rng(11)
+    sizes = rng.integers(1, 300, size=eeg3.n_times)
+    late = rng.uniform(0.0, 0.5, size=20000)
+    dec = oddball.online.OnlineDecoder(PARADIGM, eeg3.sfreq, eeg3.ch_names, model=model.read_text(),
+                                       dynamic_stopping=stopping)
+    got = feed(dec, eeg3, markers(eeg3), lambda i: int(sizes[i]), lambda k: float(late[k]))
+    got = [m for m in got if m["type"] in ("decision", "stop")]
+    # `flashes_shown` is how many flash markers had arrived when the decision came: it depends
+    # on when markers are delivered, which is what this test varies. Everything else must agree.
+    for m in want + got:
+        m.pop("time", None)
+        m.pop("flashes_shown", None)
+    assert "".join(d["choice"] for d in decisions(got)) == "6MK?"
+    assert got == want
+
+
 def test_dynamic_stopping_says_when_to_stop(eeg3):
     marks = markers(eeg3)
     dec = oddball.online.OnlineDecoder(PARADIGM, eeg3.sfreq, eeg3.ch_names, calibration=2,
@@ -108,3 +145,21 @@ def test_bad_input_is_refused_or_counted(eeg3):
     dec.push_eeg(eeg3.data[:, :100], 99 / eeg3.sfreq)
     assert dec.push_marker("Hello", 0.2) == []
     assert dec.counts()["unknown"] == 1
+
+
+def test_the_psychopy_style_example_spells_and_stops_early():
+    """python/examples/psychopy_style_loop.py as a user runs it: calibrated on the first two
+    characters of eeg3_2, it spells the other two, ending each trial when the decoder is sure."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "psychopy_style_loop", REPO / "python" / "examples" / "psychopy_style_loop.py")
+    ex = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ex)
+    path = data_file("bci2000-samplefiles-p300/eeg3_2.dat")
+    full, shown_full = ex.run(path, PARADIGM, calibration=2)
+    fast, shown_fast = ex.run(path, PARADIGM, calibration=2, dynamic_stopping=True)
+    assert "".join(d["choice"] for d in full) == "K?" == "".join(d["choice"] for d in fast)
+    assert shown_full == 720
+    assert shown_fast < shown_full and all(d["flashes"] < 180 for d in fast)
+    print(f"\nexample: {shown_fast} flashes shown with dynamic stopping, {shown_full} without")

@@ -57,8 +57,9 @@ pub enum Update {
     },
 }
 
-/// A calibrated LDA whose class means follow the session.
-#[derive(Debug, Clone)]
+/// A calibrated LDA whose class means follow the session; saved and restored whole (serde), so
+/// a session's adapted model can be stored and picked up again.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AdaptiveLda {
     min_cosine: f64,
     /// `Σ⁻¹` of the calibration.
@@ -155,8 +156,7 @@ impl AdaptiveLda {
             self.proj[k].axpy(inv, &v, 1.0 - inv);
         }
         self.refresh();
-        let cosine = self.coef.dot(&self.calibrated)
-            / (self.coef.norm() * self.calibrated.norm()).max(f64::MIN_POSITIVE);
+        let cosine = self.cosine();
         if cosine < self.min_cosine {
             (self.n, self.mean, self.proj) = before;
             self.refresh();
@@ -176,9 +176,36 @@ impl AdaptiveLda {
         )
     }
 
+    /// P(target) per row of `x` (the log-odds' logistic).
+    pub fn predict_proba(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
+        Ok(self.decision_function(x)?.mapv(crate::linalg::sigmoid))
+    }
+
     /// Epochs per class taken in so far (calibration included): `[non-target, target]`.
     pub fn counts(&self) -> [f64; 2] {
         self.n
+    }
+
+    /// The current weights (`Σ⁻¹(μ_t − μ_n)`).
+    pub fn coef(&self) -> Array1<f64> {
+        Array1::from_iter(self.coef.iter().copied())
+    }
+
+    /// The current intercept.
+    pub fn intercept(&self) -> f64 {
+        self.intercept
+    }
+
+    /// The current class means `(2, n_features)`: non-target, target.
+    pub fn means(&self) -> ndarray::Array2<f64> {
+        let p = self.coef.len();
+        ndarray::Array2::from_shape_fn((2, p), |(k, j)| self.mean[k][j])
+    }
+
+    /// The weights' cosine with the calibrated weights (1 before any update).
+    pub fn cosine(&self) -> f64 {
+        self.coef.dot(&self.calibrated)
+            / (self.coef.norm() * self.calibrated.norm()).max(f64::MIN_POSITIVE)
     }
 }
 
@@ -251,6 +278,27 @@ mod tests {
             );
         }
         assert_eq!(m.counts(), [90.0, 30.0]);
+    }
+
+    #[test]
+    fn a_saved_model_adapts_on_as_the_original() {
+        let (x1, y1) = data(80, 1);
+        let (x2, y2) = data(40, 2);
+        let mut m = AdaptiveLdaParams::default().fit(x1.view(), &y1).unwrap();
+        m.update(x2.slice(ndarray::s![..20, ..]), &y2[..20])
+            .unwrap();
+        let mut back: AdaptiveLda =
+            serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
+        assert_eq!(back, m);
+        let rest = (x2.slice(ndarray::s![20.., ..]), &y2[20..]);
+        assert_eq!(
+            back.update(rest.0, rest.1).unwrap(),
+            m.update(rest.0, rest.1).unwrap()
+        );
+        assert_eq!(
+            back.decision_function(x1.view()).unwrap(),
+            m.decision_function(x1.view()).unwrap()
+        );
     }
 
     #[test]

@@ -80,6 +80,18 @@ fn em_matches_the_dense_numpy_reference() {
         assert!((a - b).abs() < 1e-9 * (1.0 + b.abs()), "{a} vs {b}");
     }
     assert_eq!(m.choices(), g.truth);
+    // The E-step on epochs given afresh (a predict): the numpy model's posteriors and choices.
+    let again = m
+        .posteriors_features(x.view(), &g.codes, &g.trials)
+        .unwrap();
+    for (t, tp) in again.iter().enumerate() {
+        for (s, p) in tp.sets.iter().enumerate() {
+            for (a, b) in p.iter().zip(&g.posterior[2 * t + s]) {
+                assert!((a - b).abs() < 1e-9, "afresh: trial {t} set {s}: {p:?}");
+            }
+        }
+    }
+    assert_eq!(m.choices_of(&again), g.truth);
 }
 
 /// A random problem: `n_trials` trials flashing every code of `sets` `reps` times, features

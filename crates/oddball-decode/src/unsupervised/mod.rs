@@ -309,30 +309,10 @@ impl UnsupervisedParams {
                 }
             }
         }
-        let to_trials = |post: &[Vec<f64>]| -> Vec<TrialPosterior> {
-            trial_ids
-                .iter()
-                .enumerate()
-                .map(|(t, &id)| TrialPosterior {
-                    trial: id,
-                    sets: (0..constraint.sets.len())
-                        .map(|s| post[t * constraint.sets.len() + s].clone())
-                        .collect(),
-                })
-                .collect()
-        };
-        let averaged = to_trials(&averaged);
+        let n_sets = constraint.sets.len();
+        let averaged = to_trials(&averaged, &trial_ids, n_sets);
         let intercept = run.linear.offset - run.linear.w.dot(&prep.mean);
-        let trials_out = trial_ids
-            .iter()
-            .enumerate()
-            .map(|(t, &id)| TrialPosterior {
-                trial: id,
-                sets: (0..constraint.sets.len())
-                    .map(|s| run.posterior[t * constraint.sets.len() + s].clone())
-                    .collect(),
-            })
-            .collect();
+        let trials_out = to_trials(&run.posterior, &trial_ids, n_sets);
         Ok(Unsupervised {
             features: self.features,
             coef: Array1::from_iter(run.linear.w.iter().copied()),
@@ -489,7 +469,12 @@ impl Unsupervised {
 
     /// Per fitted trial, the most probable code of each set.
     pub fn choices(&self) -> Vec<Vec<u32>> {
-        self.trials
+        self.choices_of(&self.trials)
+    }
+
+    /// Per trial of `posteriors`, the most probable code of each set.
+    pub fn choices_of(&self, posteriors: &[TrialPosterior]) -> Vec<Vec<u32>> {
+        posteriors
             .iter()
             .map(|t| {
                 t.sets
@@ -499,6 +484,20 @@ impl Unsupervised {
                     .collect()
             })
             .collect()
+    }
+
+    /// Each trial's posterior over its choices under this model (the E-step, uniform prior), for
+    /// feature rows `x` with their stimulus `codes` and `trials` — epochs it was not fitted on.
+    pub fn posteriors_features(
+        &self,
+        x: ArrayView2<f64>,
+        codes: &[u32],
+        trials: &[usize],
+    ) -> Result<Vec<TrialPosterior>> {
+        let llr = self.decision_function_features(x)?;
+        let (layout, ids) = layout(x.nrows(), codes, trials, &self.constraint)?;
+        let (post, _) = em::e_step(&layout, llr.as_slice().expect("a new array is contiguous"));
+        Ok(to_trials(&post, &ids, self.constraint.sets.len()))
     }
 
     /// The penalised log-likelihood after each iteration of the chosen initialisation
@@ -533,6 +532,17 @@ impl Unsupervised {
     pub fn shrinkage(&self) -> f64 {
         self.shrinkage
     }
+}
+
+/// Slot posteriors (trial in order × set) as one [`TrialPosterior`] per trial `ids[t]`.
+fn to_trials(post: &[Vec<f64>], ids: &[usize], n_sets: usize) -> Vec<TrialPosterior> {
+    ids.iter()
+        .enumerate()
+        .map(|(t, &id)| TrialPosterior {
+            trial: id,
+            sets: post[t * n_sets..(t + 1) * n_sets].to_vec(),
+        })
+        .collect()
 }
 
 /// Index of the largest value (first on ties).
