@@ -163,7 +163,7 @@ def estimator_cases():
     presets each once (``oddball.pipelines.make``), on synthetic P300-like epochs."""
     from oddball.classification import MDM
     from oddball.estimation import Covariances, XdawnCovariances
-    from oddball.lda import LinearDiscriminantAnalysis, ToeplitzLDA
+    from oddball.lda import AdaptiveLDA, LinearDiscriminantAnalysis, ToeplitzLDA
     from oddball.pipelines import PRESETS, PresetClassifier, make
     from oddball.spatialfilters import Xdawn
     from oddball.tangentspace import TangentSpace
@@ -181,6 +181,7 @@ def estimator_cases():
         ("MDM", MDM(), covs, clf + ("transform",)),
         ("LinearDiscriminantAnalysis", LinearDiscriminantAnalysis(shrinkage="auto"), rows, clf),
         ("ToeplitzLDA", ToeplitzLDA(n_channels=4), rows_tm, clf),
+        ("AdaptiveLDA", AdaptiveLDA(), rows, clf),
         ("PresetClassifier", PresetClassifier("lda", sfreq=64.0), X, clf),
     ]
     cases += [(f"make({p})", make(p, sfreq=64.0), X, clf) for p in PRESETS]
@@ -191,7 +192,10 @@ CASES = estimator_cases()
 
 
 def test_every_exported_estimator_class_is_covered():
-    covered = {type(est) for _, est, *_ in CASES}
+    from oddball.unsupervised import UnsupervisedDecoder
+
+    # fit(X, stimuli, trials), no y: its own test below.
+    covered = {type(est) for _, est, *_ in CASES} | {UnsupervisedDecoder}
     covered |= {type(step) for _, est, *_ in CASES if hasattr(est, "steps") for _, step in est.steps}
     missing = exported_estimator_classes() - covered
     assert not missing, f"no cloudpickle case for {sorted(c.__name__ for c in missing)}"
@@ -239,6 +243,34 @@ def test_cloudpickle_round_trip_and_clone(name, est, X, y, methods):
     c = clone(fitted)
     assert repr(c.get_params(deep=True)) == repr(fitted.get_params(deep=True))
     assert_outputs_equal(outputs(c.fit(X, y), X, methods), want)
+
+
+def test_unsupervised_decoder_cloudpickle_round_trip_and_clone():
+    """The unsupervised decoder, fitted without labels on synthetic four-choice trials, survives
+    cloudpickle fitted and unfitted, and goes on learning (``partial_fit``) as the original."""
+    cloudpickle = need_module("cloudpickle")
+    from oddball.unsupervised import UnsupervisedDecoder
+
+    rng = np.random.default_rng(4)
+    n_trials, reps, codes = 12, 5, np.array([1, 2, 3, 4])
+    stim = np.concatenate([rng.permutation(codes) for _ in range(n_trials * reps)])
+    trials = np.repeat(np.arange(n_trials), reps * len(codes))
+    attended = rng.integers(1, 5, size=n_trials)
+    X = rng.normal(size=(len(stim), 4, 40))
+    X[stim == attended[trials], :, 12:20] += 1.0
+    est = UnsupervisedDecoder(sets=[[1, 2, 3, 4]], sfreq=50.0, preprocess=None, n_inits=4)
+    first = trials < 6
+    a = clone(est).partial_fit(X[first], stim[first], trials[first])
+    b = cloudpickle.loads(cloudpickle.dumps(a))
+    for m in (a, b):
+        m.partial_fit(X[~first], stim[~first], trials[~first])
+    np.testing.assert_array_equal(a.predict(X, stim, trials), b.predict(X, stim, trials))
+    np.testing.assert_array_equal(a.decision_function(X), b.decision_function(X))
+    assert (a.predict(X, stim, trials)[:, 0] == attended).mean() >= 0.75
+    fresh = cloudpickle.loads(cloudpickle.dumps(clone(est)))
+    assert repr(fresh.get_params()) == repr(est.get_params())
+    np.testing.assert_array_equal(fresh.fit(X, stim, trials).choices_,
+                                  clone(est).fit(X, stim, trials).choices_)
 
 
 @pytest.mark.xfail(strict=True, raises=TypeError,

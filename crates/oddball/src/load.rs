@@ -15,7 +15,8 @@ use oddball_io::{EventMapping, ReadOptions};
 macro_rules! formats {
     () => {
         "BCI2000 .dat (v1.0/v1.1), CSV (e.g. Muse), EDF/EDF+/BDF (annotations as events), NIC \
-         .easy (with its .info), XDF, MATLAB .mat v5/v7 (BCI Competition speller layout)"
+         .easy (with its .info), XDF, MATLAB .mat v5/v7 (BCI Competition II and III speller \
+         layouts), GDF 1.x/2.x (OpenViBE stimulations), BrainVision .vhdr, EEGLAB .set, MNE .fif"
     };
 }
 pub(crate) use formats;
