@@ -308,3 +308,38 @@ fn iib_best_preset_is_above_the_peer_auc() {
         "{by_reps:?}: 6/6 from 3 repetitions on"
     );
 }
+
+/// The OpenViBE GDF run (issue #33) within session, 5 folds that keep its 5 characters whole, beside
+/// MNE 1.13.2 + scikit-learn 1.9.1's shrinkage LDA on the same epochs and folds
+/// (`tools/peer/openvibe_gdf_lda.py`, run on this machine: AUC 0.9803, per fold 0.9896, 0.9900, 0.9492,
+/// 0.9804, 0.9925).
+#[test]
+fn openvibe_gdf_within_session_is_the_mne_scikit_learn_auc() {
+    let Some(data) = data_dir() else { return };
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = tmp_dir("cli-benchmark-gdf");
+    let json = dir.join("gdf.json");
+    let manifest = repo.join("datasets/openvibe-p300-gdf.toml");
+    let data = data.display().to_string();
+    let (ok, out, err) = oddball(&[
+        "benchmark",
+        manifest.to_str().unwrap(),
+        "--protocol",
+        "within-session",
+        "--pipeline",
+        "lda",
+        "--data",
+        &data,
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}\n{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let r = &v["results"][0];
+    assert_eq!(r["n_epochs"].as_u64(), Some(700), "{r}");
+    assert_eq!(r["n_targets"].as_u64(), Some(100), "{r}");
+    let auc = r["auc"].as_f64().unwrap();
+    println!("oddball lda within session: AUC {auc:.4} (MNE + scikit-learn: 0.9803)");
+    assert!((auc - 0.9803).abs() < 0.002, "AUC {auc}");
+}
