@@ -151,7 +151,7 @@ fn adaptation_after_calibration_loses_nothing_on_real_replays() {
         let frozen = replay(train, test, false);
         let adapted = replay(train, test, true);
         println!(
-            "{name}: frozen mean acc over 1-15 reps {:.3}, at 15 {:.3}, AUC {:.4}; adapted {:.3}, {:.3}, AUC {:.4} ({} updates rejected)",
+            "{name}: frozen mean acc over 1-15 reps {:.3}, at 15 {:.3}, AUC {:.12}; adapted {:.3}, {:.3}, AUC {:.12} ({} updates rejected)",
             frozen.0, frozen.1, frozen.2, adapted.0, adapted.1, adapted.2, adapted.3
         );
         // The decisions (all repetitions) and the epoch AUC never get worse.
