@@ -72,9 +72,17 @@ def _keys(keys) -> str:
     return ",".join(str(k) for k in keys)
 
 
-def read_raw(path, events=None, text=None) -> Raw:
+def read_raw(path, events=None, text=None, *, sfreq=None, channels=None, montage=None, time_column=None,
+             events_from=None, data_from=None) -> Raw:
     """Reads a recording in any format oddball reads (BCI2000 ``.dat``, CSV, EDF/EDF+/BDF, NIC
-    ``.easy``, XDF, MATLAB ``.mat``; chosen by extension).
+    ``.easy``, XDF, MATLAB ``.mat``, GDF, BrainVision ``.vhdr``, EEGLAB ``.set``, FIF; chosen by
+    extension).
+
+    What a file does not say, as the command line's options give it: ``sfreq`` (Hz: a CSV without a
+    time column, a MAT file), ``channels`` (CSV: the EEG columns; MAT: the signal's column names;
+    other formats: the channels kept, by name), ``montage`` (an EEGLAB ``.loc`` naming the file's
+    channels, e.g. BCI2000's ``eeg64.loc``), ``time_column`` (CSV), ``events_from`` (the CSV marker
+    column or MAT code variable), ``data_from`` (the MAT variable of samples).
 
     ``events`` labels plain markers as targets and non-targets: a dict
     ``{"target": [2], "nontarget": [1]}`` or a pair ``(target_keys, nontarget_keys)``, keys being
@@ -93,7 +101,12 @@ def read_raw(path, events=None, text=None) -> Raw:
         if target is None or nontarget is None:
             raise ValueError("events: give both target and non-target keys")
         target, nontarget = _keys(target), _keys(nontarget)
-    d = _oddball.read_raw(os.fspath(path), target, nontarget, text)
+    if isinstance(channels, str):
+        channels = [channels]
+    d = _oddball.read_raw(
+        os.fspath(path), target, nontarget, text, None if sfreq is None else float(sfreq),
+        None if channels is None else [str(c) for c in channels],
+        None if montage is None else os.fspath(montage), time_column, events_from, data_from)
     onsets = np.asarray(d["onsets"], dtype=np.int64)
     ev = np.column_stack([onsets, np.zeros_like(onsets), np.asarray(d["codes"], dtype=np.int64)])
     return Raw(

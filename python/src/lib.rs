@@ -537,20 +537,37 @@ fn presets() -> Vec<&'static str> {
     oddball_decode::preset::PRESETS.to_vec()
 }
 
-/// Reads a recording with `oddball_io::read` (format by extension), labels its events by
-/// `target`/`nontarget` keys (codes such as `"2"` or marker texts, comma-separated) when given,
-/// and returns a dict: `data` `(n_channels, n_times)` µV, `sfreq`, `ch_names`, `format`, and the
+/// Reads a recording with `oddball_io::read_with` (format by extension; the reader options the
+/// command line has: `sfreq`, `channels`, `montage`, `time_column`, `events_from`, `data_from`),
+/// labels its events by `target`/`nontarget` keys (codes such as `"2"` or marker texts,
+/// comma-separated) when given, and returns a dict: `data` `(n_channels, n_times)` µV, `sfreq`, `ch_names`, `format`, and the
 /// events as `onsets` (samples), `codes`, `targets` (`1` target, `0` non-target, `-1` unknown) and
 /// `labels` (text or `None`).
 #[pyfunction]
-#[pyo3(signature = (path, target=None, nontarget=None, text=None))]
+#[pyo3(signature = (path, target=None, nontarget=None, text=None, sfreq=None, channels=None, montage=None, time_column=None, events_from=None, data_from=None))]
+#[allow(clippy::too_many_arguments)]
 fn read_raw<'py>(
     py: Python<'py>,
     path: std::path::PathBuf,
     target: Option<&str>,
     nontarget: Option<&str>,
     text: Option<&str>,
+    sfreq: Option<f64>,
+    channels: Option<Vec<String>>,
+    montage: Option<std::path::PathBuf>,
+    time_column: Option<String>,
+    events_from: Option<String>,
+    data_from: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let options = oddball_io::ReadOptions {
+        sfreq,
+        channels,
+        montage,
+        time_column,
+        events: events_from,
+        data: data_from,
+    };
+    options.check().map_err(PyValueError::new_err)?;
     let mapping = match (target, nontarget) {
         (Some(t), Some(n)) => Some(
             oddball_io::EventMapping::parse(t, n)
@@ -565,7 +582,8 @@ fn read_raw<'py>(
     };
     let text = text.map(str::to_owned);
     let rec = py.detach(move || -> PyResult<oddball_io::Recording> {
-        let mut rec = oddball_io::read(&path).map_err(|e| PyOSError::new_err(e.to_string()))?;
+        let mut rec = oddball_io::read_with(&path, &options)
+            .map_err(|e| PyOSError::new_err(e.to_string()))?;
         if let Some(m) = &mapping {
             rec.map_events(m)
                 .map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))?;

@@ -1,4 +1,4 @@
-"""oddball.read_raw on every format oddball reads, against independent readers where one exists
+"""oddball.read_raw on every format oddball reads (and with the command line's reader options), against independent readers where one exists
 (the peer stack's BCI2000 reader, MNE's EDF/BDF readers), and Raw.to_mne()."""
 from __future__ import annotations
 
@@ -17,6 +17,10 @@ FIXTURE_FILES = {
     "Easy": "nic_small.easy",
     "Xdf": "xdf/python_small.xdf",
     "Mat": "mat/bci_small.mat",
+    "Gdf": "gdf/small_v2.gdf",
+    "BrainVision": "brainvision/mne_float32.vhdr",
+    "Eeglab": "eeglab/mne_export.set",
+    "Fif": "fif/float_raw.fif",
 }
 
 
@@ -99,3 +103,27 @@ def test_bad_files_are_clear_errors(tmp_path):
     bad.write_bytes((FIXTURES / "pyedflib_small.edf").read_bytes()[:300])
     with pytest.raises(OSError, match="cut.edf"):
         oddball.read_raw(bad)
+
+
+def test_the_command_lines_reader_options_reach_the_readers(tmp_path):
+    """sfreq, channels, time_column and events_from as `--sfreq`, `--channels`, `--time-column`
+    and `--events-from` give them; a bad option is refused before reading."""
+    path = tmp_path / "plain.csv"
+    rows = ["t,Cz,Pz,trig"] + [f"{i / 100:.2f},{i},{2 * i},{1 if i % 10 == 3 else 0}" for i in range(50)]
+    path.write_text("\n".join(rows) + "\n")
+    raw = oddball.read_raw(path, sfreq=128.0, channels=["Pz"], time_column="t", events_from="trig")
+    assert raw.sfreq == 128.0 and raw.ch_names == ["Pz"]
+    np.testing.assert_array_equal(raw.data[0], 2.0 * np.arange(50))
+    assert raw.events[:, 0].tolist() == [3, 13, 23, 33, 43]
+    # Without a time column the rate must be given: the error says so.
+    nots = tmp_path / "nots.csv"
+    nots.write_text("Cz,Pz\n1,2\n3,4\n")
+    with pytest.raises(OSError, match="sampling rate"):
+        oddball.read_raw(nots)
+    assert oddball.read_raw(nots, sfreq=250.0).sfreq == 250.0
+    with pytest.raises(ValueError, match="sfreq"):
+        oddball.read_raw(nots, sfreq=-1.0)
+    # Any format: the channels kept, by name.
+    fif = oddball.read_raw(need(FIXTURES / "fif/float_raw.fif"))
+    one = oddball.read_raw(need(FIXTURES / "fif/float_raw.fif"), channels=[fif.ch_names[1]])
+    np.testing.assert_array_equal(one.data[0], fif.data[1])
