@@ -43,6 +43,7 @@
 //! ```
 
 pub mod bci2000;
+pub mod bids;
 pub mod brainvision;
 pub mod csv;
 mod dispatch;
