@@ -48,7 +48,8 @@ pub struct BenchmarkArgs {
     /// Folds of the within-session cross-validation.
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
-    /// The folder the manifests' run paths are relative to, instead of each manifest's `root`.
+    /// The folder the manifests' run paths are relative to, instead of each manifest's `root`
+    /// (a BIDS root's runs are in its own tree).
     #[arg(long, value_name = "DIR")]
     pub data: Option<PathBuf>,
     /// Threads for the evaluations (default: one per core).

@@ -296,14 +296,18 @@ fn exported_runs_read_back_with_the_same_samples_events_and_speller() {
     );
 }
 
-fn aucs(json: &Path) -> Vec<f64> {
+/// Each result row's (AUC, epochs, targets).
+fn aucs(json: &Path) -> Vec<(f64, u64, u64)> {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
     v["results"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|r| r["auc"].as_f64().unwrap())
+        .map(|r| {
+            let n = |k: &str| r[k].as_u64().unwrap();
+            (r["auc"].as_f64().unwrap(), n("n_epochs"), n("n_targets"))
+        })
         .collect()
 }
 
@@ -348,7 +352,8 @@ fn benchmark_on_the_exported_root_gives_the_originals_auc() {
     assert_eq!(orig.len(), 1);
     assert_eq!(orig.len(), bids.len());
     for (x, y) in orig.iter().zip(&bids) {
-        assert!((x - y).abs() <= 1e-3, "{x} vs {y}");
+        assert!((x.0 - y.0).abs() <= 1e-3, "{x:?} vs {y:?}");
+        assert_eq!((x.1, x.2), (y.1, y.2), "epochs and targets");
     }
     // train-test needs a split a BIDS tree does not give: not applicable, said so.
     let (ok, _, err) = oddball(&[

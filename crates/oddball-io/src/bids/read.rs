@@ -473,6 +473,19 @@ mod tests {
             .contains("\"Oz\""));
     }
 
+    proptest::proptest! {
+        /// Any text as an events or channels table: a result or an error, never a panic.
+        #[test]
+        fn any_table_text_is_refused_or_read(text in "[a-z0-9/\\t\\n.\\-]{0,200}", header in 0usize..3) {
+            let head = ["onset\tduration\tsample\ttrial_type\tvalue\n", "onset\tvalue\n", "name\ttype\tstatus\n"][header];
+            let text = format!("{head}{text}");
+            if let Ok(t) = Table::parse(&text, Path::new("p.tsv")) {
+                let _ = read_events(&t, 256.0, 1000);
+                let _ = eeg_channels(&t, &["a".to_string(), "b".into()]);
+            }
+        }
+    }
+
     #[test]
     fn speller_checked() {
         let p = Path::new("e.json");
