@@ -68,7 +68,7 @@ fn a_run_reads_back_and_broken_sidecars_are_named() {
     assert!(json.contains("\"PowerLineFrequency\": 50.0"), "{json}");
     let m = dataset_manifest(&dir.join("bids")).unwrap();
     assert_eq!(m.subjects.len(), 1);
-    assert_eq!(m.subjects[0].train, [eeg.clone()]);
+    assert_eq!(m.subjects[0].train, std::slice::from_ref(&eeg));
 
     // A bad channel and a MISC channel are left out.
     let channels = sidecar(&eeg, "channels.tsv");
