@@ -22,8 +22,21 @@ use crate::{IoError, Recording};
 /// ([`read_brainvision`]), `.set` → EEGLAB ([`read_eeglab`]), `.fif` → FIF raw ([`read_fif`], its
 /// split parts too; `.fif.gz` refused: decompress it first), `.gdf` → GDF 1.x/2.x ([`read_gdf`]); a file
 /// with another extension that starts with the XDF magic code `XDF:` is read as XDF.
+///
+/// A run of a BIDS-EEG data set (`sub-…_eeg.<edf|bdf|vhdr|set>` with its `_events.tsv` beside
+/// it) is read by [`crate::bids::read_bids_run`]: its events and channels come from the data
+/// set's sidecars, not from the data file.
 pub fn read(path: impl AsRef<Path>) -> Result<Recording, IoError> {
     let path = path.as_ref();
+    check_file(path)?;
+    if crate::bids::is_bids_run(path) {
+        return crate::bids::read_bids_run(path);
+    }
+    read_format(path)
+}
+
+/// [`read`] by the extension alone (a BIDS run's data file as its format's reader reads it).
+pub(crate) fn read_format(path: &Path) -> Result<Recording, IoError> {
     check_file(path)?;
     let ext = path
         .extension()

@@ -134,6 +134,16 @@ pub enum IoError {
         #[source]
         source: SignalError,
     },
+
+    /// A BIDS layout or sidecar (see [`crate::bids`]).
+    #[error(transparent)]
+    Bids(Box<crate::bids::BidsError>),
+}
+
+impl From<crate::bids::BidsError> for IoError {
+    fn from(e: crate::bids::BidsError) -> Self {
+        IoError::Bids(Box::new(e))
+    }
 }
 
 /// The [`Raw`] of a reader's parts; a part the signal crate refuses (shape, rate, names, events
@@ -198,6 +208,7 @@ impl IoError {
             | IoError::InvalidState { path, .. }
             | IoError::InvalidParameterLine { path, .. }
             | IoError::Signal { path, .. } => path,
+            IoError::Bids(b) => b.path(),
         }
     }
 

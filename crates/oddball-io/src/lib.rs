@@ -19,6 +19,10 @@
 //! | `.gdf` | [`gdf`]: GDF 1.x and 2.x (all integer and float types, 24-bit included) | the event table; OpenViBE label codes 0x8101… as flashes 1…, target from 0x8205/0x8206 within 2 samples; other tables: their codes |
 //! | `.xdf` (or any file starting with `XDF:`) | [`xdf`]: Lab Streaming Layer XDF 1.0, the EEG stream; written live by [`XdfWriter`] or offline by [`write_xdf`]; files cut by a killed recorder are read up to their last complete chunk | string (and numeric marker) stream samples at the nearest EEG sample |
 //!
+//! A BIDS-EEG run (`sub-…_eeg.<edf|bdf|vhdr|set>` with its `_events.tsv` beside it) is read by
+//! its format's reader with the events, channels and speller of its sidecars ([`bids`], which
+//! also writes recordings as BIDS-EEG).
+//!
 //! All ten readers are written from scratch in this crate (each module says why). They share
 //! one error rule: corrupt or truncated input gives an [`IoError`] naming the file, the field and
 //! the byte offset (CSV and `.easy`/`.info`: line and column), never a panic and never a silently
@@ -43,6 +47,7 @@
 //! ```
 
 pub mod bci2000;
+pub mod bids;
 pub mod brainvision;
 pub mod csv;
 mod dispatch;

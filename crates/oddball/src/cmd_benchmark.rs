@@ -33,7 +33,9 @@ impl FromStr for ProtocolList {
 )]
 pub struct BenchmarkArgs {
     /// Dataset manifests (TOML: subjects, train/test runs, event mapping, speller geometry;
-    /// shipped ones in datasets/).
+    /// shipped ones in datasets/), or BIDS data set roots (a folder with
+    /// dataset_description.json: subjects and sessions from its tree, events and speller from
+    /// each run's sidecars; no train/test split, so train-test is skipped for it).
     #[arg(required = true, value_name = "MANIFEST")]
     pub manifests: Vec<PathBuf>,
     #[arg(long, default_value = DEFAULT_PIPELINE, value_name = "NAME[,NAME…]|all", help = list_help())]
@@ -46,7 +48,8 @@ pub struct BenchmarkArgs {
     /// Folds of the within-session cross-validation.
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
-    /// The folder the manifests' run paths are relative to, instead of each manifest's `root`.
+    /// The folder the manifests' run paths are relative to, instead of each manifest's `root`
+    /// (a BIDS root's runs are in its own tree).
     #[arg(long, value_name = "DIR")]
     pub data: Option<PathBuf>,
     /// Threads for the evaluations (default: one per core).
@@ -72,8 +75,13 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let manifests = args
         .manifests
         .iter()
-        .map(|m| Manifest::load_with_root(m, args.data.as_deref()))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|m| -> Result<Manifest> {
+            if m.join("dataset_description.json").is_file() {
+                return Ok(oddball_io::bids::dataset_manifest(m)?);
+            }
+            Ok(Manifest::load_with_root(m, args.data.as_deref())?)
+        })
+        .collect::<Result<Vec<_>>>()?;
     let params = BenchmarkParams {
         presets: args.pipeline.0.clone(),
         protocols: args.protocol.0.clone(),

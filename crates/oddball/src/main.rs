@@ -21,6 +21,7 @@ mod cmd_arm;
 mod cmd_benchmark;
 mod cmd_decode;
 mod cmd_demo;
+mod cmd_export;
 mod cmd_inspect;
 mod cmd_online;
 mod cmd_simulate;
@@ -111,6 +112,13 @@ enum Command {
   oddball benchmark datasets/bci2000-eeg3.toml --pipeline all --json results.json --plot results.png
   oddball benchmark datasets/*.toml --protocol within-session --folds 5")]
     Benchmark(cmd_benchmark::BenchmarkArgs),
+    /// Write recordings as a BIDS-EEG data set (EDF+, sidecars, events with targets and codes).
+    #[command(after_help = "Examples:
+  oddball export --bids bids/ --subject PXB eeg3_1.dat eeg3_2.dat     # runs 1 and 2 of task eeg31
+  oddball export --bids bids/ --subject 1 --session 1 --task visualp300 run1.csv run2.csv \\
+      --target-events 2 --nontarget-events 1 --line-freq 60
+  oddball export --bids bids/ --subject 01 --task online out/online/session.xdf   # the XDF under sourcedata/")]
+    Export(cmd_export::ExportArgs),
     /// Simulate the 2-DoF arm following direction commands (the paper's G by default).
     #[command(after_help = "Examples:
   oddball arm                                    # the paper's six commands
@@ -195,6 +203,7 @@ fn main() -> ExitCode {
         Command::Evaluate(args) => done(cmd_train::run_evaluate(&args)),
         Command::Benchmark(args) => done(cmd_benchmark::run(&args)),
         Command::Arm(args) => done(cmd_arm::run(&args)),
+        Command::Export(args) => done(cmd_export::run(&args)),
     };
     match result {
         Ok(None) => ExitCode::SUCCESS,
