@@ -16,11 +16,18 @@
 //!
 //! so one iteration costs one triangular solve pair with the Cholesky factor of `B` (`p²`) and
 //! two passes over the rows (`N·p`).
+//!
+//! With [`Covariance::BlockToeplitz`] the label-free part is `B_T = T(B)`, `T` the tapered
+//! block-Toeplitz map of `toeplitz-lda` (every channel pair and time lag averaged, lag `d` tapered
+//! by `(n_t − |d|)/n_t`), and the prior's scale is the label-free matrix `c·D′ = (N + c)·B_T − N·S`
+//! instead of `c·D`; everything above holds with `B_T` for `B` (see [`Prepared::new`]).
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ndarray::ArrayView2;
 
 use super::error::{Result, UnsupervisedError};
+use super::Covariance;
+use crate::classifiers::toeplitz_lda::block_toeplitz_tapered;
 
 /// Where each epoch sits in the paradigm's constraint: its slot (one trial's choice set, in
 /// which exactly one code is attended) and its choice within the slot.
@@ -50,11 +57,23 @@ pub(crate) struct Prepared {
     pub chol: Cholesky<f64, Dyn>,
     /// `ln |B|`.
     pub log_det_b: f64,
+    /// `B` is block-Toeplitz (`B_T`), and the prior's scale `c·D′ = (N + c)·B_T − N·S`.
+    pub structured: bool,
 }
 
 impl Prepared {
-    /// Centres `x` `(N, p)`, computes `S`, the shrinkage and the factor of `B`.
-    pub fn new(x: ArrayView2<f64>) -> Result<Self> {
+    /// Centres `x` `(N, p)`, computes `S`, the shrinkage and the factor of `B` (of `B_T` under
+    /// [`Covariance::BlockToeplitz`]).
+    ///
+    /// Why the block-Toeplitz variant is still an exact EM: the M-step maximises
+    /// `−((N + c)/2) ln|Σ| − ½ tr((c·D′ + W) Σ⁻¹)` over `Σ`, whose maximiser is
+    /// `(c·D′ + W)/(N + c)` whenever `c·D′ + W` is positive definite — `D′` itself need not be (the
+    /// penalty is then an improper, data-chosen prior, as `λ` already is). With
+    /// `c·D′ = (N + c)·B_T − N·S` and `W = N·S − ΔμΔμᵀ/h` that maximiser is `B_T − g·ΔμΔμᵀ`, which
+    /// [`m_step`] checks is positive definite (`B_T` by its Cholesky factor, `1 − g·a > 0`). So both
+    /// steps are exact maximisations of one fixed objective and it never decreases; the
+    /// identity `N·S + c·D′ = (N + c)·B_T` also gives [`Self::constant`] with `ln|B_T|`.
+    pub fn new(x: ArrayView2<f64>, covariance: Covariance) -> Result<Self> {
         let (n, p) = x.dim();
         if n < 2 || p == 0 {
             return Err(UnsupervisedError::TooFewEpochs { n_epochs: n });
@@ -83,6 +102,20 @@ impl Prepared {
         for j in 0..p {
             b[(j, j)] += shrinkage * d[j];
         }
+        let structured = match covariance {
+            Covariance::LedoitWolf => false,
+            Covariance::BlockToeplitz { n_channels } => {
+                if n_channels == 0 || p % n_channels != 0 {
+                    return Err(UnsupervisedError::InvalidParameter {
+                        name: "covariance",
+                        value: format!("block-Toeplitz over {n_channels} channels"),
+                        reason: format!("{p} features are not a whole number per channel"),
+                    });
+                }
+                b = block_toeplitz_tapered(b, n_channels, p / n_channels);
+                true
+            }
+        };
         let chol = Cholesky::new(b).ok_or(UnsupervisedError::NotPositiveDefinite {
             n_epochs: n,
             n_features: p,
@@ -104,6 +137,7 @@ impl Prepared {
             c,
             chol,
             log_det_b,
+            structured,
         })
     }
 
@@ -226,16 +260,20 @@ fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
     // Δμᵀ Σ⁻¹ Δμ.
     let m = a / one_minus;
     let offset = -0.5 * (beta_t + beta_n) * m;
-    let xu = &prep.xc * &u;
-    let u_s_u = xu.norm_squared() / nf;
-    let u_d_u: f64 = u
-        .iter()
-        .zip(prep.d.iter())
-        .map(|(ui, di)| ui * ui * di)
-        .sum();
+    // uᵀ(N·S + c·D)u: formed from S and D, or — block-Toeplitz — (N + c)·uᵀB_T·u = (N + c)·a.
+    let quad = if prep.structured {
+        (nf + prep.c) * a
+    } else {
+        let xu = &prep.xc * &u;
+        let u_d_u: f64 = u
+            .iter()
+            .zip(prep.d.iter())
+            .map(|(ui, di)| ui * ui * di)
+            .sum();
+        xu.norm_squared() + prep.c * u_d_u
+    };
     let rest = -0.5 * (nf + prep.c) * one_minus.ln()
-        - 0.5 * nf * (kappa * u_s_u + beta_n * beta_n * m)
-        - 0.5 * prep.c * kappa * u_d_u
+        - 0.5 * (kappa * quad + nf * beta_n * beta_n * m)
         - 0.5 * kappa0 * (beta_t * beta_t + beta_n * beta_n) * m;
     Ok((Linear { w, offset }, rest))
 }
