@@ -19,12 +19,12 @@ ledoit_wolf_shrinkage of the standardised features. Nothing here uses the Rust s
 directly, Sigma = (c D + W) / (N + c), and the likelihood uses dense inverses
 and slogdet; the E-step enumerates each slot's codes.
 
-The block-Toeplitz variant (oddball_decode::unsupervised::Covariance::BlockToeplitz) is the same model with
-the prior's scale c D replaced by c D' = (N + c) B_T - N S, B_T the tapered block-Toeplitz form of
+The block-Toeplitz variant (oddball_decode::unsupervised::Covariance::BlockToeplitz) is the same objective
+with the covariance restricted to Sigma = s2 B_T: B_T the tapered block-Toeplitz form of
 B = (1 - lam) S + lam D (per channel pair and time lag the mean of B's entries, times (T - |lag|) / T),
-formed here from B reshaped to (channel, time, channel, time) and its diagonals; the M-step is
-Sigma = (c D' + W) / (N + c) formed directly, as above. Written to unsupervised_toeplitz_golden.json, on a
-problem of 2 channels x 3 time points (6 features), 6 trials.
+formed here from B reshaped to (channel, time, channel, time) and its diagonals, fixed; the M-step's scale
+s2 = tr(B_T^-1 (c D + W)) / ((N + c) p) with W formed directly, as above. Written to
+unsupervised_toeplitz_golden.json, on a problem of 2 channels x 3 time points (6 features), 6 trials.
 
 The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
 flashed twice per trial (48 epochs), 5 features; attended epochs carry a mean shift. The EM starts
@@ -88,11 +88,8 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
     lam = ledoit_wolf_shrinkage(xc / np.sqrt(np.diag(S)), assume_centered=True)
     lam = min(max(lam, 1e-4), 0.99)
     cst = lam * n / (1 - lam)
-    if n_channels is None:
-        cD = cst * D
-    else:
-        B = (1 - lam) * S + lam * D
-        cD = (n + cst) * block_toeplitz(B, n_channels) - n * S
+    if n_channels is not None:
+        BT = block_toeplitz((1 - lam) * S + lam * D, n_channels)
     k0 = 3.0
     m0 = X.mean(axis=0)
 
@@ -139,7 +136,7 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
             total += m + np.log(np.exp(np.array(terms) - m).sum())
         _, logdet = np.linalg.slogdet(sigma)
         inv = np.linalg.inv(sigma)
-        pen = -0.5 * cst * logdet - 0.5 * np.trace(cD @ inv)
+        pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
         pen -= 0.5 * k0 * ((mu_t - m0) @ inv @ (mu_t - m0) + (mu_n - m0) @ inv @ (mu_n - m0))
         return total + pen
 
@@ -153,7 +150,11 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
         dt, dn = X - mu_t, X - mu_n
         W = (r[:, None] * dt).T @ dt + ((1 - r)[:, None] * dn).T @ dn
         W += k0 * (np.outer(mu_t - m0, mu_t - m0) + np.outer(mu_n - m0, mu_n - m0))
-        sigma = (cD + W) / (n + cst)
+        if n_channels is None:
+            sigma = (cst * D + W) / (n + cst)
+        else:
+            s2 = np.trace(np.linalg.solve(BT, cst * D + W)) / ((n + cst) * p)
+            sigma = s2 * BT
         objectives.append(float(objective(mu_t, mu_n, sigma)))
         w = np.linalg.solve(sigma, mu_t - mu_n)
         llr = (X - 0.5 * (mu_t + mu_n)) @ w

@@ -22,12 +22,12 @@
 //!   standardised rows, `c = λN/(1 − λ)`). This is a shrinkage LDA whose labels are soft, and one
 //!   iteration needs only one solve with the Cholesky factor of `B` (Sherman–Morrison).
 //!
-//! [`Covariance::BlockToeplitz`] replaces `B` by its block-Toeplitz, tapered form `B_T` (the
-//! time-stationary structure of `toeplitz-lda`, on the label-free total covariance, as the
-//! calibration-free spellers of Sosulski & Tangermann do) and the prior's scale by the
-//! label-free `c·D′ = (N + c)·B_T − N·S`; then `Σ = B_T − g·ΔμΔμᵀ` is again the exact M-step of
-//! one fixed penalised likelihood (an improper prior where `D′` is not positive definite; the
-//! M-step checks `Σ` is).
+//! [`Covariance::BlockToeplitz`] restricts the covariance to `Σ = σ²·B_T`, `B_T` the
+//! block-Toeplitz, tapered form of `B` (the time-stationary structure of `toeplitz-lda`, on the
+//! label-free total covariance, as the calibration-free spellers of Sosulski & Tangermann do),
+//! fixed once; the M-step maximises the same penalised likelihood over the scale `σ²` (closed
+//! form, always positive). The LLR's direction is then `B_T⁻¹Δμ` where the Ledoit–Wolf model's is
+//! `B⁻¹Δμ` (its rank-one update changes only the scale).
 //!
 //! Both steps are exact, so the penalised log-likelihood (marginal over the unknown choices)
 //! never decreases ([`Unsupervised::objective`]). EM finds a local maximum: a fit starts from
@@ -131,12 +131,11 @@ pub enum Covariance {
     /// `B = (1 − λ)·S + λ·D`: the Ledoit–Wolf shrunk total covariance (the prior's scale `D`).
     #[default]
     LedoitWolf,
-    /// `B_T`: that matrix made block-Toeplitz over `n_channels` channels of the channel-major
-    /// features (every channel pair and time lag averaged, lag `d` tapered by
-    /// `(n_t − |d|)/n_t`), the time-stationary structure of `toeplitz-lda` (Sosulski &
-    /// Tangermann 2022) on the total covariance, which needs no labels. The prior's scale is then
-    /// the label-free `c·D′ = (N + c)·B_T − N·S` so that the M-step stays exact (proof at
-    /// `em::Prepared::new`): the objective still never decreases.
+    /// `Σ = σ²·B_T`: `B_T` that matrix made block-Toeplitz over `n_channels` channels of the
+    /// channel-major features (every channel pair and time lag averaged, lag `d` tapered by
+    /// `(n_t − |d|)/n_t`: the time-stationary structure of `toeplitz-lda`, Sosulski & Tangermann
+    /// 2022, on the total covariance, which needs no labels), fixed; the M-step chooses the scale
+    /// `σ²` (the same objective, over covariances of that shape: still exact, never decreasing).
     BlockToeplitz {
         /// Channels of the features (each channel's points contiguous, the amplitude features'
         /// layout).
