@@ -61,11 +61,9 @@ fn check_golden(fixture: &str) {
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
     let constraint = Constraint::new(g.sets.clone()).unwrap();
-    let covariance = g
-        .n_channels
-        .map_or(Covariance::LedoitWolf, |n_channels| {
-            Covariance::BlockToeplitz { n_channels }
-        });
+    let covariance = g.n_channels.map_or(Covariance::LedoitWolf, |n_channels| {
+        Covariance::BlockToeplitz { n_channels }
+    });
     let m = UnsupervisedParams {
         mean_prior: g.mean_prior,
         covariance,
