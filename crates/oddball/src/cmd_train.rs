@@ -328,6 +328,9 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
         e @ unsupervised::ReplayError::Unscorable { .. } => {
             anyhow::anyhow!("{e}; give it with --test-text")
         }
+        e @ unsupervised::ReplayError::NotSpeller { .. } => {
+            anyhow::anyhow!("{e}; a data set's manifest can give its geometry: --manifest FILE")
+        }
         e => e.into(),
     })?;
     print!("{}", text::unsupervised(&r));

@@ -32,12 +32,12 @@ fn a_csv_with_wall_clock_timestamps_trains_a_model_at_the_nominal_rate() {
     }
     let mut csv = format!("time,{},marker\n", raw.ch_names().join(","));
     let t0 = 1_764_288_000.0_f64;
-    for i in 0..raw.n_times() {
+    for (i, m) in marker.iter().enumerate() {
         write!(csv, "{:.6}", t0 + i as f64 / 500.0).unwrap();
         for c in 0..raw.n_channels() {
             write!(csv, ",{}", raw.data()[[c, i]]).unwrap();
         }
-        writeln!(csv, ",{}", marker[i]).unwrap();
+        writeln!(csv, ",{m}").unwrap();
     }
     let csv_path = tmp.join("session.csv");
     std::fs::write(&csv_path, csv).unwrap();
