@@ -6,7 +6,7 @@
 use ndarray::{Array2, Array3};
 use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::unsupervised::{
-    replay, replay_from, Constraint, Init, UnsupervisedError, UnsupervisedParams,
+    replay, replay_from, Constraint, Covariance, Init, UnsupervisedError, UnsupervisedParams,
 };
 use proptest::prelude::*;
 use serde::Deserialize;
@@ -25,6 +25,9 @@ struct Golden {
     posterior: Vec<Vec<f64>>,
     llr: Vec<f64>,
     truth: Vec<Vec<u32>>,
+    /// The block-Toeplitz variant's channels (absent: Ledoit–Wolf).
+    #[serde(default)]
+    n_channels: Option<usize>,
 }
 
 fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
@@ -35,6 +38,7 @@ fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
         max_iter,
         tol,
         seed: 7,
+        covariance: Covariance::LedoitWolf,
     }
 }
 
@@ -44,13 +48,25 @@ fn rows(x: &[Vec<f64>]) -> Array2<f64> {
 
 #[test]
 fn em_matches_the_dense_numpy_reference() {
-    let g: Golden =
-        serde_json::from_str(include_str!("fixtures/unsupervised_golden.json")).unwrap();
+    check_golden(include_str!("fixtures/unsupervised_golden.json"));
+}
+
+#[test]
+fn block_toeplitz_em_matches_the_dense_numpy_reference() {
+    check_golden(include_str!("fixtures/unsupervised_toeplitz_golden.json"));
+}
+
+fn check_golden(fixture: &str) {
+    let g: Golden = serde_json::from_str(fixture).unwrap();
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
     let constraint = Constraint::new(g.sets.clone()).unwrap();
+    let covariance = g.n_channels.map_or(Covariance::LedoitWolf, |n_channels| {
+        Covariance::BlockToeplitz { n_channels }
+    });
     let m = UnsupervisedParams {
         mean_prior: g.mean_prior,
+        covariance,
         ..params(g.objective.len(), 0.0)
     }
     .fit_from_scores(x.view(), &g.codes, &g.trials, &constraint, &g.init)
@@ -133,9 +149,16 @@ proptest! {
         let (x, codes, trials) = problem(&sets, n_trials, reps, p, &values);
         let constraint = Constraint::new(sets.clone()).unwrap();
         let init: Vec<f64> = (0..codes.len()).map(|i| init[i % init.len()]).collect();
+        // The block-Toeplitz variant over 2 channels when the features split evenly, else 1.
+        let toeplitz = UnsupervisedParams {
+            covariance: Covariance::BlockToeplitz { n_channels: if p % 2 == 0 { 2 } else { 1 } },
+            ..params(30, 0.0)
+        };
         let fits = [
             params(30, 0.0).fit_from_scores(x.view(), &codes, &trials, &constraint, &init),
             params(30, 0.0).fit_features(x.view(), &codes, &trials, &constraint, None),
+            toeplitz.fit_from_scores(x.view(), &codes, &trials, &constraint, &init),
+            toeplitz.fit_features(x.view(), &codes, &trials, &constraint, None),
         ];
         for fit in fits {
             let m = match fit {

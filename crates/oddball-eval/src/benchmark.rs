@@ -11,6 +11,10 @@
 //! * [`Protocol::CrossSubject`]: leave one subject out (MOABB's `CrossSubjectEvaluation`):
 //!   fitted on every run of the data set's other subjects, scored on all of the subject's runs.
 //!   The channel names and the sampling rate of all subjects must agree.
+//! * [`Protocol::Unsupervised`]: no training: a speller subject's runs in order as one unlabelled
+//!   session ([`crate::unsupervised::replay`], from the P300 template): characters right online
+//!   and post hoc by repetitions, the final model's AUC; one row (preset `unsupervised`) per
+//!   subject, the labels only score. Subjects that are not spellers are skipped once read.
 //!
 //! Everything that can be checked is checked before any EEG is read ([`BenchmarkParams::plan`]):
 //! presets, folds, which protocol applies to which subject (a subject without test runs has
@@ -41,6 +45,7 @@ use crate::evaluate::{
 };
 use crate::layout::{Layout, Resampled};
 use crate::stats::{wilcoxon, Alternative};
+use crate::unsupervised::ReplayError;
 use oddball_decode::preprocess::Preprocess;
 use oddball_decode::preset::Preset;
 
@@ -54,13 +59,16 @@ pub enum Protocol {
     WithinSession,
     /// Leave one subject out.
     CrossSubject,
+    /// All of a speller subject's runs as one unlabelled session (no training).
+    Unsupervised,
 }
 
 impl Protocol {
-    pub const ALL: [Protocol; 3] = [
+    pub const ALL: [Protocol; 4] = [
         Protocol::TrainTest,
         Protocol::WithinSession,
         Protocol::CrossSubject,
+        Protocol::Unsupervised,
     ];
 
     /// The name on the command line and in results.
@@ -69,6 +77,7 @@ impl Protocol {
             Protocol::TrainTest => "train-test",
             Protocol::WithinSession => "within-session",
             Protocol::CrossSubject => "cross-subject",
+            Protocol::Unsupervised => UNSUPERVISED,
         }
     }
 }
@@ -94,6 +103,9 @@ impl FromStr for Protocol {
             })
     }
 }
+
+/// The protocol's name, and the preset name of its rows.
+pub const UNSUPERVISED: &str = "unsupervised";
 
 /// Why a benchmark could not run; each variant names the data set and subject at fault.
 #[derive(Debug, Error)]
@@ -121,6 +133,13 @@ pub enum BenchmarkError {
         session: Option<String>,
         #[source]
         source: Box<EvaluateError>,
+    },
+    #[error("data set {dataset:?}, subject {subject:?}, unsupervised")]
+    Unsupervised {
+        dataset: String,
+        subject: String,
+        #[source]
+        source: Box<ReplayError>,
     },
     #[error(
         "data set {dataset:?}: subjects {subject:?} and {other:?} differ in {what}, so one cannot \
@@ -255,8 +274,11 @@ pub struct BenchmarkRow {
     pub chars_by_reps: Option<Vec<usize>>,
     /// The best Wolpaw ITR over repetitions, bits/min, from the recording's own flash timing.
     pub itr_bits_per_min: Option<f64>,
-    /// Seconds of one fit (mean over folds).
+    /// Seconds of one fit (mean over folds; unsupervised: the whole replay).
     pub fit_s: f64,
+    /// Unsupervised: characters decided right online (each by the model of the characters so
+    /// far).
+    pub online_chars: Option<usize>,
 }
 
 /// A preset's scores over subjects under one protocol.
@@ -360,6 +382,7 @@ pub fn run(
         units: plan.units.len(),
     });
     let rows = Mutex::new(Vec::new());
+    let skipped = Mutex::new(plan.skipped);
     let load = |d: usize, s: usize| -> Result<_, BenchmarkError> {
         let recs = load_subject(&manifests[d], s, &params.preprocess, on)?;
         on(Progress::Loaded {
@@ -370,7 +393,10 @@ pub fn run(
     };
     let run_units = |loaded: &BTreeMap<(usize, usize), Vec<EpochedRecording>>, units: &[usize]| {
         units.par_iter().try_for_each(|&i| {
-            let r = run_unit(params, manifests, loaded, &plan.units[i])?;
+            let (r, skip) = run_unit(params, manifests, loaded, &plan.units[i])?;
+            if let Some(why) = skip {
+                skipped.lock().expect("no panic holds the lock").push(why);
+            }
             on(Progress::Done { rows: &r });
             rows.lock().expect("no panic holds the lock").push((i, r));
             Ok::<(), BenchmarkError>(())
@@ -398,7 +424,7 @@ pub fn run(
         summary: summarise(&results, &names),
         comparisons: compare(&results, &names),
         results,
-        skipped: plan.skipped,
+        skipped: skipped.into_inner().expect("no panic holds the lock"),
         wall_s: t0.elapsed().as_secs_f64(),
         threads: rayon::current_num_threads(),
     })
@@ -450,15 +476,19 @@ fn pick(
         .collect()
 }
 
+/// A unit's rows, or why it does not apply (found once the runs were read).
 fn run_unit(
     params: &BenchmarkParams,
     manifests: &[Manifest],
     loaded: &BTreeMap<(usize, usize), Vec<EpochedRecording>>,
     u: &Unit,
-) -> Result<Vec<BenchmarkRow>, BenchmarkError> {
+) -> Result<(Vec<BenchmarkRow>, Option<String>), BenchmarkError> {
     let m = &manifests[u.dataset];
     let subj = &m.subjects[u.subject];
     let recs = &loaded[&(u.dataset, u.subject)];
+    if u.protocol == Protocol::Unsupervised {
+        return unsupervised_unit(params, m, &subj.id, recs);
+    }
     // The subject's runs are loaded train runs first, so train → test borrows them.
     type Runs<'r> = Cow<'r, [EpochedRecording]>;
     let (train, test): (Runs<'_>, Runs<'_>) = match u.protocol {
@@ -477,6 +507,7 @@ fn run_unit(
                 Cow::Owned(Vec::new()),
             )
         }
+        Protocol::Unsupervised => unreachable!("replayed above"),
         Protocol::CrossSubject => {
             let mut train = Vec::new();
             for (o, other) in m
@@ -520,7 +551,7 @@ fn run_unit(
     }
     .map_err(&failed)?;
     let results = evaluate::evaluate(&eval, &set, &test, &mut |_| {}).map_err(failed)?;
-    Ok(results
+    let rows = results
         .iter()
         .map(|r| {
             row(
@@ -533,7 +564,55 @@ fn run_unit(
                 n_targets,
             )
         })
-        .collect())
+        .collect();
+    Ok((rows, None))
+}
+
+/// [`Protocol::Unsupervised`] on a subject's runs: one row, or why it does not apply.
+fn unsupervised_unit(
+    params: &BenchmarkParams,
+    m: &Manifest,
+    subject: &str,
+    recs: &[EpochedRecording],
+) -> Result<(Vec<BenchmarkRow>, Option<String>), BenchmarkError> {
+    let t0 = Instant::now();
+    // From the P300 template (as `evaluate --unsupervised` and a session), the default covariance.
+    let r = crate::unsupervised::replay(&params.preprocess, recs, true, false, &mut |_, _| {});
+    if let Err(ReplayError::NotSpeller { recording }) = &r {
+        let why = format!("{UNSUPERVISED} on {:?} subject {subject:?}: ", m.name);
+        return Ok((vec![], Some(why + &format!("{recording} is not a speller"))));
+    }
+    let r = r.map_err(|e| BenchmarkError::Unsupervised {
+        dataset: m.name.clone(),
+        subject: subject.to_string(),
+        source: Box::new(e),
+    })?;
+    let events = || recs.iter().flat_map(|r| r.epochs.events());
+    let n = r.n_characters;
+    Ok((
+        vec![BenchmarkRow {
+            dataset: m.name.clone(),
+            subject: subject.to_string(),
+            session: None,
+            protocol: Protocol::Unsupervised,
+            preset: UNSUPERVISED.to_string(),
+            auc: r.auc,
+            n_epochs: events().count(),
+            n_targets: events().filter(|e| e.target == Some(true)).count(),
+            n_chars: Some(n),
+            n_choices: recs[0].speller.as_ref().map(|s| s.n_rows() * s.n_cols()),
+            chars_by_reps: Some(
+                r.posthoc_chars_by_reps
+                    .iter()
+                    .map(|a| (a * n as f64).round() as usize)
+                    .collect(),
+            ),
+            itr_bits_per_min: None,
+            fit_s: t0.elapsed().as_secs_f64(),
+            online_chars: Some(r.online_correct.iter().map(|&c| usize::from(c)).sum()),
+        }],
+        None,
+    ))
 }
 
 fn check_layout(
@@ -588,6 +667,7 @@ fn row(
         chars_by_reps,
         itr_bits_per_min: r.itr_at_best.map(|i| i.bits_per_minute),
         fit_s: r.fit_s,
+        online_chars: None,
     }
 }
 
@@ -595,6 +675,11 @@ fn row(
 pub fn summarise(rows: &[BenchmarkRow], presets: &[String]) -> Vec<PresetSummary> {
     let mut out = Vec::new();
     for protocol in Protocol::ALL {
+        let unsupervised = [UNSUPERVISED.to_string()];
+        let presets = match protocol {
+            Protocol::Unsupervised => &unsupervised[..],
+            _ => presets,
+        };
         for preset in presets {
             let mine: Vec<&BenchmarkRow> = rows
                 .iter()
@@ -683,7 +768,7 @@ pub fn compare(rows: &[BenchmarkRow], presets: &[String]) -> Vec<Comparison> {
 pub fn to_csv(rows: &[BenchmarkRow]) -> String {
     let mut s = String::from(
         "dataset,subject,session,protocol,preset,auc,n_epochs,n_targets,n_chars,chars_by_reps,\
-         itr_bits_per_min,fit_s\n",
+         itr_bits_per_min,fit_s,online_chars\n",
     );
     let field = |t: &str| {
         if t.contains([',', '"', '\n']) {
@@ -694,7 +779,7 @@ pub fn to_csv(rows: &[BenchmarkRow]) -> String {
     };
     for r in rows {
         s.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             field(&r.dataset),
             field(&r.subject),
             field(r.session.as_deref().unwrap_or("")),
@@ -716,6 +801,7 @@ pub fn to_csv(rows: &[BenchmarkRow]) -> String {
                 .map(|v| v.to_string())
                 .unwrap_or_default(),
             r.fit_s,
+            r.online_chars.map(|n| n.to_string()).unwrap_or_default(),
         ));
     }
     s
@@ -740,6 +826,7 @@ mod tests {
             chars_by_reps: chars,
             itr_bits_per_min: None,
             fit_s: 0.0,
+            online_chars: None,
         }
     }
 

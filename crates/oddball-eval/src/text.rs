@@ -273,9 +273,14 @@ pub fn benchmark(report: &BenchmarkReport) -> String {
                 format!("  chars right by reps: {}", c.join(" "))
             })
             .unwrap_or_default();
+        let online = r
+            .online_chars
+            .zip(r.n_chars)
+            .map(|(k, n)| format!("  online {k}/{n}"))
+            .unwrap_or_default();
         let _ = writeln!(
             s,
-            "  {:<12} AUC {:.3}  fit {:>7.3} s{}{}",
+            "  {:<12} AUC {:.3}  fit {:>7.3} s{online}{}{}",
             r.preset,
             r.auc,
             r.fit_s,

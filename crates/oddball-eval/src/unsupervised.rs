@@ -9,7 +9,8 @@ use crate::evaluate::{labels, pooled_accuracy, score_speller, EpochedRecording, 
 use oddball_decode::metrics::{character_of_flashes, roc_auc};
 use oddball_decode::pipeline::{EpochSource, Preprocess};
 use oddball_decode::unsupervised::{
-    replay_from, Constraint, MatchedTemplate, P300Template, UnsupervisedError, UnsupervisedParams,
+    replay_from, Constraint, Covariance, MatchedTemplate, P300Template, UnsupervisedError,
+    UnsupervisedParams,
 };
 use oddball_decode::DecodeError;
 
@@ -68,15 +69,23 @@ pub struct UnsupervisedResult {
 
 /// [`evaluate_unsupervised`] with the decoder's settings for the recordings' rate; with
 /// `template`, every refit's EM also starts from the scores of a P300 template seen through
-/// `pre`'s band-pass (the epochs' preprocessing), as a session without calibration starts.
+/// `pre`'s band-pass (the epochs' preprocessing), as a session without calibration starts; with
+/// `block_toeplitz`, the covariance is [`Covariance::BlockToeplitz`] over the recordings'
+/// channels (else the default Ledoit–Wolf).
 pub fn replay(
     pre: &Preprocess,
     recs: &[EpochedRecording],
     template: bool,
+    block_toeplitz: bool,
     on_character: &mut dyn FnMut(usize, usize),
 ) -> Result<UnsupervisedResult, ReplayError> {
     let sfreq = recs.first().map_or(0.0, |r| r.epochs.sfreq());
-    let params = UnsupervisedParams::for_sfreq(sfreq)?;
+    let mut params = UnsupervisedParams::for_sfreq(sfreq)?;
+    if block_toeplitz {
+        params.covariance = Covariance::BlockToeplitz {
+            n_channels: recs.first().map_or(1, |r| r.epochs.n_channels()),
+        };
+    }
     let template = if template {
         Some(P300Template::default().matched(pre, sfreq)?)
     } else {

@@ -42,7 +42,8 @@ pub struct BenchmarkArgs {
     pub pipeline: PipelineList,
     /// Evaluation protocols, comma-separated, or `all`: train-test (the manifest's train runs →
     /// its test runs), within-session (k-fold CV in each session), cross-subject (leave one
-    /// subject out).
+    /// subject out), unsupervised (a speller subject's runs in order as one unlabelled session:
+    /// characters right online and post hoc, AUC; no preset).
     #[arg(long, default_value = "train-test", value_name = "NAME[,NAME…]|all")]
     pub protocol: ProtocolList,
     /// Folds of the within-session cross-validation.
@@ -115,6 +116,9 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
     let report = pool.install(|| benchmark::run(&params, &manifests, &on));
     bar.finish_and_clear();
     let report = report?;
+    for s in report.skipped.iter().skip(plan.skipped.len()) {
+        println!("skipped: {s}");
+    }
     print!("{}", text::benchmark(&report));
     if let Some(path) = &args.json {
         write_out(path, serde_json::to_string_pretty(&report)?)?;
@@ -138,7 +142,7 @@ mod tests {
     fn protocol_lists() {
         let l: ProtocolList = "within-session,train-test,train-test".parse().unwrap();
         assert_eq!(l.0, [Protocol::WithinSession, Protocol::TrainTest]);
-        assert_eq!("all".parse::<ProtocolList>().unwrap().0.len(), 3);
+        assert_eq!("all".parse::<ProtocolList>().unwrap().0.len(), 4);
         assert!("nope"
             .parse::<ProtocolList>()
             .unwrap_err()

@@ -70,6 +70,11 @@ pub struct EvaluateArgs {
     /// 8 random starts only.
     #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
     pub em_start: EmStart,
+    /// With --unsupervised: the covariance's label-free part — `ledoit-wolf`: the Ledoit–Wolf
+    /// shrunk total covariance; `block-toeplitz`: that made block-Toeplitz over channels and time
+    /// lags (the time-stationary structure of `toeplitz-lda`).
+    #[arg(long, value_enum, default_value_t = CovarianceArg::LedoitWolf, requires = "unsupervised")]
+    pub covariance: CovarianceArg,
     /// With --unsupervised: band-pass causally, as a live session (`oddball decode
     /// --calibration none`, `demo --calibration none`) can, instead of zero-phase.
     #[arg(long, requires = "unsupervised")]
@@ -288,6 +293,13 @@ pub enum EmStart {
     Random,
 }
 
+/// The unsupervised decoder's covariance (`--covariance`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CovarianceArg {
+    LedoitWolf,
+    BlockToeplitz,
+}
+
 /// `evaluate --unsupervised`: the test recordings as one unlabelled session.
 fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     let pre = if args.causal {
@@ -298,7 +310,8 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
     let template = args.em_start == EmStart::Template;
     let mut shown: Option<Bar> = None;
-    let r = unsupervised::replay(&pre, &test, template, &mut |k, n| {
+    let block_toeplitz = args.covariance == CovarianceArg::BlockToeplitz;
+    let r = unsupervised::replay(&pre, &test, template, block_toeplitz, &mut |k, n| {
         shown
             .get_or_insert_with(|| {
                 bar(
@@ -314,6 +327,9 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     let r = r.map_err(|e| match e {
         e @ unsupervised::ReplayError::Unscorable { .. } => {
             anyhow::anyhow!("{e}; give it with --test-text")
+        }
+        e @ unsupervised::ReplayError::NotSpeller { .. } => {
+            anyhow::anyhow!("{e}; a data set's manifest can give its geometry: --manifest FILE")
         }
         e => e.into(),
     })?;

@@ -8,7 +8,7 @@ use oddball_eval::dataset::{self, DatasetError};
 use oddball_eval::evaluate::EpochedRecording;
 pub use oddball_eval::layout::Layout;
 use oddball_eval::layout::LayoutError;
-use oddball_io::{EventMapping, ReadOptions};
+use oddball_io::{EventMapping, Manifest, ReadOptions};
 
 /// The formats [`oddball_io::read`] takes (by extension; XDF also by its magic bytes), for help
 /// texts.
@@ -60,17 +60,31 @@ pub struct EventArgs {
     /// MAT: the variable holding the samples, n_times × n_channels (e.g. --data-from eeg).
     #[arg(long, value_name = "VARIABLE")]
     pub data_from: Option<String>,
+    /// A data-set manifest (datasets/*.toml) whose [events] mapping (unless --target-events
+    /// is given) and [speller] geometry label these files, as `oddball benchmark` labels its
+    /// runs: e.g. a speller run whose file has row/column codes but no geometry.
+    #[arg(long, value_name = "MANIFEST")]
+    pub manifest: Option<PathBuf>,
 }
 
 impl EventArgs {
-    /// The mapping, checked (both lists, no key in both), or `None` when not given.
+    /// The mapping, checked (both lists, no key in both): the flags', else --manifest's
+    /// [events], else `None`.
     pub fn mapping(&self) -> Result<Option<EventMapping>> {
         match (&self.target_events, &self.nontarget_events) {
             (Some(t), Some(n)) => Ok(Some(
                 EventMapping::parse(t, n).context("--target-events/--nontarget-events")?,
             )),
-            _ => Ok(None),
+            _ => Ok(self.manifest()?.and_then(|m| m.events)),
         }
+    }
+
+    /// The --manifest, read and checked.
+    pub fn manifest(&self) -> Result<Option<Manifest>> {
+        self.manifest
+            .as_ref()
+            .map(|p| Manifest::load(p).with_context(|| format!("--manifest {}", p.display())))
+            .transpose()
     }
 
     /// The reading options, checked.
@@ -137,12 +151,13 @@ pub fn load_epochs(
         );
     }
     let mapping = events.mapping()?;
+    let speller = events.manifest()?.and_then(|m| m.speller);
     let read = events.read_options()?;
     let runs = paths.iter().enumerate().map(|(i, p)| {
         let how = dataset::Labelling {
             mapping: mapping.as_ref(),
             text: texts.get(i).map(String::as_str),
-            speller: None,
+            speller: speller.as_ref(),
             read: Some(&read),
         };
         (p.as_path(), how)

@@ -343,3 +343,83 @@ fn openvibe_gdf_within_session_is_the_mne_scikit_learn_auc() {
     println!("oddball lda within session: AUC {auc:.4} (MNE + scikit-learn: 0.9803)");
     assert!((auc - 0.9803).abs() < 0.002, "AUC {auc}");
 }
+
+/// `--protocol unsupervised` on the shipped manifests: each speller subject's runs in order as
+/// one unlabelled session (the speller geometry and texts from the manifests, as for the other
+/// protocols); the non-spellers (eeg2's oddball, the Muse's) are listed as skipped.
+#[test]
+fn shipped_spellers_decoded_without_labels_per_subject() {
+    let Some(data) = data_dir() else { return };
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let dir = tmp_dir("cli-benchmark-unsupervised");
+    let (json, csv) = (dir.join("u.json"), dir.join("u.csv"));
+    let manifests: Vec<String> = [
+        "bci2000-eeg3",
+        "bci2000-eeg2",
+        "muse-visual-p300",
+        "bci-competition-ii-iib",
+    ]
+    .iter()
+    .map(|m| {
+        repo.join(format!("datasets/{m}.toml"))
+            .display()
+            .to_string()
+    })
+    .collect();
+    let mut args: Vec<&str> = vec!["benchmark"];
+    args.extend(manifests.iter().map(String::as_str));
+    let data = data.display().to_string();
+    args.extend(["--data", &data, "--protocol", "unsupervised"]);
+    args.extend([
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let (ok, out, err) = oddball(&args);
+    assert!(ok, "{err}\n{out}");
+    for d in ["bci2000-eeg2", "muse-visual-p300"] {
+        assert!(
+            out.lines()
+                .any(|l| l.starts_with("skipped: unsupervised on") && l.contains(d)),
+            "{d} not skipped:\n{out}"
+        );
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let rows = v["results"].as_array().unwrap();
+    assert_eq!(rows.len(), 2, "{out}");
+    assert_eq!(v["skipped"].as_array().unwrap().len(), 2, "{out}");
+    let row = |d: &str| rows.iter().find(|r| r["dataset"] == d).unwrap();
+    // What `evaluate --unsupervised` gets on the same runs (README): eeg3_1 + eeg3_2 online 7/8,
+    // post hoc 8/8 from 3 repetitions, AUC 0.967; the six IIb runs online 17/18, post hoc 17/18.
+    for (d, n, online, posthoc, min_auc) in [
+        ("bci2000-eeg3", 8, 7, 8, 0.95),
+        ("bci-competition-ii-iib", 18, 17, 17, 0.97),
+    ] {
+        let r = row(d);
+        assert_eq!(r["protocol"], "unsupervised");
+        assert_eq!(r["preset"], "unsupervised");
+        assert_eq!(r["n_chars"].as_u64(), Some(n), "{r}");
+        assert!(r["online_chars"].as_u64().unwrap() >= online, "{d}: {r}");
+        let by_reps = r["chars_by_reps"].as_array().unwrap();
+        assert_eq!(by_reps.len(), 15);
+        assert!(by_reps[14].as_u64().unwrap() >= posthoc, "{d}: {r}");
+        assert!(r["auc"].as_f64().unwrap() >= min_auc, "{d}: {r}");
+        assert!(
+            out.contains(&format!("online {}/{n}", r["online_chars"])),
+            "{out}"
+        );
+    }
+    // Every run of the subject, labelled from the manifest: IIb's six runs, 540 flashes each.
+    assert_eq!(
+        row("bci-competition-ii-iib")["n_epochs"].as_u64(),
+        Some(3240)
+    );
+    let csv = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        csv.lines().next().unwrap().ends_with(",online_chars"),
+        "{csv}"
+    );
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+}

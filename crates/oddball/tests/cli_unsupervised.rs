@@ -107,3 +107,82 @@ fn bci_competition_iib_six_runs_as_one_unlabelled_session() {
     // starts and the last fit alone, `--em-start random`: 15/18).
     assert!(right(u) >= 17, "online {} of 18: {out}", right(u));
 }
+
+/// A speller run whose file has row and column codes but no geometry (here a CSV) is refused as
+/// not a speller alone; `--manifest` gives it the data set's [speller] table, as
+/// `oddball benchmark` does for its runs, and the replay decodes it without labels.
+#[test]
+fn a_manifest_gives_a_run_without_geometry_its_speller() {
+    let tmp = tmp_dir("cli-unsupervised-manifest");
+    let (sfreq, n_ch, step) = (128.0, 4, 32);
+    let text = "HATPIE";
+    let matrix = ["ABCDEF", "GHIJKL", "MNOPQR", "STUVWX", "YZ1234", "56789_"];
+    let at = |c: char| {
+        let r = matrix.iter().position(|m| m.contains(c)).unwrap();
+        (r, matrix[r].find(c).unwrap())
+    };
+    // Columns 1–6, rows 7–12 (IIb's codes); 5 rounds of the 12 codes per character.
+    let mut onsets = Vec::new();
+    let mut state = 7u64;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for c in text.chars() {
+        let (r, col) = at(c);
+        for round in 0..5u32 {
+            for k in 0..12u32 {
+                let code = 1 + (k * 5 + round * 7) % 12;
+                let target = code == col as u32 + 1 || code == r as u32 + 7;
+                onsets.push((code, target));
+            }
+        }
+    }
+    let n = onsets.len() * step + 2 * sfreq as usize;
+    let mut data = ndarray::Array2::from_shape_fn((n_ch, n), |_| 0.0);
+    data.mapv_inplace(|_| 6.0 * uniform());
+    let mut markers = vec![0u32; n];
+    for (i, &(code, target)) in onsets.iter().enumerate() {
+        let t0 = i * step;
+        markers[t0] = code;
+        if target {
+            for s in 0..(sfreq as usize) {
+                let t = s as f64 / sfreq;
+                let bump = 6.0 * (-((t - 0.35) / 0.08f64).powi(2)).exp();
+                for ch in 0..n_ch {
+                    data[[ch, t0 + s]] += bump;
+                }
+            }
+        }
+    }
+    let csv = tmp.join("run.csv");
+    oddball_testkit::write_codes_csv(&csv, &data, &markers, sfreq);
+    let manifest = tmp.join("m.toml");
+    std::fs::write(
+        &manifest,
+        format!(
+            "name = \"m\"\n[speller]\nmatrix = {matrix:?}\ncolumns = [1, 2, 3, 4, 5, 6]\n\
+             rows = [7, 8, 9, 10, 11, 12]\nrepetitions = 5\n\n[[subject]]\nid = \"s\"\n\
+             train = [\"run.csv\"]\n"
+        ),
+    )
+    .unwrap();
+    let base = [
+        "evaluate",
+        "--unsupervised",
+        "--test",
+        csv.to_str().unwrap(),
+    ];
+    let base = [&base[..], &["--test-text", text]].concat();
+    let (ok, out, err) = oddball(&base);
+    assert!(!ok && err.contains("speller"), "{out}\n{err}");
+    let (v, out) = run_json(
+        &[&base[..], &["--manifest", manifest.to_str().unwrap()]].concat(),
+        &tmp.join("u.json"),
+    );
+    let u = &v["unsupervised"];
+    assert_eq!(u["n_characters"], 6, "{out}");
+    assert_eq!(u["posthoc_text"], text, "{out}");
+}

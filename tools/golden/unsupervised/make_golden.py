@@ -19,6 +19,13 @@ ledoit_wolf_shrinkage of the standardised features. Nothing here uses the Rust s
 directly, Sigma = (c D + W) / (N + c), and the likelihood uses dense inverses
 and slogdet; the E-step enumerates each slot's codes.
 
+The block-Toeplitz variant (oddball_decode::unsupervised::Covariance::BlockToeplitz) is the same objective
+with the covariance restricted to Sigma = s2 B_T: B_T the tapered block-Toeplitz form of
+B = (1 - lam) S + lam D (per channel pair and time lag the mean of B's entries, times (T - |lag|) / T),
+formed here from B reshaped to (channel, time, channel, time) and its diagonals, fixed; the M-step's scale
+s2 = tr(B_T^-1 (c D + W)) / ((N + c) p) with W formed directly, as above. Written to
+unsupervised_toeplitz_golden.json, on a problem of 2 channels x 3 time points (6 features), 6 trials.
+
 The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
 flashed twice per trial (48 epochs), 5 features; attended epochs carry a mean shift. The EM starts
 from given initial scores (a fixed random vector), runs 6 M-steps, and the fixture holds the
@@ -31,121 +38,149 @@ import numpy as np
 import sklearn
 from sklearn.covariance import ledoit_wolf_shrinkage
 
-OUT = (
-    pathlib.Path(__file__).resolve().parents[3]
-    / "crates/oddball-decode/tests/fixtures/unsupervised_golden.json"
-)
-
-rng = np.random.default_rng(20261125)
-sets = [[1, 2, 3], [4, 5, 6]]
-n_trials, reps, p = 4, 2, 5
-codes, trials, attended = [], [], []
-truth = []
-for t in range(n_trials):
-    row, col = rng.integers(0, 3), rng.integers(0, 3)
-    truth.append([sets[0][row], sets[1][col]])
-    for _ in range(reps):
-        for c in rng.permutation(6) + 1:
-            codes.append(int(c))
-            trials.append(t)
-            attended.append(int(c) in truth[-1])
-codes = np.array(codes)
-trials = np.array(trials)
-attended = np.array(attended)
-n = len(codes)
-mix = np.eye(p) + 0.3 * rng.normal(size=(p, p))
-shift = np.array([1.5, 1.0, 0.5, 0.0, -0.5])
-X = rng.normal(size=(n, p)) @ mix.T + np.outer(attended, shift)
-X = np.round(X, 4)
-init = np.round(rng.normal(size=n), 4)
-
-# Label-free statistics.
-xc = X - X.mean(axis=0)
-S = xc.T @ xc / n
-D = np.diag(np.diag(S))
-lam = ledoit_wolf_shrinkage(xc / np.sqrt(np.diag(S)), assume_centered=True)
-lam = min(max(lam, 1e-4), 0.99)
-cst = lam * n / (1 - lam)
-k0 = 3.0
-m0 = X.mean(axis=0)
-
-# Slots: (trial, set) and each epoch's choice.
-def locate(code):
-    for s, cs in enumerate(sets):
-        if code in cs:
-            return s, cs.index(code)
-slot = np.array([trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
-choice = np.array([locate(codes[i])[1] for i in range(n)])
-n_slots = n_trials * 2
+FIXTURES = pathlib.Path(__file__).resolve().parents[3] / "crates/oddball-decode/tests/fixtures"
 
 
-def e_step(llr):
-    post = np.zeros((n_slots, 3))
-    lse = 0.0
-    for s in range(n_slots):
-        e = np.array([llr[(slot == s) & (choice == c)].sum() for c in range(3)])
-        m = e.max()
-        z = np.exp(e - m).sum()
-        lse += m + np.log(z) - np.log(3)
-        post[s] = np.exp(e - m) / z
-    return post, lse
+def block_toeplitz(b, n_channels):
+    """Per channel pair and time lag, the mean of b's entries times (T - |lag|) / T."""
+    p = b.shape[0]
+    t = p // n_channels
+    b4 = b.reshape(n_channels, t, n_channels, t).copy()
+    out = np.zeros_like(b4)
+    for a in range(n_channels):
+        for c in range(n_channels):
+            blk = b4[a, :, c, :]
+            for lag in range(-(t - 1), t):
+                m = np.diagonal(blk, offset=lag).mean() * (t - abs(lag)) / t
+                idx = np.arange(max(0, -lag), min(t, t - lag))
+                out[a, idx, c, idx + lag] = m
+    return out.reshape(p, p)
 
 
-def log_normal(x, mu, sigma):
-    inv = np.linalg.inv(sigma)
-    _, logdet = np.linalg.slogdet(sigma)
-    d = x - mu
-    return -0.5 * (p * np.log(2 * np.pi) + logdet + np.einsum("ij,jk,ik->i", d, inv, d))
+def golden(seed, n_trials_, shift_, n_channels, out_name):
+    rng = np.random.default_rng(seed)
+    sets = [[1, 2, 3], [4, 5, 6]]
+    n_trials, reps, p = n_trials_, 2, len(shift_)
+    codes, trials, attended = [], [], []
+    truth = []
+    for t in range(n_trials):
+        row, col = rng.integers(0, 3), rng.integers(0, 3)
+        truth.append([sets[0][row], sets[1][col]])
+        for _ in range(reps):
+            for c in rng.permutation(6) + 1:
+                codes.append(int(c))
+                trials.append(t)
+                attended.append(int(c) in truth[-1])
+    codes = np.array(codes)
+    trials = np.array(trials)
+    attended = np.array(attended)
+    n = len(codes)
+    mix = np.eye(p) + 0.3 * rng.normal(size=(p, p))
+    shift = np.array(shift_)
+    X = rng.normal(size=(n, p)) @ mix.T + np.outer(attended, shift)
+    X = np.round(X, 4)
+    init = np.round(rng.normal(size=n), 4)
+
+    # Label-free statistics.
+    xc = X - X.mean(axis=0)
+    S = xc.T @ xc / n
+    D = np.diag(np.diag(S))
+    lam = ledoit_wolf_shrinkage(xc / np.sqrt(np.diag(S)), assume_centered=True)
+    lam = min(max(lam, 1e-4), 0.99)
+    cst = lam * n / (1 - lam)
+    if n_channels is not None:
+        BT = block_toeplitz((1 - lam) * S + lam * D, n_channels)
+    k0 = 3.0
+    m0 = X.mean(axis=0)
+
+    # Slots: (trial, set) and each epoch's choice.
+    def locate(code):
+        for s, cs in enumerate(sets):
+            if code in cs:
+                return s, cs.index(code)
+    slot = np.array([trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
+    choice = np.array([locate(codes[i])[1] for i in range(n)])
+    n_slots = n_trials * 2
 
 
-def objective(mu_t, mu_n, sigma):
-    # Enumerate each slot's codes exactly: per slot, log sum_c (1/K) prod_i N(x_i; mu_{y_i(c)}, Sigma).
-    lt = log_normal(X, mu_t, sigma)
-    ln = log_normal(X, mu_n, sigma)
-    total = 0.0
-    for s in range(n_slots):
-        idx = slot == s
-        terms = [
-            np.where(choice[idx] == c, lt[idx], ln[idx]).sum() - np.log(3) for c in range(3)
-        ]
-        m = max(terms)
-        total += m + np.log(np.exp(np.array(terms) - m).sum())
-    _, logdet = np.linalg.slogdet(sigma)
-    inv = np.linalg.inv(sigma)
-    pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
-    pen -= 0.5 * k0 * ((mu_t - m0) @ inv @ (mu_t - m0) + (mu_n - m0) @ inv @ (mu_n - m0))
-    return total + pen
+    def e_step(llr):
+        post = np.zeros((n_slots, 3))
+        lse = 0.0
+        for s in range(n_slots):
+            e = np.array([llr[(slot == s) & (choice == c)].sum() for c in range(3)])
+            m = e.max()
+            z = np.exp(e - m).sum()
+            lse += m + np.log(z) - np.log(3)
+            post[s] = np.exp(e - m) / z
+        return post, lse
 
 
-post, _ = e_step(init)
-objectives = []
-for it in range(6):
-    r = post[slot, choice]
-    mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
-    mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
-    dt, dn = X - mu_t, X - mu_n
-    W = (r[:, None] * dt).T @ dt + ((1 - r)[:, None] * dn).T @ dn
-    W += k0 * (np.outer(mu_t - m0, mu_t - m0) + np.outer(mu_n - m0, mu_n - m0))
-    sigma = (cst * D + W) / (n + cst)
-    objectives.append(float(objective(mu_t, mu_n, sigma)))
-    w = np.linalg.solve(sigma, mu_t - mu_n)
-    llr = (X - 0.5 * (mu_t + mu_n)) @ w
-    post, _ = e_step(llr)
+    def log_normal(x, mu, sigma):
+        inv = np.linalg.inv(sigma)
+        _, logdet = np.linalg.slogdet(sigma)
+        d = x - mu
+        return -0.5 * (p * np.log(2 * np.pi) + logdet + np.einsum("ij,jk,ik->i", d, inv, d))
 
-fixture = {
-    "versions": {"numpy": np.__version__, "scikit-learn": sklearn.__version__},
-    "sets": sets,
-    "x": X.tolist(),
-    "codes": codes.tolist(),
-    "trials": trials.tolist(),
-    "init": init.tolist(),
-    "shrinkage": float(lam),
-    "mean_prior": k0,
-    "objective": objectives,
-    "posterior": post.tolist(),
-    "llr": llr.tolist(),
-    "truth": truth,
-}
-OUT.write_text(json.dumps(fixture, indent=1) + "\n")
-print(f"wrote {OUT} ({OUT.stat().st_size} B): shrinkage {lam:.6f}, objective {objectives}")
-print("truth", truth, "decoded", [[sets[0][int(np.argmax(post[2*t]))], sets[1][int(np.argmax(post[2*t+1]))]] for t in range(n_trials)])
+
+    def objective(mu_t, mu_n, sigma):
+        # Enumerate each slot's codes exactly: per slot, log sum_c (1/K) prod_i N(x_i; mu_{y_i(c)}, Sigma).
+        lt = log_normal(X, mu_t, sigma)
+        ln = log_normal(X, mu_n, sigma)
+        total = 0.0
+        for s in range(n_slots):
+            idx = slot == s
+            terms = [
+                np.where(choice[idx] == c, lt[idx], ln[idx]).sum() - np.log(3) for c in range(3)
+            ]
+            m = max(terms)
+            total += m + np.log(np.exp(np.array(terms) - m).sum())
+        _, logdet = np.linalg.slogdet(sigma)
+        inv = np.linalg.inv(sigma)
+        pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
+        pen -= 0.5 * k0 * ((mu_t - m0) @ inv @ (mu_t - m0) + (mu_n - m0) @ inv @ (mu_n - m0))
+        return total + pen
+
+
+    post, _ = e_step(init)
+    objectives = []
+    for it in range(6):
+        r = post[slot, choice]
+        mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
+        mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
+        dt, dn = X - mu_t, X - mu_n
+        W = (r[:, None] * dt).T @ dt + ((1 - r)[:, None] * dn).T @ dn
+        W += k0 * (np.outer(mu_t - m0, mu_t - m0) + np.outer(mu_n - m0, mu_n - m0))
+        if n_channels is None:
+            sigma = (cst * D + W) / (n + cst)
+        else:
+            s2 = np.trace(np.linalg.solve(BT, cst * D + W)) / ((n + cst) * p)
+            sigma = s2 * BT
+        objectives.append(float(objective(mu_t, mu_n, sigma)))
+        w = np.linalg.solve(sigma, mu_t - mu_n)
+        llr = (X - 0.5 * (mu_t + mu_n)) @ w
+        post, _ = e_step(llr)
+
+    fixture = {
+        "versions": {"numpy": np.__version__, "scikit-learn": sklearn.__version__},
+        "sets": sets,
+        "x": X.tolist(),
+        "codes": codes.tolist(),
+        "trials": trials.tolist(),
+        "init": init.tolist(),
+        "shrinkage": float(lam),
+        "mean_prior": k0,
+        "objective": objectives,
+        "posterior": post.tolist(),
+        "llr": llr.tolist(),
+        "truth": truth,
+    }
+    if n_channels is not None:
+        fixture["n_channels"] = n_channels
+    OUT = FIXTURES / out_name
+    OUT.write_text(json.dumps(fixture, indent=1) + "\n")
+    print(f"wrote {OUT} ({OUT.stat().st_size} B): shrinkage {lam:.6f}, objective {objectives}")
+    print("truth", truth, "decoded", [[sets[0][int(np.argmax(post[2*t]))], sets[1][int(np.argmax(post[2*t+1]))]] for t in range(n_trials)])
+
+
+golden(20261125, 4, [1.5, 1.0, 0.5, 0.0, -0.5], None, "unsupervised_golden.json")
+golden(20261128, 6, [0.0, 2.0, 1.0, 0.0, 1.6, 0.8], 2, "unsupervised_toeplitz_golden.json")

@@ -173,8 +173,11 @@ fn standardised_ledoit_wolf(mut x: DMatrix<f64>) -> (DMatrix<f64>, f64) {
 }
 
 /// Averages `cov` (channel-major, `n_channels · n_times` square) over every (channel pair, time
-/// lag) diagonal and tapers lag `d` by `(n_times − |d|) / n_times`.
-fn block_toeplitz_tapered(
+/// lag) diagonal and tapers lag `d` by `(n_times − |d|) / n_times`. Linear in `cov`, and the
+/// result of a positive semi-definite `cov` is positive semi-definite (each entry is the biased
+/// cross-correlogram `(1/n_times) Σ_t cov[(a, t), (b, t + d)]`); the unsupervised decoder's
+/// structured covariance is this map too.
+pub(crate) fn block_toeplitz_tapered(
     mut cov: DMatrix<f64>,
     n_channels: usize,
     n_times: usize,

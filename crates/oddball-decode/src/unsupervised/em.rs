@@ -16,11 +16,28 @@
 //!
 //! so one iteration costs one triangular solve pair with the Cholesky factor of `B` (`p²`) and
 //! two passes over the rows (`N·p`).
+//!
+//! With [`Covariance::BlockToeplitz`], `Σ = σ²·B_T`: `B_T = T(B)` is fixed (label-free), `T` the
+//! tapered block-Toeplitz map of `toeplitz-lda` (every channel pair and time lag averaged, lag `d`
+//! tapered by `(n_t − |d|)/n_t`), and the M-step maximises the same objective over the scale only:
+//!
+//! ```text
+//! τ  = tr(B_T⁻¹B)                         (once; B = (N·S + c·D)/(N + c))
+//! σ² = ((N + c)·τ − a/h) / ((N + c)·p)     = tr(B_T⁻¹(c·D + W)) / ((N + c)·p),  a = ΔμᵀB_T⁻¹Δμ
+//! w  = B_T⁻¹Δμ / σ²
+//! ```
+//!
+//! (`W = N·S − ΔμΔμᵀ/h` the within-class scatter with the means' penalty, so `c·D + W` is
+//! positive definite and `σ² > 0`; the means' maximiser does not depend on `Σ`). Both steps are
+//! exact maximisations over that family, so the objective never decreases; it is the Ledoit–Wolf
+//! model's objective, restricted to covariances of block-Toeplitz shape.
 
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 use ndarray::ArrayView2;
 
 use super::error::{Result, UnsupervisedError};
+use super::Covariance;
+use crate::classifiers::toeplitz_lda::block_toeplitz_tapered;
 
 /// Where each epoch sits in the paradigm's constraint: its slot (one trial's choice set, in
 /// which exactly one code is attended) and its choice within the slot.
@@ -47,14 +64,18 @@ pub(crate) struct Prepared {
     pub shrinkage: f64,
     /// Prior strength `c = λN / (1 − λ)`.
     pub c: f64,
+    /// Factor of `B`, or of `B_T` under [`Covariance::BlockToeplitz`].
     pub chol: Cholesky<f64, Dyn>,
-    /// `ln |B|`.
+    /// `ln |B|` (`ln |B_T|`).
     pub log_det_b: f64,
+    /// `Some(τ = tr(B_T⁻¹B))` when `Σ = σ²·B_T` (block-Toeplitz); `None`: `Σ = B − g·ΔμΔμᵀ`.
+    pub tau: Option<f64>,
 }
 
 impl Prepared {
-    /// Centres `x` `(N, p)`, computes `S`, the shrinkage and the factor of `B`.
-    pub fn new(x: ArrayView2<f64>) -> Result<Self> {
+    /// Centres `x` `(N, p)`, computes `S`, the shrinkage and the factor of `B` (of `B_T` and `τ`
+    /// under [`Covariance::BlockToeplitz`]).
+    pub fn new(x: ArrayView2<f64>, covariance: Covariance) -> Result<Self> {
         let (n, p) = x.dim();
         if n < 2 || p == 0 {
             return Err(UnsupervisedError::TooFewEpochs { n_epochs: n });
@@ -83,10 +104,26 @@ impl Prepared {
         for j in 0..p {
             b[(j, j)] += shrinkage * d[j];
         }
-        let chol = Cholesky::new(b).ok_or(UnsupervisedError::NotPositiveDefinite {
+        let not_pd = UnsupervisedError::NotPositiveDefinite {
             n_epochs: n,
             n_features: p,
-        })?;
+        };
+        let (chol, tau) = match covariance {
+            Covariance::LedoitWolf => (Cholesky::new(b).ok_or(not_pd)?, None),
+            Covariance::BlockToeplitz { n_channels } => {
+                if n_channels == 0 || p % n_channels != 0 {
+                    return Err(UnsupervisedError::InvalidParameter {
+                        name: "covariance",
+                        value: format!("block-Toeplitz over {n_channels} channels"),
+                        reason: format!("{p} features are not a whole number per channel"),
+                    });
+                }
+                let bt = block_toeplitz_tapered(b.clone(), n_channels, p / n_channels);
+                let chol = Cholesky::new(bt).ok_or(not_pd)?;
+                let tau = chol.solve(&b).trace();
+                (chol, Some(tau))
+            }
+        };
         let log_det_b = 2.0
             * chol
                 .l_dirty()
@@ -104,15 +141,18 @@ impl Prepared {
             c,
             chol,
             log_det_b,
+            tau,
         })
     }
 
     /// The part of the objective that does not depend on the parameters:
-    /// `−(Np/2) ln 2π − ((N + c)/2)(ln|B| + p)` (from `N tr(B⁻¹S) + c tr(B⁻¹D) = (N + c) p`).
+    /// `−(Np/2) ln 2π − ((N + c)/2)(ln|B| + p)` (from `N tr(B⁻¹S) + c tr(B⁻¹D) = (N + c) p`);
+    /// block-Toeplitz: `−(Np/2) ln 2π − ((N + c)/2) ln|B_T|` (the trace depends on `σ²`).
     fn constant(&self) -> f64 {
         let (nf, pf) = (self.n as f64, self.p as f64);
+        let trace = if self.tau.is_some() { 0.0 } else { pf };
         -0.5 * nf * pf * (2.0 * std::f64::consts::PI).ln()
-            - 0.5 * (nf + self.c) * (self.log_det_b + pf)
+            - 0.5 * (nf + self.c) * (self.log_det_b + trace)
     }
 }
 
@@ -214,6 +254,9 @@ fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
     let (beta_t, beta_n) = (1.0 / (h * (n_t + kappa0)), -1.0 / (h * (n_n + kappa0)));
     let u = prep.chol.solve(&dmu);
     let a = dmu.dot(&u);
+    if let Some(tau) = prep.tau {
+        return Ok(m_step_scaled(prep, tau, &u, a, h, [beta_t, beta_n], kappa0));
+    }
     let g = 1.0 / (h * (nf + prep.c));
     let one_minus = 1.0 - g * a;
     if !(one_minus > 0.0 && one_minus.is_finite()) {
@@ -238,6 +281,32 @@ fn m_step(prep: &Prepared, r: &[f64], kappa0: f64) -> Result<(Linear, f64)> {
         - 0.5 * prep.c * kappa * u_d_u
         - 0.5 * kappa0 * (beta_t * beta_t + beta_n * beta_n) * m;
     Ok((Linear { w, offset }, rest))
+}
+
+/// The M-step of `Σ = σ²·B_T` (module doc) from `u = B_T⁻¹Δμ`, `a = Δμᵀu`, `h` and the means'
+/// factors `[β_t, β_n]` (`μ = β·Δμ`): `σ² > 0` always, since `c·D + W` is positive definite.
+fn m_step_scaled(
+    prep: &Prepared,
+    tau: f64,
+    u: &DVector<f64>,
+    a: f64,
+    h: f64,
+    [beta_t, beta_n]: [f64; 2],
+    kappa0: f64,
+) -> (Linear, f64) {
+    let (nf, pf) = (prep.n as f64, prep.p as f64);
+    let nc = nf + prep.c;
+    // Floored only against rounding: (N + c)·τ − a/h = tr(B_T⁻¹(c·D + W)) > 0.
+    let s2 = ((nc * tau - a / h) / (nc * pf)).max(f64::MIN_POSITIVE);
+    let w = u / s2;
+    // Δμᵀ Σ⁻¹ Δμ.
+    let m = a / s2;
+    let offset = -0.5 * (beta_t + beta_n) * m;
+    let rest = -0.5 * nc * pf * s2.ln()
+        - 0.5 * nc * tau / s2
+        - 0.5 * nf * beta_n * beta_n * m
+        - 0.5 * kappa0 * (beta_t * beta_t + beta_n * beta_n) * m;
+    (Linear { w, offset }, rest)
 }
 
 /// LLR per epoch of the centred rows.

@@ -22,6 +22,13 @@
 //!   standardised rows, `c = λN/(1 − λ)`). This is a shrinkage LDA whose labels are soft, and one
 //!   iteration needs only one solve with the Cholesky factor of `B` (Sherman–Morrison).
 //!
+//! [`Covariance::BlockToeplitz`] restricts the covariance to `Σ = σ²·B_T`, `B_T` the
+//! block-Toeplitz, tapered form of `B` (the time-stationary structure of `toeplitz-lda`, on the
+//! label-free total covariance, as the calibration-free spellers of Sosulski & Tangermann do),
+//! fixed once; the M-step maximises the same penalised likelihood over the scale `σ²` (closed
+//! form, always positive). The LLR's direction is then `B_T⁻¹Δμ` where the Ledoit–Wolf model's is
+//! `B⁻¹Δμ` (its rank-one update changes only the scale).
+//!
 //! Both steps are exact, so the penalised log-likelihood (marginal over the unknown choices)
 //! never decreases ([`Unsupervised::objective`]). EM finds a local maximum: a fit starts from
 //! several initialisations (random projections of the standardised features, optionally a
@@ -117,6 +124,25 @@ impl Constraint {
     }
 }
 
+/// What the label-free part `B` of the decoder's covariance `Σ = B − g·ΔμΔμᵀ` is (module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Covariance {
+    /// `B = (1 − λ)·S + λ·D`: the Ledoit–Wolf shrunk total covariance (the prior's scale `D`).
+    #[default]
+    LedoitWolf,
+    /// `Σ = σ²·B_T`: `B_T` that matrix made block-Toeplitz over `n_channels` channels of the
+    /// channel-major features (every channel pair and time lag averaged, lag `d` tapered by
+    /// `(n_t − |d|)/n_t`: the time-stationary structure of `toeplitz-lda`, Sosulski & Tangermann
+    /// 2022, on the total covariance, which needs no labels), fixed; the M-step chooses the scale
+    /// `σ²` (the same objective, over covariances of that shape: still exact, never decreasing).
+    BlockToeplitz {
+        /// Channels of the features (each channel's points contiguous, the amplitude features'
+        /// layout).
+        n_channels: usize,
+    },
+}
+
 /// Settings of the unsupervised decoder.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct UnsupervisedParams {
@@ -133,11 +159,16 @@ pub struct UnsupervisedParams {
     pub tol: f64,
     /// Seed of the random initialisations.
     pub seed: u32,
+    /// The label-free part of the covariance (Ledoit–Wolf by default, and in settings saved
+    /// before this field existed).
+    #[serde(default)]
+    pub covariance: Covariance,
 }
 
 impl UnsupervisedParams {
     /// The `lda` preset's features at `sfreq` (bins of round(sfreq / 25) samples), no prior on
-    /// the means, 8 random initialisations, at most 200 iterations each, tolerance 1e-6 nats.
+    /// the means, 8 random initialisations, at most 200 iterations each, tolerance 1e-6 nats, the
+    /// Ledoit–Wolf covariance.
     pub fn for_sfreq(sfreq: f64) -> std::result::Result<Self, DecodeError> {
         Ok(Self {
             features: AmplitudeFeatures::for_sfreq(sfreq)?,
@@ -146,6 +177,7 @@ impl UnsupervisedParams {
             max_iter: 200,
             tol: 1e-6,
             seed: 0,
+            covariance: Covariance::LedoitWolf,
         })
     }
 
@@ -214,7 +246,7 @@ impl UnsupervisedParams {
         prior: Option<&[f64]>,
     ) -> Result<Unsupervised> {
         self.validate()?;
-        let prep = em::Prepared::new(x)?;
+        let prep = em::Prepared::new(x, self.covariance)?;
         let mut inits: Vec<(Init, Vec<f64>)> = Vec::new();
         if let Some(s) = prior {
             if s.len() != x.nrows() {
@@ -258,7 +290,7 @@ impl UnsupervisedParams {
                 n_scores: init.len(),
             });
         }
-        let prep = em::Prepared::new(x)?;
+        let prep = em::Prepared::new(x, self.covariance)?;
         self.fit_prepared(
             &prep,
             codes,
@@ -324,6 +356,7 @@ impl UnsupervisedParams {
             init,
             init_objectives,
             shrinkage: prep.shrinkage,
+            covariance: self.covariance,
         })
     }
 }
@@ -427,6 +460,8 @@ pub struct Unsupervised {
     init: Init,
     init_objectives: Vec<(Init, f64)>,
     shrinkage: f64,
+    #[serde(default)]
+    covariance: Covariance,
 }
 
 impl Unsupervised {
@@ -531,6 +566,11 @@ impl Unsupervised {
     /// The Ledoit–Wolf shrinkage of the total covariance.
     pub fn shrinkage(&self) -> f64 {
         self.shrinkage
+    }
+
+    /// The covariance structure it was fitted with.
+    pub fn covariance(&self) -> Covariance {
+        self.covariance
     }
 }
 
