@@ -29,7 +29,7 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use ndarray::{Array2, Array3, ArrayView2, Axis};
+use ndarray::{Array3, ArrayView2, Axis};
 use oddball_decode::decision::{DecisionRule, Posterior, Verdict};
 use oddball_decode::pipeline::{Model, Preprocess};
 use oddball_decode::unsupervised::Constraint;
@@ -42,7 +42,9 @@ use crate::online::{Marker, OnlineEpocher, ReadyEpoch};
 use crate::SessionError;
 
 mod messages;
+mod trials;
 pub use messages::{ListenerDecision, MarkerCounts, Output};
+use trials::{CalibrationSet, Flash, Trial};
 
 /// A flash stamped further than this past the newest EEG sample is not believed, s.
 pub const MAX_AHEAD_S: f64 = 5.0;
@@ -111,47 +113,6 @@ impl ListenerParams {
             },
         }
     }
-}
-
-#[derive(Debug, Clone, Copy)]
-struct Flash {
-    trial: usize,
-    code: u32,
-    time: f64,
-    target: Option<bool>,
-}
-
-#[derive(Debug)]
-struct Trial {
-    number: usize,
-    /// Opened by a flash with no trial open: a start marker that arrives late adopts it.
-    implicit: bool,
-    /// The earliest flash's time.
-    first_time: f64,
-    /// The start marker's time: a flash stamped before it is not this trial's.
-    start_time: Option<f64>,
-    /// The trial end marker's time: flashes stamped up to it are this trial's, in whatever
-    /// order they arrive; the trial is decided once the EEG has passed its last epoch.
-    end_time: Option<f64>,
-    cue: Option<usize>,
-    announced: usize,
-    completed: usize,
-    ended: bool,
-    decided: bool,
-    calibration: bool,
-    evidence: Vec<f64>,
-    per_code: BTreeMap<u32, usize>,
-    scored: usize,
-    last_sample: u64,
-}
-
-/// Labelled calibration epochs of the first trials.
-#[derive(Debug, Default)]
-struct CalibrationSet {
-    epochs: Vec<Array2<f64>>,
-    labels: Vec<bool>,
-    trials: Vec<usize>,
-    done: usize,
 }
 
 /// The online decoder behind another program's stimuli (see the module doc).
@@ -421,23 +382,10 @@ impl Listener {
             }
         }
         let calibration = self.trial_count <= self.calibration_trials;
-        self.trials.push_back(Trial {
-            number: self.trial_count,
-            implicit: false,
-            first_time: f64::INFINITY,
-            end_time: None,
-            start_time: None,
-            cue: self.next_cue.take(),
-            announced: 0,
-            completed: 0,
-            ended: false,
-            decided: false,
-            calibration,
-            evidence: vec![0.0; self.paradigm.labels.len()],
-            per_code: BTreeMap::new(),
-            scored: 0,
-            last_sample: 0,
-        });
+        let cue = self.next_cue.take();
+        let n_choices = self.paradigm.labels.len();
+        self.trials
+            .push_back(Trial::new(self.trial_count, cue, calibration, n_choices));
     }
 
     /// The trial flashes now go to: the newest, unless it has ended.
@@ -919,7 +867,7 @@ fn choice_posterior(paradigm: &Paradigm, constraint: &Constraint, sets: &[Vec<f6
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ndarray::s;
+    use ndarray::{s, Array2};
     use oddball_decode::preset::Preset;
     use std::path::Path;
 
