@@ -32,8 +32,7 @@ pub(crate) struct AdaptiveLda {
     inner: oddball_decode::adaptive::AdaptiveLda,
 }
 
-#[pymethods]
-impl AdaptiveLda {
+methods_with_json!(AdaptiveLda, oddball_decode::adaptive::AdaptiveLda, {
     /// Calibrates on rows `x` with labels `y`; `shrinkage` as `Lda.fit`; updates that turn the
     /// weights below `min_cosine` with the calibrated weights are undone.
     #[staticmethod]
@@ -131,22 +130,7 @@ impl AdaptiveLda {
     fn cosine(&self) -> f64 {
         self.inner.cosine()
     }
-
-    fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string(&self.inner).map_err(json_err)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner = serde_json::from_str(text).map_err(json_err)?;
-        Ok(Self { inner })
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let json = slf.borrow().to_json()?;
-        Ok((slf.get_type().getattr("from_json")?, (json,)))
-    }
-}
+});
 
 /// What an unsupervised decoder holds between calls: its settings, the feature rows, codes and
 /// trials of every epoch taken in, each epoch's P300-template score (where every refit starts,
@@ -168,7 +152,7 @@ struct UnsupervisedState {
 /// The unsupervised decoder (`oddball_decode::unsupervised`): no label is taken anywhere.
 #[pyclass(module = "oddball._oddball")]
 pub(crate) struct UnsupervisedDecoder {
-    state: UnsupervisedState,
+    inner: UnsupervisedState,
 }
 
 fn preprocess_named(name: &str) -> PyResult<Preprocess> {
@@ -195,7 +179,7 @@ fn trial_dicts<'py>(py: Python<'py>, t: &[TrialPosterior]) -> PyResult<Bound<'py
 
 impl UnsupervisedDecoder {
     fn features(&self, epochs: &PyReadonlyArray3<'_, f64>) -> PyResult<ndarray::Array2<f64>> {
-        self.state
+        self.inner
             .params
             .features
             .transform(epochs.as_array())
@@ -203,15 +187,14 @@ impl UnsupervisedDecoder {
     }
 
     fn model(&self) -> PyResult<&Unsupervised> {
-        self.state
+        self.inner
             .model
             .as_ref()
             .ok_or_else(|| PyValueError::new_err("the unsupervised decoder is not fitted yet"))
     }
 }
 
-#[pymethods]
-impl UnsupervisedDecoder {
+methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
     /// `sets`: the codes that compete (one attended per set and trial: a speller's rows and
     /// columns, or the bulbs); epochs at `sfreq` Hz cut by `preprocess` (`"peer"`,
     /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts.
@@ -244,7 +227,7 @@ impl UnsupervisedDecoder {
                 .map_err(unsup_err)?;
         }
         Ok(Self {
-            state: UnsupervisedState {
+            inner: UnsupervisedState {
                 params,
                 constraint,
                 template,
@@ -270,10 +253,10 @@ impl UnsupervisedDecoder {
         reset: bool,
     ) -> PyResult<()> {
         let x = self.features(&epochs)?;
-        let start = match &self.state.template {
+        let start = match &self.inner.template {
             Some(pre) => {
                 let t = P300Template::default()
-                    .matched(pre, self.state.sfreq)
+                    .matched(pre, self.inner.sfreq)
                     .map_err(unsup_err)?;
                 epochs
                     .as_array()
@@ -292,7 +275,7 @@ impl UnsupervisedDecoder {
                 trials.len()
             )));
         }
-        let s = &mut self.state;
+        let s = &mut self.inner;
         if reset {
             s.rows.clear();
             s.codes.clear();
@@ -392,29 +375,14 @@ impl UnsupervisedDecoder {
     /// Epochs taken in so far.
     #[getter]
     fn n_epochs(&self) -> usize {
-        self.state.codes.len()
+        self.inner.codes.len()
     }
 
     #[getter]
     fn is_fitted(&self) -> bool {
-        self.state.model.is_some()
+        self.inner.model.is_some()
     }
-
-    fn to_json(&self) -> PyResult<String> {
-        serde_json::to_string(&self.state).map_err(json_err)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let state = serde_json::from_str(text).map_err(json_err)?;
-        Ok(Self { state })
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let json = slf.borrow().to_json()?;
-        Ok((slf.get_type().getattr("from_json")?, (json,)))
-    }
-}
+});
 
 /// A recording's flashes epoched as `oddball evaluate` epochs them (`oddball_eval::dataset`:
 /// read, labelled, band-passed by `preprocess`, cut): a dict of `data`

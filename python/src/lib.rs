@@ -23,9 +23,6 @@ use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-mod learning;
-mod online;
-
 fn value_err(e: DecodeError) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
@@ -59,7 +56,8 @@ fn labels(y: &PyReadonlyArray1<'_, bool>) -> Vec<bool> {
 }
 
 /// A class's `#[pymethods]` block, with `to_json`, `from_json` and pickling through them added
-/// (one block per class: pyo3 without `multiple-pymethods`).
+/// (one block per class: pyo3 without `multiple-pymethods`); the class keeps its model in `inner`
+/// (frozen, or changed in place as `learning`'s are).
 macro_rules! methods_with_json {
     ($py_type:ident, $inner:ty, { $($body:tt)* }) => {
         #[pymethods]
@@ -81,12 +79,16 @@ macro_rules! methods_with_json {
             fn __reduce__<'py>(
                 slf: &Bound<'py, Self>,
             ) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-                let json = slf.get().to_json()?;
+                let json = slf.borrow().to_json()?;
                 Ok((slf.get_type().getattr("from_json")?, (json,)))
             }
         }
     };
 }
+
+// After the macro, which they use.
+mod learning;
+mod online;
 
 /// Fitted xDAWN spatial filters (pyRiemann's `Xdawn`).
 #[pyclass(module = "oddball._oddball", frozen)]
