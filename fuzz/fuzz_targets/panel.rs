@@ -19,7 +19,17 @@ fuzz_target!(|data: &[u8]| {
                 ClientMsg::Clock { offset_ms, rtt_ms } => {
                     assert!(offset_ms.is_finite() && rtt_ms.is_finite() && rtt_ms >= 0.0)
                 }
-                ClientMsg::Control { .. } => {}
+                ClientMsg::Frames {
+                    frames,
+                    max_gap_ms,
+                    dropped,
+                    multi_lit,
+                } => {
+                    assert!(max_gap_ms.is_finite() && max_gap_ms >= 0.0);
+                    assert!(u64::from(dropped) <= u64::from(frames) + 1);
+                    assert!(u64::from(multi_lit) <= u64::from(frames) + 1);
+                }
+                ClientMsg::Control { .. } | ClientMsg::Visibility { .. } => {}
             }
         }
     }
