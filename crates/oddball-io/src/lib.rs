@@ -49,6 +49,7 @@
 pub mod bci2000;
 pub mod bids;
 pub mod brainvision;
+mod bytes;
 pub mod csv;
 mod dispatch;
 pub mod easy;

@@ -1,7 +1,5 @@
 //! The EDF/BDF header: the fixed part and the signal headers, each field checked.
 
-use std::path::Path;
-
 use crate::IoError;
 
 use super::types::*;
@@ -21,39 +19,12 @@ pub(super) const SIGNAL_FIELDS: [(&str, usize); 10] = [
     ("reserved", 32),
 ];
 
-pub(super) struct Ctx<'a> {
-    pub(super) path: &'a Path,
-    pub(super) bytes: &'a [u8],
-}
+/// The file's bytes and path ([`crate::bytes::FileBytes`]: its errors and reads).
+pub(super) type Ctx<'a> = crate::bytes::FileBytes<'a>;
 
 impl Ctx<'_> {
-    pub(super) fn invalid(
-        &self,
-        field: impl Into<String>,
-        offset: usize,
-        expected: impl Into<String>,
-        found: impl Into<String>,
-    ) -> IoError {
-        IoError::invalid_field(self.path, field, offset as u64, expected, found)
-    }
-
-    pub(super) fn truncated(
-        &self,
-        field: impl Into<String>,
-        offset: usize,
-        needed: usize,
-    ) -> IoError {
-        IoError::Truncated {
-            path: self.path.to_path_buf(),
-            field: field.into(),
-            offset: offset as u64,
-            needed: needed as u64,
-            file_len: self.bytes.len() as u64,
-        }
-    }
-
-    /// A text field (Latin-1, trailing spaces and NULs trimmed).
-    pub(super) fn text(&self, off: usize, len: usize) -> String {
+    /// An ASCII header field (Latin-1, trailing spaces and NULs trimmed).
+    pub(super) fn ascii(&self, off: usize, len: usize) -> String {
         self.bytes[off..off + len]
             .iter()
             .map(|&b| b as char)
@@ -87,15 +58,15 @@ impl Ctx<'_> {
 pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> {
     let b = ctx.bytes;
     if b.len() < FIXED {
-        return Err(ctx.truncated("fixed header (256 bytes)", 0, FIXED));
+        return Err(ctx.truncated("fixed header (256 bytes)", 0, FIXED as u64));
     }
     let is_bdf = b[0] == 0xFF && &b[1..8] == b"BIOSEMI";
-    if !is_bdf && ctx.text(0, 8) != "0" {
+    if !is_bdf && ctx.ascii(0, 8) != "0" {
         return Err(ctx.invalid(
             "version",
             0,
             "`0` (EDF) or `\\xFFBIOSEMI` (BDF)",
-            ctx.text(0, 8),
+            ctx.ascii(0, 8),
         ));
     }
     let header_bytes: usize = ctx.number("number of bytes in header", 184, 8, "an integer")?;
@@ -127,7 +98,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
         return Err(ctx.truncated(
             format!("signal headers ({ns} signals × 256 bytes)"),
             FIXED,
-            needed,
+            needed as u64,
         ));
     }
     if !(record_duration.is_finite() && record_duration > 0.0) {
@@ -135,7 +106,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
             "duration of a data record",
             244,
             "a positive number of seconds",
-            ctx.text(244, 8),
+            ctx.ascii(244, 8),
         ));
     }
     if n_records < -1 || n_records == 0 {
@@ -161,7 +132,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
     let at = |k: usize, i: usize| starts[k] + i * SIGNAL_FIELDS[k].1;
     let mut signals = Vec::with_capacity(ns);
     for i in 0..ns {
-        let label = ctx.text(at(0, i), 16);
+        let label = ctx.ascii(at(0, i), 16);
         let name = |k: usize| format!("signal {} ({label}) {}", i + 1, SIGNAL_FIELDS[k].0);
         let physical_min: f64 = ctx.number(&name(3), at(3, i), 8, "a number")?;
         let physical_max: f64 = ctx.number(&name(4), at(4, i), 8, "a number")?;
@@ -173,7 +144,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
                 name(4),
                 at(4, i),
                 format!("a finite number different from the physical minimum {physical_min}"),
-                ctx.text(at(4, i), 8),
+                ctx.ascii(at(4, i), 8),
             ));
         }
         if !(dig_lo..=dig_hi).contains(&digital_min) {
@@ -196,15 +167,15 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
             return Err(ctx.invalid(name(8), at(8, i), "a positive integer", "0"));
         }
         signals.push(EdfSignal {
-            transducer: ctx.text(at(1, i), 80),
-            dimension: ctx.text(at(2, i), 8),
+            transducer: ctx.ascii(at(1, i), 80),
+            dimension: ctx.ascii(at(2, i), 8),
             physical_min,
             physical_max,
             digital_min,
             digital_max,
-            prefiltering: ctx.text(at(7, i), 80),
+            prefiltering: ctx.ascii(at(7, i), 80),
             samples_per_record: spr,
-            reserved: ctx.text(at(9, i), 32),
+            reserved: ctx.ascii(at(9, i), 32),
             label,
         });
     }
@@ -232,7 +203,7 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
             None => format!("data record {k} ({record_bytes} bytes)"),
             Some(n) => format!("data record {k} of {n} ({record_bytes} bytes)"),
         };
-        ctx.truncated(what, off, off + record_bytes)
+        ctx.truncated(what, off, (off + record_bytes) as u64)
     };
     let n_records = if n_records == -1 {
         if data_len == 0 || data_len % record_bytes != 0 {
@@ -264,12 +235,12 @@ pub(super) fn parse_header(ctx: &Ctx<'_>) -> Result<(EdfHeader, bool), IoError> 
             } else {
                 "0".to_string()
             },
-            patient: ctx.text(8, 80),
-            recording: ctx.text(88, 80),
-            start_date: ctx.text(168, 8),
-            start_time: ctx.text(176, 8),
+            patient: ctx.ascii(8, 80),
+            recording: ctx.ascii(88, 80),
+            start_date: ctx.ascii(168, 8),
+            start_time: ctx.ascii(176, 8),
             header_bytes,
-            reserved: ctx.text(192, 44),
+            reserved: ctx.ascii(192, 44),
             n_records,
             record_duration,
             signals,

@@ -1,8 +1,6 @@
 //! FIF tags: the 16-byte headers, the chain of tags through the file (`next`), the block tree
 //! (`FIFF_BLOCK_START` / `FIFF_BLOCK_END`), and the typed reading of a tag's data.
 
-use std::path::Path;
-
 use crate::IoError;
 
 /// Tag kinds (`FIFF_*` in MNE's `_fiff/constants.py`).
@@ -120,33 +118,10 @@ impl Node {
     }
 }
 
-/// The file's bytes and its name for messages.
-pub(super) struct Ctx<'a> {
-    pub path: &'a Path,
-    pub bytes: &'a [u8],
-}
+/// The file's bytes and path ([`crate::bytes::FileBytes`]: its errors), with FIF's tag reads.
+pub(super) type Ctx<'a> = crate::bytes::FileBytes<'a>;
 
 impl Ctx<'_> {
-    pub fn invalid(
-        &self,
-        field: impl Into<String>,
-        offset: usize,
-        expected: impl Into<String>,
-        found: impl Into<String>,
-    ) -> IoError {
-        IoError::invalid_field(self.path, field, offset as u64, expected, found)
-    }
-
-    pub fn truncated(&self, field: impl Into<String>, offset: usize, needed: usize) -> IoError {
-        IoError::Truncated {
-            path: self.path.to_path_buf(),
-            field: field.into(),
-            offset: offset as u64,
-            needed: needed as u64,
-            file_len: self.bytes.len() as u64,
-        }
-    }
-
     fn be_i32(&self, at: usize) -> i32 {
         i32::from_be_bytes([
             self.bytes[at],
@@ -157,7 +132,7 @@ impl Ctx<'_> {
     }
 
     /// The data of `tag` (in bounds: [`walk`] checked every tag against the file length).
-    pub fn data(&self, tag: &Tag) -> &[u8] {
+    pub(super) fn data(&self, tag: &Tag) -> &[u8] {
         &self.bytes[tag.data_pos()..tag.data_pos() + tag.size]
     }
 
@@ -175,7 +150,7 @@ impl Ctx<'_> {
     }
 
     /// The 32-bit integers of an `FIFFT_INT` tag.
-    pub fn ints(&self, tag: &Tag, field: &str) -> Result<Vec<i32>, IoError> {
+    pub(super) fn ints(&self, tag: &Tag, field: &str) -> Result<Vec<i32>, IoError> {
         self.expect_type(tag, field, &[(ty::INT, "FIFFT_INT (3)")])?;
         if tag.size % 4 != 0 {
             return Err(self.invalid(
@@ -193,7 +168,7 @@ impl Ctx<'_> {
     }
 
     /// The one 32-bit integer of an `FIFFT_INT` tag.
-    pub fn int(&self, tag: &Tag, field: &str) -> Result<i32, IoError> {
+    pub(super) fn int(&self, tag: &Tag, field: &str) -> Result<i32, IoError> {
         match self.ints(tag, field)?[..] {
             [v] => Ok(v),
             _ => Err(self.invalid(
@@ -206,7 +181,7 @@ impl Ctx<'_> {
     }
 
     /// The numbers of an `FIFFT_FLOAT` or `FIFFT_DOUBLE` tag, and whether they are float32.
-    pub fn floats(&self, tag: &Tag, field: &str) -> Result<(Vec<f64>, bool), IoError> {
+    pub(super) fn floats(&self, tag: &Tag, field: &str) -> Result<(Vec<f64>, bool), IoError> {
         self.expect_type(
             tag,
             field,
@@ -241,7 +216,7 @@ impl Ctx<'_> {
     }
 
     /// The text of an `FIFFT_STRING` tag, decoded as MNE decodes it (see [`decode_string`]).
-    pub fn string(&self, tag: &Tag, field: &str) -> Result<String, IoError> {
+    pub(super) fn string(&self, tag: &Tag, field: &str) -> Result<String, IoError> {
         self.expect_type(tag, field, &[(ty::STRING, "FIFFT_STRING (10)")])?;
         Ok(decode_string(self.data(tag)))
     }
@@ -302,7 +277,7 @@ pub(super) fn walk(ctx: &Ctx<'_>) -> Result<Vec<Tag>, IoError> {
     let mut pos = 0usize;
     while pos < len {
         if len - pos < 16 {
-            return Err(ctx.truncated(format!("tag header {}", tags.len()), pos, pos + 16));
+            return Err(ctx.truncated(format!("tag header {}", tags.len()), pos, pos as u64 + 16));
         }
         let kind_v = ctx.be_i32(pos);
         let ty_v = ctx.be_i32(pos + 4) as u32;
@@ -321,7 +296,7 @@ pub(super) fn walk(ctx: &Ctx<'_>) -> Result<Vec<Tag>, IoError> {
         let size = size as usize;
         let end = pos + 16 + size;
         if end > len {
-            return Err(ctx.truncated(format!("{} data ({size} bytes)", field()), pos, end));
+            return Err(ctx.truncated(format!("{} data ({size} bytes)", field()), pos, end as u64));
         }
         tags.push(Tag {
             kind: kind_v,
@@ -432,7 +407,7 @@ pub(super) fn tree(ctx: &Ctx<'_>, tags: Vec<Tag>) -> Result<Node, IoError> {
                 open.start
             ),
             open.start,
-            len + 20,
+            len as u64 + 20,
         ));
     }
     Ok(stack.pop().expect("the root"))

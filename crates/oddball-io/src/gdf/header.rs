@@ -1,87 +1,16 @@
 //! The GDF header: the fixed part (256 bytes, laid out differently in GDF 1.x and 2.x) and the
 //! channel headers (256 bytes per channel, each field stored for all channels in turn).
 
-use std::path::Path;
-
 use crate::IoError;
 
 use super::types::*;
 
 pub(super) const FIXED: usize = 256;
 
-/// The bytes of a file and its path, with bounds-checked little-endian reads whose errors name
-/// the field and its byte offset.
-pub(super) struct Ctx<'a> {
-    pub(super) path: &'a Path,
-    pub(super) bytes: &'a [u8],
-}
+/// The file's bytes and path ([`crate::bytes::FileBytes`]: its errors and little-endian reads).
+pub(super) type Ctx<'a> = crate::bytes::FileBytes<'a>;
 
 impl Ctx<'_> {
-    pub(super) fn invalid(
-        &self,
-        field: impl Into<String>,
-        offset: usize,
-        expected: impl Into<String>,
-        found: impl Into<String>,
-    ) -> IoError {
-        IoError::invalid_field(self.path, field, offset as u64, expected, found)
-    }
-
-    pub(super) fn truncated(
-        &self,
-        field: impl Into<String>,
-        offset: usize,
-        needed: u64,
-    ) -> IoError {
-        IoError::Truncated {
-            path: self.path.to_path_buf(),
-            field: field.into(),
-            offset: offset as u64,
-            needed,
-            file_len: self.bytes.len() as u64,
-        }
-    }
-
-    /// `len` bytes at `off`, or a truncation error naming `field`.
-    pub(super) fn slice(&self, field: &str, off: usize, len: usize) -> Result<&[u8], IoError> {
-        off.checked_add(len)
-            .and_then(|end| self.bytes.get(off..end))
-            .ok_or_else(|| self.truncated(field, off, off as u64 + len as u64))
-    }
-
-    fn array<const N: usize>(&self, field: &str, off: usize) -> Result<[u8; N], IoError> {
-        let s = self.slice(field, off, N)?;
-        let mut a = [0u8; N];
-        a.copy_from_slice(s);
-        Ok(a)
-    }
-
-    pub(super) fn u8(&self, field: &str, off: usize) -> Result<u8, IoError> {
-        Ok(self.array::<1>(field, off)?[0])
-    }
-    pub(super) fn u16(&self, field: &str, off: usize) -> Result<u16, IoError> {
-        Ok(u16::from_le_bytes(self.array(field, off)?))
-    }
-    pub(super) fn u24(&self, field: &str, off: usize) -> Result<u32, IoError> {
-        let [a, b, c] = self.array(field, off)?;
-        Ok(u32::from_le_bytes([a, b, c, 0]))
-    }
-    pub(super) fn u32(&self, field: &str, off: usize) -> Result<u32, IoError> {
-        Ok(u32::from_le_bytes(self.array(field, off)?))
-    }
-    pub(super) fn i64(&self, field: &str, off: usize) -> Result<i64, IoError> {
-        Ok(i64::from_le_bytes(self.array(field, off)?))
-    }
-    pub(super) fn u64(&self, field: &str, off: usize) -> Result<u64, IoError> {
-        Ok(u64::from_le_bytes(self.array(field, off)?))
-    }
-    pub(super) fn f32(&self, field: &str, off: usize) -> Result<f32, IoError> {
-        Ok(f32::from_le_bytes(self.array(field, off)?))
-    }
-    pub(super) fn f64(&self, field: &str, off: usize) -> Result<f64, IoError> {
-        Ok(f64::from_le_bytes(self.array(field, off)?))
-    }
-
     /// A text field (Latin-1, trailing spaces and NULs trimmed, cut at the first NUL).
     pub(super) fn text(&self, field: &str, off: usize, len: usize) -> Result<String, IoError> {
         let raw = self.slice(field, off, len)?;
