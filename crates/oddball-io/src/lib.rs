@@ -1,4 +1,4 @@
-//! EEG file readers for the oddball P300 BCI, and BCI2000 and EDF+ writers.
+//! EEG file readers for the oddball P300 BCI, and BCI2000, EDF+ and BrainVision writers.
 //!
 //! [`read`] picks the reader from the file extension and returns a [`Recording`]: the samples
 //! as an [`oddball_signal::Raw`] in µV `(n_channels, n_times)` with their stimulus events, the
@@ -13,7 +13,7 @@
 //! | `.edf`, `.bdf` | [`edf`]: EDF, EDF+, BDF, BDF+ | EDF+ annotations |
 //! | `.easy` | [`easy`]: Neuroelectrics NIC (Enobio, Starstim) text + the `.info` beside it; written by [`write_easy`] (whole nV, `.info` in NIC 2's form) | non-zero trigger differing from the sample before (255, NIC's lost-packet flag, skipped) |
 //! | `.mat` | [`mat`]: MATLAB v5/v7 (uncompressed and zlib); a recording from the BCI Competition layout (`signal` + BCI2000 states, 240 Hz unless given) | `Flashing` 0 → 1 (else `StimulusCode` 0 → non-zero), target from `StimulusType` |
-//! | `.vhdr` | [`brainvision`]: BrainVision 1.0 header + `.vmrk` markers + binary data (INT_16, INT_32, IEEE_FLOAT_32; multiplexed or vectorized) | `Stimulus` `S n` → n, `Response` `R n` → 1000 + n |
+//! | `.vhdr` | [`brainvision`]: BrainVision 1.0 header + `.vmrk` markers + binary data (INT_16, INT_32, IEEE_FLOAT_32; multiplexed or vectorized); written by [`write_brainvision`] (IEEE_FLOAT_32 µV, multiplexed, as pybv) | `Stimulus` `S n` → n, `Response` `R n` → 1000 + n |
 //! | `.set` | [`eeglab`]: EEGLAB continuous data set (MAT v5/v7, `EEG` as variables or a struct), samples inside or in the `.fdt` | `EEG.event`: numeric `type` → code, text `type` → EDF+ annotation rule |
 //! | `.fif` | [`fif`]: MNE / Neuromag FIF raw (`*_raw.fif`, `*_eeg.fif`; split parts followed; EEG channels kept) | STIM channel steps up (MNE's `find_events`), MNE annotations |
 //! | `.gdf` | [`gdf`]: GDF 1.x and 2.x (all integer and float types, 24-bit included) | the event table; OpenViBE label codes 0x8101… as flashes 1…, target from 0x8205/0x8206 within 2 samples; other tables: their codes |
@@ -79,7 +79,9 @@ pub use bci2000::{
     Bci2000WriteSummary, DataFormat, Parameter, Parameters, StateColumn, StateDef, StateRun,
     StateRuns, States,
 };
-pub use brainvision::{parse_brainvision, read_brainvision, BrainVisionInfo};
+pub use brainvision::{
+    parse_brainvision, read_brainvision, write_brainvision, BrainVisionInfo, BvWriteSummary,
+};
 pub use csv::{read_csv, read_csv_auto, CsvInfo, CsvOptions};
 pub use dispatch::read;
 pub use easy::{

@@ -265,6 +265,17 @@ impl Manifest {
         Ok(m)
     }
 
+    /// The spelled text of a run given by path (any subject's test run with a `test_text`);
+    /// paths are compared as the file system resolves them, so `data/../data/x.mat` is `x.mat`.
+    pub fn text_of(&self, run: &Path) -> Option<&str> {
+        let canonical = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+        let run = canonical(run);
+        self.subjects.iter().find_map(|s| {
+            let i = s.test.iter().position(|r| canonical(r) == run)?;
+            s.test_text.as_ref()?.get(i).map(String::as_str)
+        })
+    }
+
     /// Parses and checks manifest text; `path` names it in errors. Run paths are left as written.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ManifestError> {
         let mut m: Manifest = toml::from_str(text).map_err(|e| ManifestError::Parse {
@@ -411,6 +422,11 @@ test_text = ["WATER"]
         std::fs::write(dir.join("s1_test.bdf"), b"x").unwrap();
         let m = Manifest::load(dir.join("m.toml")).unwrap();
         assert_eq!(m.subjects[0].train[0], dir.join("s1_train.bdf"));
+        // A test run's text, by the path as given (another spelling of it too); none for others.
+        let sub = dir.join("sub");
+        std::fs::create_dir_all(&sub).unwrap();
+        assert_eq!(m.text_of(&sub.join("../s1_test.bdf")), Some("WATER"));
+        assert_eq!(m.text_of(&dir.join("s1_train.bdf")), None);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

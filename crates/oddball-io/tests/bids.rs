@@ -4,7 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use oddball_io::bids::{dataset_manifest, ExportOptions, ExportPlan};
+use oddball_io::bids::{
+    dataset_manifest, BidsError, ExportFormat, ExportOptions, ExportPlan, RunData,
+};
 use oddball_io::{EventMapping, IoError, Recording};
 
 /// A 3-channel synthetic oddball CSV (markers 2 = target, 1 = non-target), read and labelled.
@@ -20,6 +22,16 @@ fn recording(dir: &Path) -> Recording {
 
 /// Exports `rec` as sub-1's only run under `dir/bids`; returns the EDF's path.
 fn export(dir: &Path, rec: &Recording) -> PathBuf {
+    export_as(dir, rec, ExportFormat::Edf, true).unwrap()
+}
+
+/// Exports `rec` as sub-1's only run under `dir/bids` in `format`; returns the data file's path.
+fn export_as(
+    dir: &Path,
+    rec: &Recording,
+    format: ExportFormat,
+    overwrite: bool,
+) -> Result<PathBuf, IoError> {
     let root = dir.join("bids");
     let plan = ExportPlan::new(
         &root,
@@ -27,15 +39,19 @@ fn export(dir: &Path, rec: &Recording) -> PathBuf {
         ExportOptions {
             subject: "1".into(),
             task: Some("oddball".into()),
-            overwrite: true,
+            overwrite,
             power_line_frequency: Some(50.0),
+            format,
             ..ExportOptions::default()
         },
-    )
-    .unwrap();
-    plan.write_run(0, rec).unwrap();
-    plan.finish().unwrap();
-    plan.runs[0].eeg_path(&root)
+    )?;
+    let s = plan.write_run(0, rec)?;
+    assert_eq!(
+        matches!(s.data, RunData::BrainVision(_)),
+        format == ExportFormat::BrainVision
+    );
+    plan.finish()?;
+    Ok(plan.runs[0].eeg_path(&root))
 }
 
 fn sidecar(eeg: &Path, suffix: &str) -> PathBuf {
@@ -130,4 +146,47 @@ fn a_folder_without_a_description_or_runs_is_not_a_data_set() {
     std::fs::write(dir.join("dataset_description.json"), r#"{"Name": "x"}"#).unwrap();
     let e = dataset_manifest(dir.path()).unwrap_err().to_string();
     assert!(e.contains("no EEG run"), "{e}");
+}
+
+#[test]
+fn a_brainvision_run_reads_back_to_f32_and_one_format_replaces_the_other() {
+    let dir = oddball_testkit::TempDir::new("bids-bv");
+    let rec = recording(dir.path());
+    let vhdr = export_as(dir.path(), &rec, ExportFormat::BrainVision, false).unwrap();
+    assert!(vhdr.ends_with("sub-1/eeg/sub-1_task-oddball_eeg.vhdr"));
+    for ext in ["vmrk", "eeg"] {
+        assert!(vhdr.with_extension(ext).is_file(), "{ext}");
+    }
+    let back = oddball_io::read(&vhdr).unwrap();
+    assert_eq!(back.raw.ch_names(), rec.raw.ch_names());
+    assert_eq!(back.raw.sfreq(), rec.raw.sfreq());
+    for (a, b) in rec.raw.data().iter().zip(back.raw.data().iter()) {
+        assert_eq!(*b, f64::from(*a as f32));
+    }
+    let key = |r: &Recording| {
+        r.raw
+            .events()
+            .iter()
+            .map(|e| (e.onset, e.code, e.target))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(key(&back), key(&rec));
+    let m = dataset_manifest(&dir.join("bids")).unwrap();
+    assert_eq!(m.subjects[0].train, std::slice::from_ref(&vhdr));
+
+    // The run is there (in the other format): refused without overwrite, replaced with it.
+    let e = export_as(dir.path(), &rec, ExportFormat::Edf, false).unwrap_err();
+    assert!(
+        matches!(&e, IoError::Bids(b) if matches!(**b, BidsError::Exists { ref path } if path == &vhdr)),
+        "{e}"
+    );
+    let edf = export_as(dir.path(), &rec, ExportFormat::Edf, true).unwrap();
+    for ext in ["vhdr", "vmrk", "eeg"] {
+        assert!(
+            !vhdr.with_extension(ext).exists(),
+            "{ext} left beside the EDF"
+        );
+    }
+    let m = dataset_manifest(&dir.join("bids")).unwrap();
+    assert_eq!(m.subjects[0].train, std::slice::from_ref(&edf));
 }

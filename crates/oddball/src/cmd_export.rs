@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use oddball_io::bids::{BidsError, ExportOptions, ExportPlan};
+use oddball_io::bids::{BidsError, ExportFormat, ExportOptions, ExportPlan};
 use oddball_io::IoError;
 
 #[derive(Debug, clap::Args)]
@@ -32,8 +32,28 @@ pub struct ExportArgs {
     /// The EEG reference, as text (EEGReference; default n/a), e.g. "linked mastoids".
     #[arg(long, value_name = "TEXT")]
     pub reference: Option<String>,
+    /// The runs' data file format: edf (EDF+, 16-bit) or brainvision (.vhdr/.vmrk/.eeg,
+    /// float32 µV).
+    #[arg(long, value_enum, default_value_t = DataFormat::Edf)]
+    pub format: DataFormat,
     #[command(flatten)]
     pub events: crate::load::EventArgs,
+}
+
+/// `--format`'s values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum DataFormat {
+    Edf,
+    Brainvision,
+}
+
+impl From<DataFormat> for ExportFormat {
+    fn from(f: DataFormat) -> Self {
+        match f {
+            DataFormat::Edf => ExportFormat::Edf,
+            DataFormat::Brainvision => ExportFormat::BrainVision,
+        }
+    }
 }
 
 /// A plan error with the flag that fixes it named.
@@ -60,6 +80,10 @@ pub fn run(args: &ExportArgs) -> Result<()> {
     }
     let mapping = args.events.mapping()?;
     let read_options = args.events.read_options()?;
+    // --manifest: its speller geometry and each test run's spelled text label the runs (as
+    // `oddball benchmark` labels them), so the BIDS sidecars carry what the manifest says.
+    let manifest = args.events.manifest()?;
+    let speller = manifest.as_ref().and_then(|m| m.speller.clone());
     let options = ExportOptions {
         subject: args.subject.clone(),
         session: args.session.clone(),
@@ -67,12 +91,23 @@ pub fn run(args: &ExportArgs) -> Result<()> {
         overwrite: args.overwrite,
         power_line_frequency: args.line_freq,
         reference: args.reference.clone(),
+        format: args.format.into(),
     };
     let plan = ExportPlan::new(&args.bids, &args.files, options).map_err(with_flags)?;
     for (i, run) in plan.runs.iter().enumerate() {
-        let mut rec =
+        let text = manifest.as_ref().and_then(|m| m.text_of(&run.source));
+        let mut rec = if speller.is_some() || text.is_some() {
+            let how = oddball_eval::dataset::Labelling {
+                mapping: mapping.as_ref(),
+                text,
+                speller: speller.as_ref(),
+                read: Some(&read_options),
+            };
+            oddball_eval::dataset::read_labelled(&run.source, how)
+        } else {
             oddball_eval::dataset::read_mapped(&run.source, mapping.as_ref(), &read_options)
-                .map_err(crate::load::with_flags)?;
+        }
+        .map_err(crate::load::with_flags)?;
         if let Some(to) = args.events.resample {
             rec.raw = oddball_signal::resample::resample_raw(&rec.raw, to).with_context(|| {
                 format!("resampling {} to --resample {to} Hz", run.source.display())
@@ -95,6 +130,12 @@ pub fn run(args: &ExportArgs) -> Result<()> {
                 String::new()
             }
         );
+        for p in &s.replaced {
+            println!(
+                "  removed {} (the run's data in the other format)",
+                p.display()
+            );
+        }
         if let Some(c) = &s.source_copy {
             println!("  original copied to {}", c.display());
         }

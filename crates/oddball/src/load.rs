@@ -62,7 +62,8 @@ pub struct EventArgs {
     pub data_from: Option<String>,
     /// A data-set manifest (datasets/*.toml) whose [events] mapping (unless --target-events
     /// is given) and [speller] geometry label these files, as `oddball benchmark` labels its
-    /// runs: e.g. a speller run whose file has row/column codes but no geometry.
+    /// runs: e.g. a speller run whose file has row/column codes but no geometry (export: also
+    /// each test run's test_text).
     #[arg(long, value_name = "MANIFEST")]
     pub manifest: Option<PathBuf>,
 }

@@ -1,7 +1,7 @@
 //! `oddball export --bids` and BIDS in: every shared recording oddball reads written as BIDS-EEG
 //! and checked by the official validator (`ODDBALL_BIDS_VALIDATOR`, `npm ci` in `tools/bids`),
-//! read back (samples to EDF's 16-bit step, events, codes, targets, speller), and benchmarked
-//! from the BIDS root with the AUC it has on the originals.
+//! read back (samples to EDF's 16-bit step, or exactly to f32 as BrainVision; events, codes,
+//! targets, speller), and benchmarked from the BIDS root with the AUC it has on the originals.
 
 mod common;
 
@@ -68,10 +68,25 @@ fn export(
     oddball_ok(&args)
 }
 
-/// Every subject and session of a shipped manifest exported into `root`.
+/// Every subject and session of a shipped manifest exported into `root`, labelled by it
+/// (`--manifest`, a copy whose `root` is `data`: its speller and test texts label the runs).
 fn export_manifest(manifest: &Path, data: &Path, root: &Path) {
     let m = Manifest::load_with_root(manifest, Some(data)).unwrap();
+    let text = std::fs::read_to_string(manifest).unwrap();
+    let copy = root.with_extension("toml");
+    let rooted: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("root =") {
+                format!("root = {:?}", data.display().to_string())
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    std::fs::write(&copy, rooted.join("\n")).unwrap();
     let mut extra = mapping_args(m.events.as_ref());
+    extra.extend(["--manifest".into(), copy.display().to_string()]);
     if let Some(r) = &m.read {
         assert!(
             r.channels.is_none() && r.montage.is_none() && r.events.is_none() && r.data.is_none()
@@ -158,6 +173,14 @@ fn every_shared_recording_exports_as_valid_bids() {
         export_manifest(&ws.join(format!("datasets/{name}.toml")), &data, &root);
         roots.push(root);
     }
+    // The test session of BCI Competition II IIb has no labels in its files: the manifest's
+    // test texts (HAM, PIE) label it on export, so its events say target / nontarget.
+    let iib = dir.join("bci-competition-ii-iib/sub-AAS/ses-12/eeg");
+    let events = std::fs::read_to_string(
+        iib.join("sub-AAS_ses-12_task-bcicompetitioniiiib_run-1_events.tsv"),
+    )
+    .unwrap();
+    assert_eq!(events.matches("\ttarget\t").count(), 90, "{events}");
     let gdf = dir.join("openvibe");
     export(
         &gdf,
@@ -423,4 +446,106 @@ fn export_checks_labels_and_existing_runs_before_any_work() {
         !ok && err.contains("sub-1_task-run_events.tsv: line") && err.contains("column \"value\""),
         "{err}"
     );
+}
+
+/// `--format brainvision`: the shared recordings (a BCI2000 speller, a BCI Competition `.mat`,
+/// the OpenViBE GDF, a Muse CSV with its mapping, an oddball session XDF) as one BrainVision
+/// data set: valid for the validator (no error), and every sample read back is the original
+/// rounded to f32, with the events, targets and speller of the original.
+#[test]
+fn a_brainvision_export_validates_and_reads_back_to_f32() {
+    let Some(data) = data_dir() else { return };
+    let dir = tmp_dir("cli-bids-bv");
+    let muse =
+        data.join("muse-visual-p300-eeg-notebooks/subject1/session1/data_2017-02-04-15_45_13.csv");
+    let cases: Vec<(PathBuf, Option<EventMapping>)> = vec![
+        (data.join("bci2000-samplefiles-p300/eeg3_1.dat"), None),
+        (data.join("bci-competition-ii-iib/AAS010R01.mat"), None),
+        (data.join("openvibe-p300-gdf/data_sample_8ch.gdf"), None),
+        (muse, Some(EventMapping::parse("2", "1").unwrap())),
+        (session_xdf(&dir), None),
+    ];
+    let root = dir.join("bv");
+    for (i, (file, mapping)) in cases.iter().enumerate() {
+        let mut extra = mapping_args(mapping.as_ref());
+        extra.extend(["--format".into(), "brainvision".into()]);
+        let subject = format!("{}", i + 1);
+        let out = export(
+            &root,
+            &subject,
+            None,
+            "x",
+            std::slice::from_ref(file),
+            &extra,
+        );
+        let vhdr = root.join(format!("sub-{subject}/eeg/sub-{subject}_task-x_eeg.vhdr"));
+        assert!(out.contains(&vhdr.display().to_string()), "{out}");
+        let original =
+            oddball_eval::dataset::read_mapped(file, mapping.as_ref(), &Default::default())
+                .unwrap();
+        let back = oddball_io::read(&vhdr).unwrap();
+        assert_eq!(back.raw.ch_names(), original.raw.ch_names());
+        assert_eq!(back.raw.sfreq(), original.raw.sfreq(), "{}", file.display());
+        assert_eq!(back.raw.n_times(), original.raw.n_times());
+        let mut worst = 0.0f64;
+        for (a, b) in original.raw.data().iter().zip(back.raw.data().iter()) {
+            assert_eq!(*b, f64::from(*a as f32), "{}", file.display());
+            worst = worst.max((a - b).abs());
+        }
+        eprintln!(
+            "{}: BrainVision read back, max |diff| {worst:.3e} µV (f32)",
+            file.display()
+        );
+        let key = |r: &Recording| {
+            r.raw
+                .events()
+                .iter()
+                .map(|e| (e.onset, e.code, e.target))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(key(&back), key(&original), "{}", file.display());
+        assert_eq!(back.speller, original.speller, "{}", file.display());
+    }
+    // The EDF export of the same run replaces the BrainVision files (a run has one data file).
+    let out = export(
+        &root,
+        "1",
+        None,
+        "x",
+        std::slice::from_ref(&cases[0].0),
+        &["--overwrite".into()],
+    );
+    assert!(
+        out.contains("removed") && out.contains("_eeg.vhdr"),
+        "{out}"
+    );
+    assert!(!root.join("sub-1/eeg/sub-1_task-x_eeg.eeg").exists());
+    let Some(exe) = oddball_testkit::tool(
+        "ODDBALL_BIDS_VALIDATOR",
+        TEST,
+        "npm ci in tools/bids, then tools/bids/node_modules/.bin/bids-validator",
+    ) else {
+        return;
+    };
+    // Validated as BrainVision (the EDF of subject 1 written back as BrainVision first).
+    let extra = [
+        "--overwrite".to_string(),
+        "--format".into(),
+        "brainvision".into(),
+    ];
+    export(
+        &root,
+        "1",
+        None,
+        "x",
+        std::slice::from_ref(&cases[0].0),
+        &extra,
+    );
+    let (errors, warnings) = validate(&exe, &root);
+    eprintln!(
+        "validator on the BrainVision export: {} errors, {} warnings {warnings:?}",
+        errors.len(),
+        warnings.len()
+    );
+    assert!(errors.is_empty(), "{errors:#?}");
 }

@@ -8,7 +8,9 @@
 //! OUT/dataset_description.json           Name, BIDSVersion 1.9.0, DatasetType raw, GeneratedBy oddball
 //! OUT/README                             (when absent)
 //! OUT/participants.tsv, .json            participant_id (the subjects found under OUT)
-//! OUT/sub-S/[ses-T/]eeg/sub-S[_ses-T]_task-K[_run-N]_eeg.edf       EDF+ (16-bit), µV
+//! OUT/sub-S/[ses-T/]eeg/sub-S[_ses-T]_task-K[_run-N]_eeg.edf       EDF+ (16-bit), µV, or
+//!                                  …_eeg.vhdr, .vmrk, .eeg  BrainVision (float32 µV;
+//!                                                  ExportFormat::BrainVision)
 //!                                  …_eeg.json      TaskName, EEGReference, SamplingFrequency,
 //!                                                  PowerLineFrequency, SoftwareFilters (REQUIRED);
 //!                                                  EEGChannelCount, MISC/EOG/…ChannelCount,
@@ -55,7 +57,9 @@ use std::path::PathBuf;
 use thiserror::Error;
 
 pub use read::{dataset_manifest, is_bids_run, read_bids_run, RUN_EXTENSIONS};
-pub use write::{default_task, ExportOptions, ExportPlan, PlannedRun, RunSummary};
+pub use write::{
+    default_task, ExportFormat, ExportOptions, ExportPlan, PlannedRun, RunData, RunSummary,
+};
 
 /// The BIDS version the exports follow.
 pub const BIDS_VERSION: &str = "1.9.0";

@@ -9,8 +9,41 @@ use serde_json::{json, Value};
 
 use super::tsv::{self, Table};
 use super::{channel_type, BidsError, Entities, BIDS_VERSION};
+use crate::brainvision::{write_brainvision, BvWriteSummary};
 use crate::edf::{write_edf_plus_with, EdfWriteOptions, EdfWriteSummary};
 use crate::{write_atomic, Format, IoError, Recording};
+
+/// The data file format of an export's runs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum ExportFormat {
+    /// EDF+ (`_eeg.edf`): 16-bit samples, each channel's step its range / 65535.
+    #[default]
+    Edf,
+    /// BrainVision (`_eeg.vhdr` with `_eeg.vmrk` and `_eeg.eeg`): IEEE float32 samples in µV
+    /// ([`write_brainvision`]), each the recording's value to 2⁻²⁴ relative.
+    BrainVision,
+}
+
+impl ExportFormat {
+    /// Both formats.
+    pub const ALL: [ExportFormat; 2] = [ExportFormat::Edf, ExportFormat::BrainVision];
+
+    /// The extension of the run's data file (the one a reader is given).
+    pub fn extension(self) -> &'static str {
+        match self {
+            ExportFormat::Edf => "edf",
+            ExportFormat::BrainVision => "vhdr",
+        }
+    }
+
+    /// Every file the format writes for a run, by extension.
+    pub fn extensions(self) -> &'static [&'static str] {
+        match self {
+            ExportFormat::Edf => &["edf"],
+            ExportFormat::BrainVision => &["vhdr", "vmrk", "eeg"],
+        }
+    }
+}
 
 /// What the command line (or any front end) says about an export.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -27,6 +60,8 @@ pub struct ExportOptions {
     pub power_line_frequency: Option<f64>,
     /// `EEGReference`; `None` writes `n/a`.
     pub reference: Option<String>,
+    /// The runs' data file format (EDF+ unless asked).
+    pub format: ExportFormat,
 }
 
 /// One input file and the run it becomes.
@@ -34,12 +69,24 @@ pub struct ExportOptions {
 pub struct PlannedRun {
     pub source: PathBuf,
     pub entities: Entities,
+    /// The format its data file is written in.
+    pub format: ExportFormat,
 }
 
 impl PlannedRun {
-    /// The run's EDF+ file under `root`.
+    /// The run's data file under `root` (`_eeg.edf`, or the BrainVision header `_eeg.vhdr`).
     pub fn eeg_path(&self, root: &Path) -> PathBuf {
-        self.sidecar(root, "eeg.edf")
+        self.sidecar(root, &format!("eeg.{}", self.format.extension()))
+    }
+
+    /// The run's data files in `format` that are already under `root`.
+    fn existing(&self, root: &Path, format: ExportFormat) -> Vec<PathBuf> {
+        format
+            .extensions()
+            .iter()
+            .map(|ext| self.sidecar(root, &format!("eeg.{ext}")))
+            .filter(|p| p.exists())
+            .collect()
     }
 
     /// `root/sub-…/eeg/<stem>_<suffix>`.
@@ -61,7 +108,7 @@ pub struct ExportPlan {
 /// What one run's export wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSummary {
-    /// The EDF+ file.
+    /// The data file (EDF+, or the BrainVision header).
     pub eeg: PathBuf,
     pub n_channels: usize,
     pub n_times: usize,
@@ -69,9 +116,20 @@ pub struct RunSummary {
     pub n_events: usize,
     /// Markers that are not stimuli (rows with `value` `n/a`).
     pub n_annotations: usize,
-    pub edf: EdfWriteSummary,
+    /// What the data file's writer wrote.
+    pub data: RunData,
+    /// Data files of the run in the other format, there from an earlier export and removed
+    /// (a run has one data file).
+    pub replaced: Vec<PathBuf>,
     /// The original copied under `sourcedata/` (XDF files).
     pub source_copy: Option<PathBuf>,
+}
+
+/// What a run's data file writer wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunData {
+    Edf(EdfWriteSummary),
+    BrainVision(BvWriteSummary),
 }
 
 /// A task label from a file name: its stem's letters and digits (`eeg3_1.dat` → `eeg31`), or
@@ -120,6 +178,7 @@ impl ExportPlan {
                     task: task.clone(),
                     run: several.then_some(i as u32 + 1),
                 },
+                format: options.format,
             })
             .collect();
         runs[0].entities.check()?;
@@ -132,9 +191,14 @@ impl ExportPlan {
                 }
                 .into());
             }
-            let eeg = r.eeg_path(root);
-            if eeg.exists() && !options.overwrite {
-                return Err(BidsError::Exists { path: eeg }.into());
+            // The run in either format (a run has one data file).
+            if !options.overwrite {
+                if let Some(path) = ExportFormat::ALL
+                    .iter()
+                    .find_map(|&f| r.existing(root, f).into_iter().next())
+                {
+                    return Err(BidsError::Exists { path }.into());
+                }
             }
         }
         for f in files {
@@ -147,22 +211,37 @@ impl ExportPlan {
         })
     }
 
-    /// Writes run `i` from its recording: the EDF+ file, `_eeg.json`, `_channels.tsv`,
-    /// `_events.tsv`, `_events.json`, and an XDF original under `sourcedata/`.
+    /// Writes run `i` from its recording: the data file (EDF+ or BrainVision), `_eeg.json`,
+    /// `_channels.tsv`, `_events.tsv`, `_events.json`, and an XDF original under `sourcedata/`;
+    /// the run's data files in the other format, left by an earlier export, are removed.
     pub fn write_run(&self, i: usize, rec: &Recording) -> Result<RunSummary, IoError> {
         let run = &self.runs[i];
         let raw = &rec.raw;
         let dir = self.root.join(run.entities.eeg_dir());
         create_dir(&dir)?;
         let eeg = run.eeg_path(&self.root);
-        let edf = write_edf_plus_with(
-            &eeg,
-            raw,
-            &EdfWriteOptions {
-                patient: format!("{} X X X", run.entities.subject),
-                ..EdfWriteOptions::default()
-            },
-        )?;
+        let data = match run.format {
+            ExportFormat::Edf => RunData::Edf(write_edf_plus_with(
+                &eeg,
+                raw,
+                &EdfWriteOptions {
+                    patient: format!("{} X X X", run.entities.subject),
+                    ..EdfWriteOptions::default()
+                },
+            )?),
+            ExportFormat::BrainVision => RunData::BrainVision(write_brainvision(&eeg, raw)?),
+        };
+        let mut replaced = Vec::new();
+        for other in ExportFormat::ALL.into_iter().filter(|&f| f != run.format) {
+            for p in run.existing(&self.root, other) {
+                std::fs::remove_file(&p).map_err(|source| IoError::Io {
+                    path: p.clone(),
+                    action: "remove",
+                    source,
+                })?;
+                replaced.push(p);
+            }
+        }
 
         // Channels.
         let types: Vec<&str> = raw.ch_names().iter().map(|n| channel_type(n)).collect();
@@ -257,7 +336,8 @@ impl ExportPlan {
             n_times: raw.n_times(),
             n_events,
             n_annotations,
-            edf,
+            data,
+            replaced,
             source_copy,
         })
     }

@@ -131,3 +131,39 @@ fn numeric_code(m: &BvMarker) -> Option<u32> {
     }
     digits.parse::<u32>().ok()?.checked_add(offset)
 }
+
+/// The marker type and description that [`numeric_code`] reads back as `code`: `Response`
+/// `R  n` for 1000 + n (n ≤ 999), else `Stimulus` `S  n`; the number right-aligned in three
+/// characters as pybv and BrainVision Recorder write it (MNE reads the last three characters,
+/// so a code from 2000 up reads back here but not as MNE's number).
+pub(super) fn marker_of_code(code: u32) -> (&'static str, String) {
+    match code {
+        1000..=1999 => ("Response", format!("R{:>3}", code - 1000)),
+        _ => ("Stimulus", format!("S{code:>3}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_is_written_as_the_marker_that_reads_back_as_it() {
+        for code in (0..3000).chain([9999, 65535, u32::MAX]) {
+            let (kind, description) = marker_of_code(code);
+            let m = BvMarker {
+                kind: kind.into(),
+                description: description.clone(),
+                onset: 0,
+                size: 1,
+                channel: 0,
+                date: None,
+                code: None,
+            };
+            assert_eq!(numeric_code(&m), Some(code), "{kind},{description}");
+        }
+        assert_eq!(marker_of_code(1), ("Stimulus", "S  1".to_string()));
+        assert_eq!(marker_of_code(1003), ("Response", "R  3".to_string()));
+        assert_eq!(marker_of_code(2000), ("Stimulus", "S2000".to_string()));
+    }
+}

@@ -1,5 +1,6 @@
 //! BrainVision Core Data Format 1.0 (Brain Products' BrainVision Recorder and Analyzer; pybv
-//! and MNE's `export_raw(fmt="brainvision")`), read from scratch.
+//! and MNE's `export_raw(fmt="brainvision")`), read from scratch, and written as pybv writes
+//! float data ([`write_brainvision`]: `IEEE_FLOAT_32`, multiplexed, µV; see `write.rs`).
 //!
 //! # Why no crate
 //! There is no maintained Rust reader of the format, and it is small: two INI-like text files
@@ -51,15 +52,18 @@
 //! # Layout
 //! By job: `types.rs` (what a recording holds: [`BrainVisionInfo`]), `ini.rs` (the INI-like
 //! text, encodings, byte offsets), `read.rs` (settings, channels, data file, events),
-//! `markers.rs` (the marker file).
+//! `markers.rs` (the marker file, and the marker of a code for the writer), `write.rs`
+//! ([`write_brainvision`]).
 
 mod ini;
 mod markers;
 mod read;
 mod types;
+mod write;
 
 pub use read::{parse_brainvision, read_brainvision};
 pub use types::{BrainVisionInfo, BvBinaryFormat, BvChannel, BvMarker, BvOrientation};
+pub use write::{write_brainvision, BvWriteSummary};
 
 #[cfg(test)]
 mod tests {

@@ -252,7 +252,7 @@ fn build(ini: &Ini<'_>, data: &[u8], markers: Option<&[u8]>) -> Result<Recording
         }
     };
 
-    let sfreq = 1e6 / interval;
+    let sfreq = rate_of_interval(interval);
     let ch_names: Vec<String> = channels.iter().map(|c| c.name.clone()).collect();
     let values =
         Array2::from_shape_vec((n_ch, n_times), values).map_err(|e| IoError::Unsupported {
@@ -279,6 +279,21 @@ fn build(ini: &Ini<'_>, data: &[u8], markers: Option<&[u8]>) -> Result<Recording
             non_voltage_channels: non_voltage,
         })),
     })
+}
+
+/// The rate of a `SamplingInterval` of `interval` µs: the rate of at most six decimals whose
+/// interval (10⁶ / rate, as a writer computes it) is exactly `interval`, the fewest decimals
+/// first; else 10⁶ / `interval`. So the 240 Hz that pybv and oddball write as
+/// `4166.666666666667` µs reads back as 240, not 239.99999999999997.
+pub(super) fn rate_of_interval(interval: f64) -> f64 {
+    let rate = 1e6 / interval;
+    (0..=6)
+        .map(|d| {
+            let scale = 10f64.powi(d);
+            (rate * scale).round() / scale
+        })
+        .find(|&r| r > 0.0 && 1e6 / r == interval)
+        .unwrap_or(rate)
 }
 
 /// `[Channel Infos]`: `Ch1` … `ChN` for `NumberOfChannels` = N, each
@@ -353,4 +368,33 @@ fn channels(ini: &Ini<'_>) -> Result<Vec<BvChannel>, IoError> {
         });
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rate_of_interval;
+
+    #[test]
+    fn a_written_interval_reads_back_as_its_rate() {
+        for rate in [
+            240.0,
+            220.0,
+            250.0,
+            256.0,
+            512.0,
+            1000.0,
+            7.0,
+            119.5,
+            2048.0,
+            1e6 / 3.0,
+        ] {
+            assert_eq!(rate_of_interval(1e6 / rate), rate, "{rate}");
+        }
+        assert_eq!(1e6 / (1e6 / 240.0), 239.99999999999997);
+        // An interval no short rate gives: 10⁶ / interval as it is.
+        assert_eq!(rate_of_interval(1953.1249), 1e6 / 1953.1249);
+        // A rate with more than six decimals is the division's.
+        let odd = 123.123_456_789_f64;
+        assert!((rate_of_interval(1e6 / odd) - odd).abs() < 1e-9);
+    }
 }
