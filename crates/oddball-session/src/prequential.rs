@@ -185,11 +185,12 @@ mod tests {
                 trials.push(t);
             }
             let m = p.fit(&scores, &attended, &trials);
-            if t == 1 {
-                assert!(m.is_none(), "one scored trial");
-            } else {
+            match t {
+                1 => assert!(m.is_none(), "one scored trial"),
+                // Trials 1 (reversed) and 2 (good) cancel: no evidence either way.
+                2 => assert_eq!(m.unwrap().d_prime(), 0.0, "{m:?}"),
                 // The window holds trials 2 and 3 only: good scores, a positive separation.
-                assert!(m.unwrap().d_prime() > 1.0, "after trial {t}: {m:?}");
+                _ => assert!(m.unwrap().d_prime() > 1.0, "after trial {t}: {m:?}"),
             }
         }
         assert!(HonestParams { window: 1, ..p }.check().is_err());
