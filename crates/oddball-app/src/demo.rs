@@ -12,8 +12,9 @@ use oddball_live::clock::Clock;
 use oddball_live::source::SourceSpec;
 use oddball_session::replay::{self, REPLAY_NOTE};
 use oddball_session::report::{
-    accuracy_over_time, accuracy_over_time_text, numbered, pen_report, report_text, row_text,
-    rule_name, scores, CalibrationSummary, PenReport, Row, Scores, SessionFacts, Stretch,
+    accuracy_over_time, accuracy_over_time_text, headline, headline_text, numbered, pen_report,
+    report_text, row_text, rule_name, scores, BitsBy, CalibrationSummary, PenReport, Row, Scores,
+    SessionFacts, Stretch,
 };
 use oddball_session::tasks::{run_copy, Pilot};
 use oddball_session::timing::{stopping_text, time_report, time_text, TimeReport};
@@ -50,6 +51,10 @@ struct Summary<'a> {
     facts: SessionFacts<'a>,
     commands: Vec<Command>,
     result: &'a Scores,
+    /// Bits delivered in the first 5 and 10 minutes after the session started (its calibration
+    /// included); empty for a replay.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    bits_since_start: Vec<BitsBy>,
     #[serde(skip_serializing_if = "Option::is_none")]
     fixed_rounds_for_comparison: Option<&'a Scores>,
     simulated_seconds: f64,
@@ -203,6 +208,7 @@ impl Demo {
         let arm = prep.pilot.arm();
         let pen = pen_report(arm, prep.pen_start, rows);
         let over_time = accuracy_over_time(rows, 10);
+        let early = headline(rows);
         let posthoc = posthoc(&prep);
         let adaptation = adaptation(&prep);
         let erp_png = report::write_decisions_and_model(&self.out, &prep, &steps)?;
@@ -248,6 +254,7 @@ impl Demo {
             },
             commands: commands.clone(),
             result: &result,
+            bits_since_start: early.clone(),
             fixed_rounds_for_comparison: comparison.as_ref(),
             simulated_seconds,
             pen: pen.clone(),
@@ -267,6 +274,9 @@ impl Demo {
             report_text(simulated_seconds, &result, comparison.as_ref(), &pen)
         )?;
         writeln!(out, "{}", accuracy_over_time_text(&over_time))?;
+        if let Some(h) = headline_text(&early) {
+            writeln!(out, "{h}")?;
+        }
         if let Some(a) = adaptation {
             writeln!(
                 out,

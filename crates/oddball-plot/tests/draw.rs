@@ -107,6 +107,7 @@ fn the_session_picture_draws_the_intended_and_executed_paths_and_marks_missed_de
         rounds: 5,
         confidence: 0.5,
         seconds: 10.0,
+        ended_s: None,
         arm_refusal: None,
         pen_m: None,
     };

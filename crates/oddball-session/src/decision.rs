@@ -199,6 +199,10 @@ pub struct Decision {
     pub confidence: f64,
     /// Seconds the decision took (countdown included).
     pub seconds: f64,
+    /// Seconds from the session's first sample (its calibration included) to the decision; a
+    /// live or simulated session's only (`None` in a replay, which has no session clock).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ended_s: Option<f64>,
     /// The arm refused the decided command (it would leave the board).
     pub arm_refusal: Option<String>,
     /// Pen (x, z) in metres when the decision was made, before its command (written only by
@@ -223,6 +227,7 @@ impl Decision {
             rounds: t.rounds,
             confidence: t.confidence(),
             seconds: (t.end - t.start) as f64 / sfreq,
+            ended_s: Some(t.end as f64 / sfreq),
             arm_refusal: t.arm_refusal.clone(),
             pen_m: t.pen_m,
         }

@@ -9,7 +9,7 @@
 use ndarray::{ArrayView2, Axis};
 use oddball_decode::adaptive::{AdaptiveLda, Update};
 use oddball_decode::classifiers::Classifier;
-use oddball_decode::decision::{DecisionModel, DecisionRule, Posterior, Verdict};
+use oddball_decode::decision::{DecisionModel, DecisionRule, Posterior, ScoreModel, Verdict};
 use oddball_decode::pipeline::{Model, Preprocess};
 pub use oddball_decode::preset::Preset;
 use oddball_decode::stopping::StoppingSearch;
@@ -19,6 +19,7 @@ use oddball_decode::unsupervised::{
 use serde::{Deserialize, Serialize};
 
 use crate::decision::TrialRecord;
+use crate::prequential::HonestParams;
 use crate::SessionError;
 
 /// The decoder settings a session ([`crate::engine::SessionParams`]) and a replay
@@ -125,6 +126,11 @@ pub struct UncalibratedParams {
     /// [`DEFAULT_MAX_TRIALS`] is about 50 minutes of the paper's timing.
     #[serde(default = "default_max_trials")]
     pub max_trials: usize,
+    /// How dynamic stopping weighs the evidence of a trial: its scores by the model fitted
+    /// before it, through a score model of such out-of-sample scores
+    /// ([`crate::prequential`]).
+    #[serde(default)]
+    pub honest: HonestParams,
 }
 
 /// The trials an uncalibrated session refits on at most, by default.
@@ -141,10 +147,12 @@ impl UncalibratedParams {
             decoder: UnsupervisedParams::for_sfreq(sfreq)?,
             abstain_below: 0.9,
             max_trials: DEFAULT_MAX_TRIALS,
+            honest: HonestParams::default(),
         })
     }
 
     fn check(&self) -> Result<(), SessionError> {
+        self.honest.check()?;
         if !(self.abstain_below > 0.0 && self.abstain_below <= 1.0) {
             return Err(SessionError::InvalidParameter {
                 name: "abstain_below",
@@ -225,6 +233,11 @@ pub(crate) struct Unlabelled {
     rows: Vec<f64>,
     codes: Vec<u32>,
     trials: Vec<usize>,
+    /// Each epoch's score by the EM model fitted before its trial (`None` before the first
+    /// fit, or when a transferred model scored it): out-of-sample scores.
+    prequential: Vec<Option<f64>>,
+    /// The score model of those scores ([`HonestParams::fit`]), after the latest refit.
+    honest: Option<ScoreModel>,
     model: Option<Unsupervised>,
     /// A model from other recordings and its score of every epoch.
     transfer: Option<Model>,
@@ -262,6 +275,8 @@ impl Unlabelled {
             rows: Vec::new(),
             codes: Vec::new(),
             trials: Vec::new(),
+            prequential: Vec::new(),
+            honest: None,
             model: None,
             transfer,
             start_scores: Vec::new(),
@@ -296,6 +311,7 @@ impl Unlabelled {
             self.rows.drain(..cut * p);
             self.codes.drain(..cut);
             self.trials.drain(..cut);
+            self.prequential.drain(..cut);
             self.start_scores.drain(..cut);
         }
     }
@@ -400,9 +416,13 @@ impl OnlineDecoder {
                 } else {
                     u.start_scores.push(u.template.score(data)?);
                 }
+                let mut prequential = None;
                 if let Some(m) = &u.model {
-                    score = Some(m.decision_function_features(row.view())?[0]);
+                    let s = m.decision_function_features(row.view())?[0];
+                    score = Some(s);
+                    prequential = Some(s);
                 }
+                u.prequential.push(prequential);
                 u.rows.extend(row.iter());
                 u.codes.push(code);
                 u.trials.push(trial);
@@ -537,9 +557,46 @@ impl OnlineDecoder {
             .iter()
             .find(|t| t.trial == trial)
             .map(|t| t.sets.clone());
+        let attended = attended_weights(&fitted, &u.codes, &u.trials, &u.constraint);
+        u.honest = u.params.honest.fit(&u.prequential, &attended, &u.trials);
         u.model = Some(fitted);
         Ok(sets)
     }
+
+    /// The decision model dynamic stopping weighs an uncalibrated trial's scores with: the
+    /// score model of out-of-sample scores ([`crate::prequential`]) under `rule`; `None` before
+    /// there is one, or when `rule` does not stop dynamically.
+    pub(crate) fn honest_decision(&self, rule: DecisionRule) -> Option<DecisionModel> {
+        match (self, rule) {
+            (Self::Unlabelled(u), DecisionRule::Dynamic { .. }) => u
+                .honest
+                .map(|scores| DecisionModel { scores, rule })
+                .filter(|d| d.validate().is_ok()),
+            _ => None,
+        }
+    }
+}
+
+/// Each epoch's posterior of being the attended one under `model` (its trial's posterior of
+/// the epoch's code; 0 where the model has no such trial or code).
+fn attended_weights(
+    model: &Unsupervised,
+    codes: &[u32],
+    trials: &[usize],
+    constraint: &Constraint,
+) -> Vec<f64> {
+    let posteriors = model.averaged_trials();
+    codes
+        .iter()
+        .zip(trials)
+        .map(|(&code, &trial)| {
+            let at = posteriors.iter().position(|t| t.trial == trial);
+            match (at, constraint.locate(code)) {
+                (Some(i), Some((set, k))) => posteriors[i].sets[set][k],
+                _ => 0.0,
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -559,12 +616,15 @@ mod tests {
                 u.codes.push(1 + k as u32 % 4);
                 u.trials.push(trial);
                 u.start_scores.push(trial as f64);
+                u.prequential.push(Some(trial as f64));
             }
             u.keep_last_trials();
             let first = trial.saturating_sub(2);
             let n: usize = (first..=trial).map(|t| 2 + t).sum();
             assert_eq!(u.trials.len(), n, "after trial {trial}");
             assert_eq!((u.codes.len(), u.start_scores.len()), (n, n));
+            assert_eq!(u.prequential.len(), n);
+            assert_eq!(u.prequential[0], Some(first as f64));
             assert_eq!(u.rows.len(), 3 * n);
             assert_eq!(u.trials[0], first);
             assert_eq!(u.rows[0], first as f64);

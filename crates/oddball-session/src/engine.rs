@@ -17,7 +17,10 @@
 //!    the subject and the epocher) when the stream reaches their onset; each epoch is scored as
 //!    soon as its last sample (600 ms after onset) has arrived; after each complete round the
 //!    [`DecisionRule`](oddball_decode::decision::DecisionRule) decides, continues or abstains. A decision issues the bulb's command to the
-//!    arm, which runs on the same clock as the EEG, one chunk at a time.
+//!    arm, which runs on the same clock as the EEG, one chunk at a time. Without calibration
+//!    the trial is decided by the unsupervised refit once its rounds are done; with a dynamic
+//!    rule it stops earlier only when the out-of-sample score model
+//!    ([`crate::prequential`]) makes a bulb probable enough.
 //!
 //! Before every trial the presenter may hold the session ([`Presenter::hold`](crate::roles::Presenter::hold): an operator's
 //! pause): the EEG and the arm run on, no trial starts. After every trial the observer hears
@@ -778,7 +781,21 @@ impl<S: Subject> Session<S> {
                     }
                 }
                 Phase::Online if self.decoder.is_unlabelled() => {
-                    if next == planned.len() && shown.iter().all(|f| f.accepted.is_some()) {
+                    let all = next == planned.len() && shown.iter().all(|f| f.accepted.is_some());
+                    // Dynamic stopping weighs the rounds so far by the out-of-sample score
+                    // model; it stops once sure, and the refit then learns from the trial.
+                    let rule = self.params.decoder.rule;
+                    if let Some(decision) = self.decoder.honest_decision(rule) {
+                        let rounds = complete_rounds(shown);
+                        let (verdict, used) = decision.decide(&rounds);
+                        let stop = matches!(verdict, Verdict::Choose { .. }) && used < n_rounds;
+                        if stop {
+                            self.decoder.refit_unlabelled(trial)?;
+                            self.conclude(trial, verdict, used)?;
+                            break;
+                        }
+                    }
+                    if all {
                         let verdict = self.decoder.decide_unlabelled(trial)?;
                         self.conclude(trial, verdict, n_rounds)?;
                         break;

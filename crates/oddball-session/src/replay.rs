@@ -527,6 +527,7 @@ impl ReplaySource {
                 rounds: used,
                 confidence: outcome.confidence(&posterior),
                 seconds: panel_seconds(&self.paradigm, &self.preprocess, used),
+                ended_s: None,
                 arm_refusal: None,
                 pen_m: None,
             },

@@ -83,6 +83,96 @@ pub fn scores(rows: &[Decision], rule: &DecisionRule) -> Scores {
     }
 }
 
+/// The minutes after a session's start its headline counts bits over ([`bits_by`]).
+pub const HEADLINE_MINUTES: [f64; 2] = [5.0, 10.0];
+
+/// What a session delivered by some minutes after it started (its first sample; a labelled
+/// calibration's time counts, and delivers nothing): the decisions made by then and their
+/// Wolpaw bits, `made · B(4, correct / made)` — each decision made carries the bits of the
+/// accuracy of all made, an abstention carries none.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BitsBy {
+    pub minutes: f64,
+    /// Decisions that chose a command by then.
+    pub made: usize,
+    pub correct: usize,
+    /// Decisions that abstained by then.
+    pub abstained: usize,
+    pub bits: f64,
+    /// The session ended (its last decision) before this time: the bits are all it delivered.
+    pub session_shorter: bool,
+}
+
+/// The bits `rows` delivered by `minutes` after the session's start; `None` when a row has no
+/// session time (a replay).
+pub fn bits_by(rows: &[Decision], minutes: f64) -> Option<BitsBy> {
+    let limit = minutes * 60.0;
+    let mut by = BitsBy {
+        minutes,
+        made: 0,
+        correct: 0,
+        abstained: 0,
+        bits: 0.0,
+        session_shorter: true,
+    };
+    for r in rows {
+        let at = r.ended_s?;
+        if at > limit {
+            by.session_shorter = false;
+            continue;
+        }
+        if r.decided.is_some() {
+            by.made += 1;
+            by.correct += usize::from(r.correct());
+        } else {
+            by.abstained += 1;
+        }
+    }
+    if by.made > 0 {
+        let p = by.correct as f64 / by.made as f64;
+        by.bits = by.made as f64 * oddball_decode::metrics::wolpaw_bits(4, p);
+    }
+    Some(by)
+}
+
+/// The headline: bits by each of [`HEADLINE_MINUTES`] (empty for a replay).
+pub fn headline(rows: &[Decision]) -> Vec<BitsBy> {
+    HEADLINE_MINUTES
+        .iter()
+        .filter_map(|&m| bits_by(rows, m))
+        .collect()
+}
+
+/// `bits delivered (Wolpaw, decisions made): first 5 min 31.4 bits (17 made, 16 right, 1
+/// abstained); first 10 min …`.
+pub fn headline_text(headline: &[BitsBy]) -> Option<String> {
+    if headline.is_empty() {
+        return None;
+    }
+    let parts: Vec<String> = headline
+        .iter()
+        .map(|b| {
+            format!(
+                "first {} min {:.1} bits ({} made, {} right, {} abstained{})",
+                b.minutes,
+                b.bits,
+                b.made,
+                b.correct,
+                b.abstained,
+                if b.session_shorter {
+                    "; the session ended before"
+                } else {
+                    ""
+                }
+            )
+        })
+        .collect();
+    Some(format!(
+        "bits delivered since the session started (Wolpaw, on decisions made): {}",
+        parts.join("; ")
+    ))
+}
+
 /// The decisions of one stretch of a session (`first`..=`last`, from 1).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stretch {
@@ -476,9 +566,50 @@ mod tests {
             rounds: 4,
             confidence: 0.9,
             seconds: 2.0,
+            ended_s: None,
             arm_refusal: None,
             pen_m: None,
         }
+    }
+
+    #[test]
+    fn the_headline_counts_the_bits_of_decisions_made_by_each_time() {
+        // A labelled session: 4 minutes of calibration, then a decision every 30 s.
+        let decided = [
+            Some(Command::Up),
+            Some(Command::Up),
+            None,
+            Some(Command::Down),
+            Some(Command::Up),
+            Some(Command::Up),
+            Some(Command::Up),
+        ];
+        let rows: Vec<Decision> = decided
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| Decision {
+                ended_s: Some(240.0 + 30.0 * (i + 1) as f64),
+                ..row(Command::Up, d)
+            })
+            .collect();
+        // By 5 min: the first decision (270 s) and the second (300 s, on the limit), both right.
+        let five = bits_by(&rows, 5.0).unwrap();
+        assert_eq!((five.made, five.correct, five.abstained), (2, 2, 0));
+        assert!((five.bits - 4.0).abs() < 1e-12);
+        assert!(!five.session_shorter);
+        // By 10 min: all 7; 6 made, 5 right: 6 · B(4, 5/6).
+        let ten = bits_by(&rows, 10.0).unwrap();
+        assert_eq!((ten.made, ten.correct, ten.abstained), (6, 5, 1));
+        let b = 2.0 + (5.0 / 6.0) * (5.0f64 / 6.0).log2() + (1.0 / 6.0) * (1.0f64 / 18.0).log2();
+        assert!((ten.bits - 6.0 * b).abs() < 1e-12, "{ten:?}");
+        assert!(ten.session_shorter);
+        let text = headline_text(&headline(&rows)).unwrap();
+        assert!(text.contains("first 5 min 4.0 bits (2 made, 2 right, 0 abstained)"));
+        assert!(text.contains("the session ended before"), "{text}");
+        // Nothing decided by then, or a replay without a session clock.
+        assert_eq!(bits_by(&rows, 4.0).unwrap().bits, 0.0);
+        assert!(bits_by(&[row(Command::Up, None)], 5.0).is_none());
+        assert!(headline_text(&headline(&[row(Command::Up, None)])).is_none());
     }
 
     #[test]

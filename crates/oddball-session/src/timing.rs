@@ -127,6 +127,7 @@ mod tests {
             rounds,
             confidence: 1.0,
             seconds,
+            ended_s: None,
             arm_refusal: None,
             pen_m: None,
         };

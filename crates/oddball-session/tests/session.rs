@@ -5,7 +5,10 @@ use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::decision::DecisionRule;
 use oddball_decode::preset::Preset;
 use oddball_session::decision::TrialOutcome;
+use oddball_session::decoder::{Start, UncalibratedParams};
 use oddball_session::engine::{Session, SessionParams};
+use oddball_session::paradigm::FourBulbParams;
+use oddball_session::prequential::HonestParams;
 use oddball_session::record::{read_session, reevaluate, save_session};
 use oddball_session::subject::{SimulatedSubject, SubjectParams, SubjectPreset};
 
@@ -298,4 +301,69 @@ fn a_pause_holds_the_session_between_trials_without_flashing() {
         sub.starts
     );
     assert_eq!(sub.quality_reports, vec![n_channels; 8]);
+}
+
+/// An uncalibrated session of the typical subject at the fast timing, 40 decisions (up, left,
+/// down, right, …), dynamic stopping at 0.95 within 5 rounds, with `honest` weighing the
+/// stopping rule's evidence. Returns each decision's (right, rounds, confidence).
+fn uncalibrated_fast(seed: u64, honest: HonestParams) -> Vec<(bool, usize, f64)> {
+    let subject = SubjectParams::preset(SubjectPreset::Typical)
+        .with_seed(seed)
+        .build()
+        .unwrap();
+    let mut params = SessionParams::paper(Preset::Lda);
+    params.paradigm = FourBulbParams::fast();
+    params.decoder.seed = seed;
+    params.decoder.rule = DecisionRule::dynamic(5);
+    let mut s = Session::new(params, subject, None).unwrap();
+    let mut p = UncalibratedParams::for_sfreq(s.sfreq()).unwrap();
+    p.honest = honest;
+    s.start(
+        Start::Uncalibrated {
+            params: Some(p),
+            transfer: None,
+        },
+        &mut |_| {},
+    )
+    .unwrap();
+    let bulbs = [Command::Up, Command::Left, Command::Down, Command::Right];
+    (0..40)
+        .map(|i| {
+            let c = bulbs[i % 4];
+            let t = s.decide(Some(c)).unwrap();
+            let right = t.decided() == Some(s.params().paradigm.code_of(c));
+            (right, t.rounds, t.confidence())
+        })
+        .collect()
+}
+
+#[test]
+fn an_uncalibrated_session_stops_early_only_on_out_of_sample_evidence() {
+    // Seed 13: the second decision's in-sample EM posterior is 1.0 and wrong (a fit on two
+    // trials finds noise). Weighed in-sample, dynamic stopping would have stopped on it; the
+    // out-of-sample score model has no evidence yet, so the trial runs its five rounds.
+    let honest = uncalibrated_fast(13, HonestParams::default());
+    let (right, rounds, confidence) = honest[1];
+    assert!(
+        !right && confidence > 0.999 && rounds == 5,
+        "{:?}",
+        honest[1]
+    );
+    // Never sure too early: no stop before the score model has trials to go on, and every
+    // early stop right.
+    assert!(honest[..3].iter().all(|d| d.1 == 5), "{honest:?}");
+    let early: Vec<_> = honest.iter().filter(|d| d.1 < 5).collect();
+    assert!(early.len() >= 4, "{honest:?}");
+    assert!(early.iter().all(|d| d.0), "{honest:?}");
+    // Without the score model (it never has enough trials) nothing stops early: the rounds saved
+    // are the out-of-sample evidence's.
+    let never = HonestParams {
+        window: 1000,
+        min_trials: 1000,
+        ..HonestParams::default()
+    };
+    let plain = uncalibrated_fast(13, never);
+    assert!(plain.iter().all(|d| d.1 == 5));
+    let rounds = |v: &[(bool, usize, f64)]| v.iter().map(|d| d.1).sum::<usize>();
+    assert!(rounds(&honest) + 4 <= rounds(&plain));
 }
