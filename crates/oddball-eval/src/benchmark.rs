@@ -604,7 +604,7 @@ fn unsupervised_unit(
         transfer,
         block_toeplitz: false,
     };
-    let r = crate::unsupervised::replay(&params.preprocess, recs, &settings, &mut |_, _| {});
+    let mut r = crate::unsupervised::replay(&params.preprocess, recs, &settings, &mut |_, _| {});
     let why = || format!("{UNSUPERVISED} on {:?} subject {subject:?}: ", m.name);
     if let Err(ReplayError::NotSpeller { recording }) = &r {
         return Ok((
@@ -612,11 +612,18 @@ fn unsupervised_unit(
             Some(why() + &format!("{recording} is not a speller")),
         ));
     }
+    // A start that names none of the channels cannot start anything: without it, noted.
+    let mut note = None;
     if let Err(ReplayError::Unsupervised(
-        e @ oddball_decode::unsupervised::UnsupervisedError::NoSharedChannels { .. },
+        oddball_decode::unsupervised::UnsupervisedError::NoSharedChannels { .. },
     )) = &r
     {
-        return Ok((vec![], Some(why() + &e.to_string())));
+        note = Some(why() + "replayed without the pooled start, which names none of its channels");
+        let alone = crate::unsupervised::ReplaySettings {
+            transfer: None,
+            ..settings
+        };
+        r = crate::unsupervised::replay(&params.preprocess, recs, &alone, &mut |_, _| {});
     }
     let r = r.map_err(|e| BenchmarkError::Unsupervised {
         dataset: m.name.clone(),
@@ -647,7 +654,7 @@ fn unsupervised_unit(
             fit_s: t0.elapsed().as_secs_f64(),
             online_chars: Some(r.online_correct.iter().map(|&c| usize::from(c)).sum()),
         }],
-        None,
+        note,
     ))
 }
 

@@ -317,8 +317,9 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     } else {
         Preprocess::peer()
     };
-    let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
+    // The pooled start is read and checked before any EEG.
     let transfer = crate::load::pooled_start(&args.transfer)?;
+    let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
     let settings = unsupervised::ReplaySettings {
         template: args.em_start == EmStart::Template,
         transfer: transfer.as_ref(),

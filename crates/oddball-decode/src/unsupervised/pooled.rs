@@ -13,9 +13,9 @@
 //! session's units.
 //!
 //! A start only chooses where EM begins: the fit it leads to is kept when its likelihood beats
-//! the template's, the warm start's and the random starts' ([`super::UnsupervisedParams::
-//! fit_features_starts`]), so a start that does not fit the session is outvoted by the session's
-//! own evidence, the more so the more trials there are.
+//! the template's, the warm start's and the random starts'
+//! ([`super::UnsupervisedParams::fit_features_starts`]), so a start that does not fit the
+//! session is outvoted by the session's own evidence, the more so the more trials there are.
 //!
 //! The shipped start ([`pooled_start`]) is `pooled.json` beside this file, built from the public
 //! recordings of `datasets/` by `oddball benchmark datasets/*.toml --write-pooled FILE`; a
