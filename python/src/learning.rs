@@ -199,7 +199,7 @@ methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
     /// columns, or the bulbs); epochs at `sfreq` Hz cut by `preprocess` (`"peer"`,
     /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts.
     #[new]
-    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=8, max_iter=200, tol=1e-6, seed=0))]
+    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=32, max_iter=200, tol=1e-6, seed=0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         sets: Vec<Vec<u32>>,

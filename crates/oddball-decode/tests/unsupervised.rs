@@ -436,3 +436,110 @@ fn bad_input_is_named() {
         "{err}"
     );
 }
+
+/// A pooled start of another "subject" (labelled, its own seed), on a session whose channels
+/// are a permuted subset/superset by name: it decides the first trials, and a start that is
+/// wrong (the pattern negated) is outvoted by the session's evidence.
+#[test]
+fn a_pooled_start_helps_early_and_a_wrong_one_does_not_hurt_post_hoc() {
+    use oddball_decode::unsupervised::{feature_times, replay_starts, PooledPattern, Start};
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::bin_mean(2).unwrap(),
+        ..UnsupervisedParams::for_sfreq(64.0).unwrap()
+    };
+    let times = feature_times(params.features, 64.0, 0.0, 64);
+    // The other subject, labelled: channels C1..C4 named as below.
+    let (xo, codes_o, trials_o, attended_o) = four_bulb(30, 5, 3.0, 11);
+    let y: Vec<bool> = codes_o
+        .iter()
+        .zip(&trials_o)
+        .map(|(c, t)| *c == attended_o[*t])
+        .collect();
+    let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let fo = params.features.transform(xo.view()).unwrap();
+    let pattern = PooledPattern::from_labelled(
+        fo.view(),
+        &y,
+        &names(&["Fz", "Cz", "Pz", "Oz"]),
+        &times,
+        false,
+        "other",
+    )
+    .unwrap();
+    let pattern = PooledPattern::pool(&[pattern]).unwrap();
+    // The session: the same four channels, other names' case, in another order, plus one the
+    // pattern does not name (its channel 4 carries the largest bump: unknown to the start).
+    let (x, codes, trials, attended) = four_bulb(14, 5, 3.0, 5);
+    // Session channel k is the other subject's channel order[k] (its bump scales with the
+    // channel index, so the names must carry it).
+    let session = names(&["fz", "CZ", "pz", "T7"]);
+    let scorer = pattern.scorer(&session, &times).unwrap();
+    assert_eq!(scorer.n_shared(), 3);
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let run = |starts: &[Start<'_>]| {
+        replay_starts(
+            &params,
+            x.view(),
+            &codes,
+            &trials,
+            &constraint,
+            starts,
+            &mut |_, _| {},
+        )
+        .unwrap()
+    };
+    let right = |r: &oddball_decode::unsupervised::Replay| {
+        let online = r
+            .online
+            .iter()
+            .zip(&attended)
+            .filter(|(c, &a)| c.codes[0] == a)
+            .count();
+        let post = r
+            .model
+            .choices()
+            .iter()
+            .zip(&attended)
+            .filter(|(c, &a)| c[0] == a)
+            .count();
+        (online, post)
+    };
+    let pooled = run(&[Start::Pooled(&scorer)]);
+    let (online, post) = right(&pooled);
+    assert!(
+        online >= 12 && post >= 13,
+        "pooled start: {online}, {post} of 14"
+    );
+    // The first trial (20 epochs, 128 features: no random starts yet) is the start's.
+    assert_eq!(pooled.online[0].init, Init::Given);
+    // A wrong start: the session's own evidence takes over.
+    let mut wrong = pattern.clone();
+    for row in &mut wrong.effect {
+        for v in row.iter_mut() {
+            *v = -*v;
+        }
+    }
+    let wrong_scorer = wrong.scorer(&session, &times).unwrap();
+    let none = right(
+        &replay(
+            &params,
+            x.view(),
+            &codes,
+            &trials,
+            &constraint,
+            &mut |_, _| {},
+        )
+        .unwrap(),
+    );
+    let with_wrong = right(&run(&[Start::Pooled(&wrong_scorer)]));
+    assert!(
+        with_wrong.1 >= none.1,
+        "post hoc: wrong start {with_wrong:?}, none {none:?}"
+    );
+    let later = run(&[Start::Pooled(&wrong_scorer)]);
+    assert!(
+        later.online.iter().skip(7).any(|o| o.init != Init::Given),
+        "the wrong start stops winning once the random starts join: {:?}",
+        later.online.iter().map(|o| o.init).collect::<Vec<_>>()
+    );
+}

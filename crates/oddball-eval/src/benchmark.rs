@@ -134,6 +134,8 @@ pub enum BenchmarkError {
         #[source]
         source: Box<EvaluateError>,
     },
+    #[error("pooled start: {0}")]
+    Pooled(#[source] Box<oddball_decode::unsupervised::UnsupervisedError>),
     #[error("data set {dataset:?}, subject {subject:?}, unsupervised")]
     Unsupervised {
         dataset: String,
@@ -163,6 +165,8 @@ pub struct BenchmarkParams {
     pub folds: usize,
     /// How every recording becomes epochs (the peer stack's by default).
     pub preprocess: Preprocess,
+    /// The unsupervised protocol's pooled start (none by default).
+    pub transfer: crate::pooled::Transfer,
 }
 
 impl Default for BenchmarkParams {
@@ -172,6 +176,7 @@ impl Default for BenchmarkParams {
             protocols: vec![Protocol::TrainTest],
             folds: 5,
             preprocess: Preprocess::peer(),
+            transfer: crate::pooled::Transfer::None,
         }
     }
 }
@@ -381,6 +386,20 @@ pub fn run(
         subjects: reads,
         units: plan.units.len(),
     });
+    let mut unsupervised_sets: Vec<usize> = plan
+        .units
+        .iter()
+        .filter(|u| u.protocol == Protocol::Unsupervised)
+        .map(|u| u.dataset)
+        .collect();
+    unsupervised_sets.dedup();
+    let starts = crate::pooled::starts_by_dataset(
+        &params.transfer,
+        manifests,
+        &params.preprocess,
+        &unsupervised_sets,
+        on,
+    )?;
     let rows = Mutex::new(Vec::new());
     let skipped = Mutex::new(plan.skipped);
     let load = |d: usize, s: usize| -> Result<_, BenchmarkError> {
@@ -393,7 +412,7 @@ pub fn run(
     };
     let run_units = |loaded: &BTreeMap<(usize, usize), Vec<EpochedRecording>>, units: &[usize]| {
         units.par_iter().try_for_each(|&i| {
-            let (r, skip) = run_unit(params, manifests, loaded, &plan.units[i])?;
+            let (r, skip) = run_unit(params, manifests, loaded, &plan.units[i], &starts)?;
             if let Some(why) = skip {
                 skipped.lock().expect("no panic holds the lock").push(why);
             }
@@ -434,7 +453,7 @@ pub fn run(
 /// texts) and epoched, in the order train then test.
 /// A subject's runs, read, labelled, matched to the first run's [`Layout`] (the one channel and
 /// rate policy `evaluate` applies to its files too) and epoched.
-fn load_subject(
+pub(crate) fn load_subject(
     m: &Manifest,
     s: usize,
     pre: &Preprocess,
@@ -482,12 +501,13 @@ fn run_unit(
     manifests: &[Manifest],
     loaded: &BTreeMap<(usize, usize), Vec<EpochedRecording>>,
     u: &Unit,
+    starts: &BTreeMap<usize, oddball_decode::unsupervised::PooledStart>,
 ) -> Result<(Vec<BenchmarkRow>, Option<String>), BenchmarkError> {
     let m = &manifests[u.dataset];
     let subj = &m.subjects[u.subject];
     let recs = &loaded[&(u.dataset, u.subject)];
     if u.protocol == Protocol::Unsupervised {
-        return unsupervised_unit(params, m, &subj.id, recs);
+        return unsupervised_unit(params, m, &subj.id, recs, starts.get(&u.dataset));
     }
     // The subject's runs are loaded train runs first, so train → test borrows them.
     type Runs<'r> = Cow<'r, [EpochedRecording]>;
@@ -574,13 +594,36 @@ fn unsupervised_unit(
     m: &Manifest,
     subject: &str,
     recs: &[EpochedRecording],
+    transfer: Option<&oddball_decode::unsupervised::PooledStart>,
 ) -> Result<(Vec<BenchmarkRow>, Option<String>), BenchmarkError> {
     let t0 = Instant::now();
-    // From the P300 template (as `evaluate --unsupervised` and a session), the default covariance.
-    let r = crate::unsupervised::replay(&params.preprocess, recs, true, false, &mut |_, _| {});
+    // From the P300 template (as `evaluate --unsupervised` and a session) and the pooled start
+    // if any, the default covariance.
+    let settings = crate::unsupervised::ReplaySettings {
+        template: true,
+        transfer,
+        block_toeplitz: false,
+    };
+    let mut r = crate::unsupervised::replay(&params.preprocess, recs, &settings, &mut |_, _| {});
+    let why = || format!("{UNSUPERVISED} on {:?} subject {subject:?}: ", m.name);
     if let Err(ReplayError::NotSpeller { recording }) = &r {
-        let why = format!("{UNSUPERVISED} on {:?} subject {subject:?}: ", m.name);
-        return Ok((vec![], Some(why + &format!("{recording} is not a speller"))));
+        return Ok((
+            vec![],
+            Some(why() + &format!("{recording} is not a speller")),
+        ));
+    }
+    // A start that names none of the channels cannot start anything: without it, noted.
+    let mut note = None;
+    if let Err(ReplayError::Unsupervised(
+        oddball_decode::unsupervised::UnsupervisedError::NoSharedChannels { .. },
+    )) = &r
+    {
+        note = Some(why() + "replayed without the pooled start, which names none of its channels");
+        let alone = crate::unsupervised::ReplaySettings {
+            transfer: None,
+            ..settings
+        };
+        r = crate::unsupervised::replay(&params.preprocess, recs, &alone, &mut |_, _| {});
     }
     let r = r.map_err(|e| BenchmarkError::Unsupervised {
         dataset: m.name.clone(),
@@ -611,7 +654,7 @@ fn unsupervised_unit(
             fit_s: t0.elapsed().as_secs_f64(),
             online_chars: Some(r.online_correct.iter().map(|&c| usize::from(c)).sum()),
         }],
-        None,
+        note,
     ))
 }
 

@@ -12,6 +12,7 @@
 //! * [`benchmark`]: every preset on every subject of data sets, with MOABB's protocols, and
 //!   [`stats`] (the Wilcoxon signed-rank test) for the comparisons;
 //! * [`unsupervised`]: the EM decoder replayed over speller recordings without labels, scored;
+//!   [`pooled`]: its starts pooled from other data sets' labelled recordings;
 //! * [`sessions`]: session files of `oddball demo` re-decided offline by a model;
 //! * [`text`]: the reports as the command line prints them (tables, result rows, summaries).
 
@@ -20,6 +21,7 @@ pub mod dataset;
 pub mod erp;
 pub mod evaluate;
 pub mod layout;
+pub mod pooled;
 pub mod sessions;
 pub mod stats;
 pub mod text;

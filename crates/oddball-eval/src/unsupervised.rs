@@ -9,8 +9,8 @@ use crate::evaluate::{labels, pooled_accuracy, score_speller, EpochedRecording, 
 use oddball_decode::metrics::{character_of_flashes, roc_auc};
 use oddball_decode::pipeline::{EpochSource, Preprocess};
 use oddball_decode::unsupervised::{
-    replay_from, Constraint, Covariance, MatchedTemplate, P300Template, UnsupervisedError,
-    UnsupervisedParams,
+    feature_times, replay_starts, Constraint, Covariance, MatchedTemplate, P300Template,
+    PooledPattern, PooledStart, Start, UnsupervisedError, UnsupervisedParams,
 };
 use oddball_decode::DecodeError;
 
@@ -65,43 +65,96 @@ pub struct UnsupervisedResult {
     /// Log-likelihood of the final model (penalised), and which initialisation it came from.
     pub objective: f64,
     pub init: String,
+    /// Per online refit, in order, the initialisation it kept (`Given`: the first start,
+    /// `Start(1)`: the second, `Warm`: the last fit, `Random(k)`).
+    pub online_inits: Vec<String>,
 }
 
-/// [`evaluate_unsupervised`] with the decoder's settings for the recordings' rate; with
-/// `template`, every refit's EM also starts from the scores of a P300 template seen through
-/// `pre`'s band-pass (the epochs' preprocessing), as a session without calibration starts; with
-/// `block_toeplitz`, the covariance is [`Covariance::BlockToeplitz`] over the recordings'
-/// channels (else the default Ledoit–Wolf).
+/// Where an unsupervised replay's refits start and its covariance ([`replay`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReplaySettings<'a> {
+    /// Every refit also starts from a P300 template's scores (seen through the band-pass).
+    pub template: bool,
+    /// Every refit also starts from this pooled start's pattern (of the replay's band-pass,
+    /// causal or zero-phase) on the epochs so far; after the template when both are given.
+    pub transfer: Option<&'a PooledStart>,
+    /// [`Covariance::BlockToeplitz`] over the recordings' channels instead of Ledoit–Wolf.
+    pub block_toeplitz: bool,
+}
+
+/// [`evaluate_unsupervised`] with the decoder's settings for the recordings' rate and the starts
+/// and covariance of `settings` (the template seen through `pre`'s band-pass, the pooled
+/// start's pattern of `pre`'s causality on the first recording's channels).
 pub fn replay(
     pre: &Preprocess,
     recs: &[EpochedRecording],
-    template: bool,
-    block_toeplitz: bool,
+    settings: &ReplaySettings<'_>,
     on_character: &mut dyn FnMut(usize, usize),
 ) -> Result<UnsupervisedResult, ReplayError> {
-    let sfreq = recs.first().map_or(0.0, |r| r.epochs.sfreq());
+    let first = recs.first().ok_or(ReplayError::Empty)?;
+    let sfreq = first.epochs.sfreq();
     let mut params = UnsupervisedParams::for_sfreq(sfreq)?;
-    if block_toeplitz {
+    if settings.block_toeplitz {
         params.covariance = Covariance::BlockToeplitz {
-            n_channels: recs.first().map_or(1, |r| r.epochs.n_channels()),
+            n_channels: first.epochs.n_channels(),
         };
     }
-    let template = if template {
+    let template = if settings.template {
         Some(P300Template::default().matched(pre, sfreq)?)
     } else {
         None
     };
-    evaluate_unsupervised(&params, recs, template.as_ref(), on_character)
+    let pooled = settings.transfer.map(|t| t.pattern(pre.causal));
+    evaluate_unsupervised(&params, recs, template.as_ref(), pooled, on_character)
+}
+
+/// The pattern of labelled recordings `recs` (targets flagged; one set, e.g. a subject's runs)
+/// as the unsupervised decoder's features at their rate see it: the effect size of every
+/// channel and time ([`PooledPattern::from_labelled`]), for a [`PooledStart`] of other sessions.
+pub fn labelled_pattern(
+    recs: &[EpochedRecording],
+    causal: bool,
+    source: &str,
+) -> Result<PooledPattern, ReplayError> {
+    let first = recs.first().ok_or(ReplayError::Empty)?;
+    let features = UnsupervisedParams::for_sfreq(first.epochs.sfreq())?.features;
+    let mut rows = Vec::new();
+    let mut y = Vec::new();
+    for rec in recs {
+        rows.push(features.transform(rec.epochs.data().view())?);
+        y.extend(labels(&rec.epochs)?);
+    }
+    let views: Vec<_> = rows.iter().map(|r| r.view()).collect();
+    let x = ndarray::concatenate(ndarray::Axis(0), &views).map_err(|e| {
+        UnsupervisedError::InvalidPooled {
+            what: format!("{source}: runs of different shapes ({e})"),
+        }
+    })?;
+    let times = feature_times(
+        features,
+        first.epochs.sfreq(),
+        first.epochs.tmin(),
+        first.epochs.n_times(),
+    );
+    Ok(PooledPattern::from_labelled(
+        x.view(),
+        &y,
+        first.epochs.ch_names(),
+        &times,
+        causal,
+        source,
+    )?)
 }
 
 /// Plays `recs` (speller recordings, every flash epoched) one after the other as one session
 /// whose labels the decoder never sees; every refit starts from `template`'s scores of the
-/// epochs when given, else from the warm start and random initialisations ([`replay_from`]);
-/// `on_character(k, n)` after each online decision.
+/// epochs and `pooled`'s (on the first recording's channels) when given, the warm start and
+/// random initialisations ([`replay_starts`]); `on_character(k, n)` after each online decision.
 pub fn evaluate_unsupervised(
     params: &UnsupervisedParams,
     recs: &[EpochedRecording],
     template: Option<&MatchedTemplate>,
+    pooled: Option<&PooledPattern>,
     on_character: &mut dyn FnMut(usize, usize),
 ) -> Result<UnsupervisedResult, ReplayError> {
     let first = recs.first().ok_or(ReplayError::Empty)?;
@@ -153,13 +206,26 @@ pub fn evaluate_unsupervised(
         })
         .transpose()?
         .map(|s| s.to_vec());
-    let r = replay_from(
+    let scorer = pooled
+        .map(|p| {
+            let times = feature_times(params.features, all.sfreq(), all.tmin(), all.n_times());
+            p.scorer(all.ch_names(), &times)
+        })
+        .transpose()?;
+    let mut starts = Vec::new();
+    if let Some(s) = &start {
+        starts.push(Start::Scores(s));
+    }
+    if let Some(p) = &scorer {
+        starts.push(Start::Pooled(p));
+    }
+    let r = replay_starts(
         params,
         &all,
         &codes,
         &trials,
         &constraint,
-        start.as_deref(),
+        &starts,
         on_character,
     )?;
 
@@ -211,6 +277,7 @@ pub fn evaluate_unsupervised(
         n_characters: n_chars,
         objective: r.model.objective().last().copied().unwrap_or(f64::NAN),
         init: format!("{init:?}"),
+        online_inits: r.online.iter().map(|o| format!("{:?}", o.init)).collect(),
     })
 }
 

@@ -246,6 +246,10 @@ impl Manifest {
             (None, None) => path.parent().unwrap_or(Path::new(".")).to_path_buf(),
         };
         m.root = Some(dir.clone());
+        // A montage file named by `[read]` is data too: relative to the root, as the runs.
+        if let Some(montage) = m.read.as_mut().and_then(|r| r.montage.as_mut()) {
+            *montage = dir.join(&*montage);
+        }
         for s in &mut m.subjects {
             let sessions = s.sessions.iter_mut().flat_map(|t| t.values_mut().flatten());
             for run in sessions {

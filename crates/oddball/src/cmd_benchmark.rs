@@ -7,6 +7,7 @@ use std::str::FromStr;
 use anyhow::{Context, Result};
 use oddball_decode::pipeline::Preprocess;
 use oddball_eval::benchmark::{self, BenchmarkError, BenchmarkParams, Progress, Protocol};
+use oddball_eval::pooled::Transfer;
 use oddball_eval::text;
 use oddball_io::Manifest;
 
@@ -65,6 +66,16 @@ pub struct BenchmarkArgs {
     /// Draw per-subject AUC per preset and mean character accuracy vs repetitions (.png/.svg).
     #[arg(long, value_name = "FILE", value_parser = crate::args::plot_file)]
     pub plot: Option<PathBuf>,
+    /// The unsupervised protocol's pooled start, one more start of every refit: `none`;
+    /// `pooled` (the one shipped); `lodo` (leave one data set out: built per data set from the
+    /// labelled recordings of every other manifest given); or a file (`--write-pooled`).
+    #[arg(long, value_name = "none|pooled|lodo|FILE", default_value = "none")]
+    pub transfer: String,
+    /// Build the pooled start from every subject of the manifests (labelled; zero-phase and
+    /// causal), write it here and stop (the shipped one is `oddball benchmark datasets/*.toml
+    /// --write-pooled crates/oddball-decode/src/unsupervised/pooled.json`).
+    #[arg(long, value_name = "FILE", value_parser = crate::args::output_file)]
+    pub write_pooled: Option<PathBuf>,
 }
 
 pub fn run(args: &BenchmarkArgs) -> Result<()> {
@@ -83,12 +94,25 @@ pub fn run(args: &BenchmarkArgs) -> Result<()> {
             Ok(Manifest::load_with_root(m, args.data.as_deref())?)
         })
         .collect::<Result<Vec<_>>>()?;
+    let transfer = match args.transfer.as_str() {
+        "lodo" => Transfer::LeaveOneDataSetOut,
+        other => match crate::load::pooled_start(other)? {
+            Some(s) => Transfer::Given(s),
+            None => Transfer::None,
+        },
+    };
     let params = BenchmarkParams {
         presets: args.pipeline.0.clone(),
         protocols: args.protocol.0.clone(),
         folds: args.folds,
         preprocess: Preprocess::peer(),
+        transfer,
     };
+    if let Some(path) = &args.write_pooled {
+        let start = oddball_eval::pooled::build(&manifests, &params.preprocess, &|_| {})?;
+        write_out(path, start.to_json())?;
+        return Ok(());
+    }
     let plan = params.plan(&manifests).map_err(|e| match e {
         BenchmarkError::Folds(k) => {
             anyhow::anyhow!("--folds {k}: cross-validation needs at least 2 folds")

@@ -66,8 +66,8 @@ pub struct EvaluateArgs {
     /// With --unsupervised: where each refit's EM starts (the likeliest result kept) —
     /// `template`: every epoch's score by a P300 template (a positive wave at 350 ms, sd 80 ms,
     /// seen through the band-pass), the last fit and, once there are as many epochs as features,
-    /// 8 random starts, as a session without calibration starts; `random`: the last fit and the
-    /// 8 random starts only.
+    /// 32 random starts, as a session without calibration starts; `random`: the last fit and the
+    /// 32 random starts only.
     #[arg(long, value_enum, default_value_t = EmStart::Template, requires = "unsupervised")]
     pub em_start: EmStart,
     /// With --unsupervised: the covariance's label-free part — `ledoit-wolf`: the Ledoit–Wolf
@@ -79,6 +79,16 @@ pub struct EvaluateArgs {
     /// --calibration none`, `demo --calibration none`) can, instead of zero-phase.
     #[arg(long, requires = "unsupervised")]
     pub causal: bool,
+    /// With --unsupervised: a pooled start of other people's recordings as one more start of
+    /// every refit — `none`; `pooled` (the one shipped, built from the public recordings, so
+    /// not independent of them); or a file (`oddball benchmark … --write-pooled FILE`).
+    #[arg(
+        long,
+        value_name = "none|pooled|FILE",
+        default_value = "none",
+        requires = "unsupervised"
+    )]
+    pub transfer: String,
     /// Score the test recordings with this saved model (from `oddball train`) instead of fitting;
     /// oddball session files (`session.dat` of `oddball demo`) get every online decision
     /// recomputed.
@@ -307,11 +317,16 @@ fn evaluate_unsupervised(args: &EvaluateArgs) -> Result<()> {
     } else {
         Preprocess::peer()
     };
+    // The pooled start is read and checked before any EEG.
+    let transfer = crate::load::pooled_start(&args.transfer)?;
     let (test, _) = load_epochs(&args.test, &pre, &args.events, &args.test_text, None)?;
-    let template = args.em_start == EmStart::Template;
+    let settings = unsupervised::ReplaySettings {
+        template: args.em_start == EmStart::Template,
+        transfer: transfer.as_ref(),
+        block_toeplitz: args.covariance == CovarianceArg::BlockToeplitz,
+    };
     let mut shown: Option<Bar> = None;
-    let block_toeplitz = args.covariance == CovarianceArg::BlockToeplitz;
-    let r = unsupervised::replay(&pre, &test, template, block_toeplitz, &mut |k, n| {
+    let r = unsupervised::replay(&pre, &test, &settings, &mut |k, n| {
         shown
             .get_or_insert_with(|| {
                 bar(

@@ -182,3 +182,18 @@ pub fn load_model(path: &Path) -> Result<Model> {
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     Model::from_json(&text).with_context(|| format!("loading model {}", path.display()))
 }
+
+/// `--transfer none|pooled|FILE`: no pooled start, the shipped one, or one read (and checked)
+/// from a file.
+pub fn pooled_start(arg: &str) -> Result<Option<oddball_decode::unsupervised::PooledStart>> {
+    use oddball_decode::unsupervised::{pooled_start, PooledStart};
+    Ok(match arg {
+        "none" => None,
+        "pooled" => Some(pooled_start()),
+        path => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("--transfer: reading {path}"))?;
+            Some(PooledStart::from_json(&text).with_context(|| format!("--transfer {path}"))?)
+        }
+    })
+}

@@ -186,3 +186,39 @@ fn a_manifest_gives_a_run_without_geometry_its_speller() {
     assert_eq!(u["n_characters"], 6, "{out}");
     assert_eq!(u["posthoc_text"], text, "{out}");
 }
+
+/// `--transfer`: the shipped pooled start beside the template on eeg3 (it names eeg3's
+/// channels), and a pooled start from a file is outside input, checked where it enters.
+#[test]
+fn a_pooled_start_is_shipped_and_a_file_is_checked() {
+    let tmp = tmp_dir("cli-unsupervised-transfer");
+    let bad = tmp.join("bad.json");
+    std::fs::write(&bad, r#"{"version": 99, "patterns": []}"#).unwrap();
+    let (ok, _, err) = oddball(&[
+        "evaluate",
+        "--unsupervised",
+        "--test",
+        bad.to_str().unwrap(),
+        "--transfer",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("version 99"), "{err}");
+    let Some(d) = data_dir() else { return };
+    let d = d.join("bci2000-samplefiles-p300");
+    let f = |n: &str| d.join(n).to_str().unwrap().to_string();
+    let (v, out) = run_json(
+        &[
+            "evaluate",
+            "--unsupervised",
+            "--test",
+            &f("eeg3_1.dat"),
+            &f("eeg3_2.dat"),
+            "--transfer",
+            "pooled",
+        ],
+        &tmp.join("u.json"),
+    );
+    let u = &v["unsupervised"];
+    assert_eq!(right(u), 8, "{out}");
+    assert_eq!(u["online_inits"].as_array().unwrap().len(), 8, "{out}");
+}

@@ -40,6 +40,22 @@ pub enum UnsupervisedError {
         value: String,
         reason: String,
     },
+    #[error("pooled start: {what}")]
+    InvalidPooled { what: String },
+    #[error(
+        "the pooled start names none of the session's channels {session:?} (it has {pattern:?})"
+    )]
+    NoSharedChannels {
+        session: Vec<String>,
+        pattern: Vec<String>,
+    },
+    #[error(
+        "{recordings}: no channel is named by its position ({channels:?}), so none can be pooled"
+    )]
+    NoNamedChannels {
+        recordings: String,
+        channels: Vec<String>,
+    },
     #[error(transparent)]
     Decode(#[from] DecodeError),
 }

@@ -8,7 +8,10 @@ use crate::pipeline::EpochSource;
 use crate::traits::FeatureData;
 use ndarray::{s, ArrayView3};
 
-use super::{argmax, Constraint, Result, Unsupervised, UnsupervisedError, UnsupervisedParams};
+use super::{
+    argmax, Constraint, Init, PooledScorer, Result, Unsupervised, UnsupervisedError,
+    UnsupervisedParams,
+};
 
 /// One trial as decided online.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,6 +22,18 @@ pub struct OnlineChoice {
     pub codes: Vec<u32>,
     /// Its posterior, per set.
     pub confidence: Vec<f64>,
+    /// Where the refit that decided it started (the likeliest initialisation).
+    pub init: Init,
+}
+
+/// Where every refit of a replay may start, besides the last fit and the random starts.
+#[derive(Debug, Clone, Copy)]
+pub enum Start<'a> {
+    /// A score per epoch of the whole recording (e.g. the P300 template's), cut to the
+    /// epochs so far.
+    Scores(&'a [f64]),
+    /// A pooled start, scored at each refit on the epochs so far (its scaling is theirs).
+    Pooled(&'a PooledScorer),
 }
 
 /// The online decisions and the final model.
@@ -54,14 +69,31 @@ pub fn replay_from<'a>(
     start: Option<&[f64]>,
     on_trial: &mut dyn FnMut(usize, usize),
 ) -> Result<Replay> {
+    let starts: Vec<Start<'_>> = start.map(Start::Scores).into_iter().collect();
+    replay_starts(params, epochs, codes, trials, constraint, &starts, on_trial)
+}
+
+/// [`replay`] with `starts`, each one more initialisation of every refit, in order
+/// ([`UnsupervisedParams::fit_features_starts`]).
+pub fn replay_starts<'a>(
+    params: &UnsupervisedParams,
+    epochs: impl Into<EpochSource<'a>>,
+    codes: &[u32],
+    trials: &[usize],
+    constraint: &Constraint,
+    starts: &[Start<'_>],
+    on_trial: &mut dyn FnMut(usize, usize),
+) -> Result<Replay> {
     let epochs: EpochSource<'_> = epochs.into();
     let n = epochs.dim().0;
-    if let Some(s) = start {
-        if s.len() != n {
-            return Err(UnsupervisedError::InitLength {
-                n_epochs: n,
-                n_scores: s.len(),
-            });
+    for start in starts {
+        if let Start::Scores(s) = start {
+            if s.len() != n {
+                return Err(UnsupervisedError::InitLength {
+                    n_epochs: n,
+                    n_scores: s.len(),
+                });
+            }
         }
     }
     if codes.len() != n || trials.len() != n {
@@ -95,13 +127,22 @@ pub fn replay_from<'a>(
     let mut model: Option<Unsupervised> = None;
     let mut online = Vec::with_capacity(ends.len());
     for (k, &end) in ends.iter().enumerate() {
-        let fitted = params.fit_features_from(
-            x.slice(s![..end, ..]),
+        let so_far = x.slice(s![..end, ..]);
+        let scores = starts
+            .iter()
+            .map(|start| match start {
+                Start::Scores(s) => Ok(s[..end].to_vec()),
+                Start::Pooled(p) => p.scores(so_far),
+            })
+            .collect::<Result<Vec<Vec<f64>>>>()?;
+        let refs: Vec<&[f64]> = scores.iter().map(Vec::as_slice).collect();
+        let fitted = params.fit_features_starts(
+            so_far,
             &codes[..end],
             &trials[..end],
             constraint,
             model.as_ref(),
-            start.map(|s| &s[..end]),
+            &refs,
         )?;
         let last = fitted.trials().last().expect("a trial per end");
         online.push(OnlineChoice {
@@ -113,6 +154,7 @@ pub fn replay_from<'a>(
                 .map(|(p, c)| c[argmax(p)])
                 .collect(),
             confidence: last.sets.iter().map(|p| p[argmax(p)]).collect(),
+            init: fitted.init().0,
         });
         model = Some(fitted);
         on_trial(k, ends.len());
