@@ -137,11 +137,11 @@ pub enum IoError {
 
     /// A BIDS layout or sidecar (see [`crate::bids`]).
     #[error(transparent)]
-    Bids(Box<crate::bids::BidsError>),
+    Bids(Box<BidsError>),
 }
 
-impl From<crate::bids::BidsError> for IoError {
-    fn from(e: crate::bids::BidsError) -> Self {
+impl From<BidsError> for IoError {
+    fn from(e: BidsError) -> Self {
         IoError::Bids(Box::new(e))
     }
 }
@@ -273,5 +273,61 @@ fn recordings_text(recordings: &[String]) -> String {
         format!(" (it holds no {KNOWN_FORMATS} file)")
     } else {
         format!(" inside it, e.g. {}", recordings.join(", "))
+    }
+}
+
+/// A BIDS layout or sidecar that cannot be written or read, with the file and place at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum BidsError {
+    /// A subject, session or task label that BIDS does not allow (letters and digits only).
+    #[error("{entity} label {value:?}: BIDS labels are letters and digits only (A-Z, a-z, 0-9), at least one")]
+    Label {
+        /// `sub`, `ses` or `task`.
+        entity: &'static str,
+        value: String,
+    },
+    /// A run's file is already there.
+    #[error("{path} exists: a run is not overwritten unless asked to")]
+    Exists { path: PathBuf },
+    /// Two inputs would become the same run.
+    #[error("{first} and {second} would both be written as {run}")]
+    SameRun {
+        first: PathBuf,
+        second: PathBuf,
+        run: String,
+    },
+    /// A TSV cell (or its header) that does not hold what the column means.
+    #[error("{path}: line {line}, column {column:?}: {what}")]
+    Table {
+        path: PathBuf,
+        /// 1-based line number.
+        line: usize,
+        column: String,
+        what: String,
+    },
+    /// A JSON sidecar that is not JSON, or a field of the wrong kind.
+    #[error("{path}: {what}")]
+    Json { path: PathBuf, what: String },
+    /// A sidecar larger than [`crate::bids::MAX_SIDECAR_BYTES`].
+    #[error("{path}: {len} bytes, more than the {limit} read from a BIDS sidecar")]
+    TooLarge { path: PathBuf, len: u64, limit: u64 },
+    /// A folder that is not a BIDS data set, or one holding no EEG run.
+    #[error("{path}: {what}")]
+    Dataset { path: PathBuf, what: String },
+}
+
+impl BidsError {
+    /// The file or folder the error is about (the first, for [`BidsError::SameRun`]; an empty
+    /// path for a label).
+    pub fn path(&self) -> &Path {
+        match self {
+            BidsError::Label { .. } => Path::new(""),
+            BidsError::SameRun { first: path, .. }
+            | BidsError::Exists { path }
+            | BidsError::Table { path, .. }
+            | BidsError::Json { path, .. }
+            | BidsError::TooLarge { path, .. }
+            | BidsError::Dataset { path, .. } => path,
+        }
     }
 }

@@ -54,8 +54,6 @@ mod write;
 
 use std::path::PathBuf;
 
-use thiserror::Error;
-
 pub use read::{dataset_manifest, is_bids_run, read_bids_run, RUN_EXTENSIONS};
 pub use write::{
     default_task, ExportFormat, ExportOptions, ExportPlan, PlannedRun, RunData, RunSummary,
@@ -64,64 +62,10 @@ pub use write::{
 /// The BIDS version the exports follow.
 pub const BIDS_VERSION: &str = "1.9.0";
 
+pub use crate::error::BidsError;
+
 /// The largest TSV or JSON sidecar read (bytes).
 pub const MAX_SIDECAR_BYTES: u64 = 64 << 20;
-
-/// A BIDS layout or sidecar that cannot be written or read, with the file and place at fault.
-#[derive(Debug, Error)]
-pub enum BidsError {
-    /// A subject, session or task label that BIDS does not allow (letters and digits only).
-    #[error("{entity} label {value:?}: BIDS labels are letters and digits only (A-Z, a-z, 0-9), at least one")]
-    Label {
-        /// `sub`, `ses` or `task`.
-        entity: &'static str,
-        value: String,
-    },
-    /// A run's file is already there.
-    #[error("{path} exists: a run is not overwritten unless asked to")]
-    Exists { path: PathBuf },
-    /// Two inputs would become the same run.
-    #[error("{first} and {second} would both be written as {run}")]
-    SameRun {
-        first: PathBuf,
-        second: PathBuf,
-        run: String,
-    },
-    /// A TSV cell (or its header) that does not hold what the column means.
-    #[error("{path}: line {line}, column {column:?}: {what}")]
-    Table {
-        path: PathBuf,
-        /// 1-based line number.
-        line: usize,
-        column: String,
-        what: String,
-    },
-    /// A JSON sidecar that is not JSON, or a field of the wrong kind.
-    #[error("{path}: {what}")]
-    Json { path: PathBuf, what: String },
-    /// A sidecar larger than [`MAX_SIDECAR_BYTES`].
-    #[error("{path}: {len} bytes, more than the {limit} read from a BIDS sidecar")]
-    TooLarge { path: PathBuf, len: u64, limit: u64 },
-    /// A folder that is not a BIDS data set, or one holding no EEG run.
-    #[error("{path}: {what}")]
-    Dataset { path: PathBuf, what: String },
-}
-
-impl BidsError {
-    /// The file or folder the error is about (the first, for [`BidsError::SameRun`]; an empty
-    /// path for a label).
-    pub fn path(&self) -> &std::path::Path {
-        match self {
-            BidsError::Label { .. } => std::path::Path::new(""),
-            BidsError::SameRun { first: path, .. }
-            | BidsError::Exists { path }
-            | BidsError::Table { path, .. }
-            | BidsError::Json { path, .. }
-            | BidsError::TooLarge { path, .. }
-            | BidsError::Dataset { path, .. } => path,
-        }
-    }
-}
 
 /// Checks a BIDS label (`sub-<label>`, `ses-<label>`, `task-<label>`): letters and digits only.
 pub fn check_label(entity: &'static str, value: &str) -> Result<(), BidsError> {
