@@ -99,9 +99,9 @@ impl ClassMeans {
                 reason: "a probability, in [0, 1]".into(),
             });
         }
-        let grand = x.mean_axis(ndarray::Axis(0)).ok_or(UnsupervisedError::TooFewEpochs {
-            n_epochs: n,
-        })?;
+        let grand = x
+            .mean_axis(ndarray::Axis(0))
+            .ok_or(UnsupervisedError::TooFewEpochs { n_epochs: n })?;
         let n_t: f64 = r.iter().sum();
         let n_n = n as f64 - n_t;
         let (z_t, z_n) = (n_t + mean_prior, n_n + mean_prior);
@@ -306,7 +306,9 @@ impl LlpParams {
         let means = DMatrix::from_fn(n_groups, p, |g, j| sums[(g, j)] / count[g] as f64);
         let mut trace = vec![0.0; n_groups];
         for (row, &g) in x.outer_iter().zip(group_of_epoch) {
-            trace[g] += (0..p).map(|j| (row[j] - means[(g, j)]).powi(2)).sum::<f64>();
+            trace[g] += (0..p)
+                .map(|j| (row[j] - means[(g, j)]).powi(2))
+                .sum::<f64>();
         }
         // C = (AᵀA)⁻¹Aᵀ, A's rows [π_g, 1 − π_g]; AᵀA is invertible iff the π differ.
         let a = DMatrix::from_fn(n_groups, 2, |g, k| {
