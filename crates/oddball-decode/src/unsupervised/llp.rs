@@ -21,7 +21,7 @@
 //! ([`super::UnsupervisedParams`]) there.
 //!
 //! **The classifier** is the EM's shrinkage LDA with its labels at the known proportions: `B` the
-//! Ledoit–Wolf shrunk total covariance of the rows (the module's [`super::em::Prepared`],
+//! Ledoit–Wolf shrunk total covariance of the rows (the EM's own `Prepared` statistics,
 //! label-free), the within-class covariance `Σ = B − q·ΔμΔμᵀ` with `q = π̄(1 − π̄)·N/(N + c)`
 //! (`π̄` the epochs' overall target share, `c` the covariance prior of the EM: the EM's M-step
 //! with every responsibility at `π̄`), `w = Σ⁻¹Δμ = B⁻¹Δμ / (1 − q·ΔμᵀB⁻¹Δμ)` (Sherman–Morrison)
