@@ -56,6 +56,22 @@ pub enum UnsupervisedError {
         recordings: String,
         channels: Vec<String>,
     },
+    #[error("{n_epochs} epochs but {got} {what}")]
+    EpochCount {
+        what: &'static str,
+        n_epochs: usize,
+        got: usize,
+    },
+    #[error("epoch {index} is in group {group}, but there are {n_groups} groups")]
+    UnknownGroup {
+        index: usize,
+        group: usize,
+        n_groups: usize,
+    },
+    #[error("group {group} has no epochs")]
+    EmptyGroup { group: usize },
+    #[error("target proportions {proportions:?}: label proportions identify the class means only with at least two groups of different proportions")]
+    NotIdentified { proportions: Vec<f64> },
     #[error(transparent)]
     Decode(#[from] DecodeError),
 }

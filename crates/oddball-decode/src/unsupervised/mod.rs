@@ -47,6 +47,7 @@
 
 mod em;
 mod error;
+mod llp;
 mod pooled;
 mod replay;
 mod template;
@@ -62,6 +63,7 @@ use crate::DecodeError;
 
 use error::Result;
 pub use error::UnsupervisedError;
+pub use llp::{ClassMeans, Llp, LlpParams, MeansLda, Mix};
 pub use pooled::{
     feature_times, grid, is_placeholder, pooled_start, PooledPattern, PooledScorer, PooledStart,
     GRID_END_S, GRID_STEP_S, POOLED_VERSION,
