@@ -61,7 +61,7 @@ pub struct EventArgs {
     #[arg(long, value_name = "VARIABLE")]
     pub data_from: Option<String>,
     /// A data-set manifest (datasets/*.toml) whose [events] mapping (unless --target-events
-    /// is given) and [speller] geometry label these files, as `oddball benchmark` labels its
+    /// is given), [read] options (unless given as flags) and [speller] geometry read and label these files, as `oddball benchmark` labels its
     /// runs: e.g. a speller run whose file has row/column codes but no geometry (export: also
     /// each test run's test_text).
     #[arg(long, value_name = "MANIFEST")]
@@ -88,15 +88,17 @@ impl EventArgs {
             .transpose()
     }
 
-    /// The reading options, checked.
+    /// The reading options, checked: each flag's, else --manifest's `[read]` value (as
+    /// `oddball benchmark` reads the manifest's runs).
     pub fn read_options(&self) -> Result<ReadOptions> {
+        let m = self.manifest()?.and_then(|m| m.read).unwrap_or_default();
         let o = ReadOptions {
-            sfreq: self.sfreq,
-            channels: self.channels.clone(),
-            montage: self.montage.clone(),
-            time_column: self.time_column.clone(),
-            events: self.events_from.clone(),
-            data: self.data_from.clone(),
+            sfreq: self.sfreq.or(m.sfreq),
+            channels: self.channels.clone().or(m.channels),
+            montage: self.montage.clone().or(m.montage),
+            time_column: self.time_column.clone().or(m.time_column),
+            events: self.events_from.clone().or(m.events),
+            data: self.data_from.clone().or(m.data),
         };
         o.check().map_err(anyhow::Error::msg)?;
         Ok(o)
