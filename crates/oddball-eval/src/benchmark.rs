@@ -460,15 +460,9 @@ pub(crate) fn load_subject(
     on: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<Vec<EpochedRecording>, BenchmarkError> {
     let subj = &m.subjects[s];
-    let runs = subj.runs().map(|run| {
-        let how = Labelling {
-            mapping: m.events.as_ref(),
-            text: subj.text_of(run),
-            speller: m.speller.as_ref(),
-            read: m.read.as_ref(),
-        };
-        (run.as_path(), how)
-    });
+    let runs = subj
+        .runs()
+        .map(|run| (run.as_path(), Labelling::of_run(m, subj, run)));
     dataset::load_epochs(runs, pre, None, None, &mut |run, resampled, of| {
         on(Progress::Resampled { run, resampled, of })
     })

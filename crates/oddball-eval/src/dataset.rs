@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 
 use oddball_io::events::{describe_events, LabelError};
-use oddball_io::manifest::SpellerSpec;
+use oddball_io::manifest::{Manifest, SpellerSpec, Subject};
 use oddball_io::{EventMapping, IoError, ReadOptions, Recording, Speller};
 use oddball_signal::SignalError;
 use thiserror::Error;
@@ -93,6 +93,19 @@ pub struct Labelling<'a> {
     pub speller: Option<&'a SpellerSpec>,
     /// What the reader cannot find in the file (CSV columns, MAT variables, sampling rate).
     pub read: Option<&'a ReadOptions>,
+}
+
+impl<'a> Labelling<'a> {
+    /// How manifest `m` labels `run` of its `subject`: the manifest's event mapping, speller
+    /// geometry and `[read]` options, and the text the run spelled (a test run's `test_text`).
+    pub fn of_run(m: &'a Manifest, subject: &'a Subject, run: &Path) -> Self {
+        Self {
+            mapping: m.events.as_ref(),
+            text: subject.text_of(run),
+            speller: m.speller.as_ref(),
+            read: m.read.as_ref(),
+        }
+    }
 }
 
 /// The [`Speller`] of a manifest's geometry ([`SpellerSpec::speller`]).

@@ -51,15 +51,9 @@ fn eeg3_from_a_start_built_without_eeg3() {
     };
     let m = &manifests[0];
     let subj = &m.subjects[0];
-    let runs = subj.runs().map(|run| {
-        let how = Labelling {
-            mapping: m.events.as_ref(),
-            text: subj.text_of(run),
-            speller: m.speller.as_ref(),
-            read: m.read.as_ref(),
-        };
-        (run.as_path(), how)
-    });
+    let runs = subj
+        .runs()
+        .map(|run| (run.as_path(), Labelling::of_run(m, subj, run)));
     let (recs, _) = load_epochs(runs, &pre, None, None, &mut |_, _, _| {}).unwrap();
     let settings = |transfer| ReplaySettings {
         template: true,
