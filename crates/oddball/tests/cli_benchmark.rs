@@ -198,14 +198,10 @@ fn mistakes_are_refused_before_any_eeg_is_read() {
     assert!(!ok && err.contains("one subject"), "{err}");
 }
 
-/// The shipped manifests on the real data: every data set reads, labels and scores.
-#[test]
-fn shipped_manifests_score_the_real_recordings() {
-    let Some(data) = data_dir() else { return };
+/// The paths of the shipped manifests of the BCI2000, Muse and BCI II IIb data.
+fn shipped_manifests() -> Vec<String> {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let dir = tmp_dir("cli-benchmark-real");
-    let json = dir.join("real.json");
-    let manifests: Vec<String> = [
+    [
         "bci2000-eeg3",
         "bci2000-eeg2",
         "muse-visual-p300",
@@ -217,7 +213,16 @@ fn shipped_manifests_score_the_real_recordings() {
             .display()
             .to_string()
     })
-    .collect();
+    .collect()
+}
+
+/// The shipped manifests on the real data: every data set reads, labels and scores.
+#[test]
+fn shipped_manifests_score_the_real_recordings() {
+    let Some(data) = data_dir() else { return };
+    let dir = tmp_dir("cli-benchmark-real");
+    let json = dir.join("real.json");
+    let manifests = shipped_manifests();
     let mut args: Vec<&str> = vec!["benchmark"];
     args.extend(manifests.iter().map(String::as_str));
     // --data replaces each manifest's root (../../shared/data), as ODDBALL_DATA does for tests.
@@ -350,22 +355,9 @@ fn openvibe_gdf_within_session_is_the_mne_scikit_learn_auc() {
 #[test]
 fn shipped_spellers_decoded_without_labels_per_subject() {
     let Some(data) = data_dir() else { return };
-    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let dir = tmp_dir("cli-benchmark-unsupervised");
     let (json, csv) = (dir.join("u.json"), dir.join("u.csv"));
-    let manifests: Vec<String> = [
-        "bci2000-eeg3",
-        "bci2000-eeg2",
-        "muse-visual-p300",
-        "bci-competition-ii-iib",
-    ]
-    .iter()
-    .map(|m| {
-        repo.join(format!("datasets/{m}.toml"))
-            .display()
-            .to_string()
-    })
-    .collect();
+    let manifests = shipped_manifests();
     let mut args: Vec<&str> = vec!["benchmark"];
     args.extend(manifests.iter().map(String::as_str));
     let data = data.display().to_string();
