@@ -48,14 +48,15 @@ class UnsupervisedDecoder(BaseEstimator):
     ``(n_epochs, n_channels, n_times)`` at ``sfreq`` Hz, cut by ``preprocess`` (``"peer"``:
     ``oddball evaluate``'s zero-phase band-pass, ``"peer-causal"``: as a live session filters;
     ``None``: no template start, random initialisations only). ``mean_prior``, ``n_inits``,
-    ``max_iter``, ``tol``, ``seed``: the EM's settings (``oddball_decode::unsupervised``).
+    ``max_iter``, ``tol``, ``seed``: the EM's settings (``oddball_decode::unsupervised``;
+    ``n_inits=None``: the library's number of random starts, as ``oddball evaluate --unsupervised``).
 
     Fitted: ``coef_`` is not exposed (features are the ``lda`` preset's bin means inside Rust);
     ``trial_posteriors_`` (per fitted trial, each set's posterior), ``choices_`` (per fitted
     trial, the attended codes), ``n_epochs_`` (epochs taken in).
     """
 
-    def __init__(self, sets=((1, 2, 3, 4),), sfreq=None, preprocess="peer", mean_prior=0.0, n_inits=8,
+    def __init__(self, sets=((1, 2, 3, 4),), sfreq=None, preprocess="peer", mean_prior=0.0, n_inits=None,
                  max_iter=200, tol=1e-6, seed=0):
         self.sets = sets
         self.sfreq = sfreq
@@ -71,7 +72,8 @@ class UnsupervisedDecoder(BaseEstimator):
             raise ValueError(f"UnsupervisedDecoder(sfreq={self.sfreq!r}): give the epochs' rate in Hz")
         sets = [[int(c) for c in s] for s in self.sets]
         return _oddball.UnsupervisedDecoder(
-            sets, float(self.sfreq), self.preprocess, float(self.mean_prior), int(self.n_inits),
+            sets, float(self.sfreq), self.preprocess, float(self.mean_prior),
+            None if self.n_inits is None else int(self.n_inits),
             int(self.max_iter), float(self.tol), int(self.seed))
 
     def _args(self, X, stimuli, trials):

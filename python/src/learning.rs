@@ -199,26 +199,27 @@ methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
     /// columns, or the bulbs); epochs at `sfreq` Hz cut by `preprocess` (`"peer"`,
     /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts.
     #[new]
-    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=32, max_iter=200, tol=1e-6, seed=0))]
+    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=None, max_iter=200, tol=1e-6, seed=0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         sets: Vec<Vec<u32>>,
         sfreq: f64,
         preprocess: Option<&str>,
         mean_prior: f64,
-        n_inits: usize,
+        n_inits: Option<usize>,
         max_iter: usize,
         tol: f64,
         seed: u32,
     ) -> PyResult<Self> {
         let constraint = Constraint::new(sets).map_err(unsup_err)?;
+        let defaults = UnsupervisedParams::for_sfreq(sfreq).map_err(value_err)?;
         let params = UnsupervisedParams {
             mean_prior,
-            n_inits,
+            n_inits: n_inits.unwrap_or(defaults.n_inits),
             max_iter,
             tol,
             seed,
-            ..UnsupervisedParams::for_sfreq(sfreq).map_err(value_err)?
+            ..defaults
         };
         let template = preprocess.map(preprocess_named).transpose()?;
         if let Some(pre) = &template {
