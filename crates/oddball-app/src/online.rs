@@ -335,6 +335,9 @@ impl Online {
             )?;
         }
         writeln!(out, "{summary_line}")?;
+        if let Some(h) = oddball_session::report::headline_text(&summary.bits_since_start) {
+            writeln!(out, "{h}")?;
+        }
         writeln!(out, "{}", timing.report())?;
         if let Some(l) = Summary::of(&latency) {
             writeln!(

@@ -9,7 +9,8 @@ use std::path::PathBuf;
 use oddball_arm::{ArmSim, Vector2};
 use oddball_live::panel::PanelConfig;
 use oddball_live::source::AnySource;
-use oddball_session::report::draw_text;
+use oddball_session::decision::Decision;
+use oddball_session::report::{draw_text, headline_text};
 use oddball_session::tasks::{
     check_drawing, drawing_path, run_drawing, run_tracking, task_targets, Pilot, TrackParams,
 };
@@ -71,7 +72,7 @@ impl TaskRun {
             &task_png,
             oddball_plot::task::draw_track(&task_png, prep.pilot.arm(), &r),
         )?;
-        self.finish(prep, "track", &r, out)
+        self.finish(prep, "track", &r, &r.steps, out)
     }
 
     /// Draws `text` in the stroke font; the text must fit the board at this step, checked
@@ -116,7 +117,7 @@ impl TaskRun {
             r.max_deviation_m * 1e3
         );
         report::write_task_files(&self.out, &prep, &r.steps, &plan, Some(&title), out)?;
-        self.finish(prep, "draw", &r, out)
+        self.finish(prep, "draw", &r, &r.steps, out)
     }
 
     /// The calibrated pilot of a task; when the panel is served, it shows the task and the
@@ -194,13 +195,14 @@ impl TaskRun {
         Ok(prep)
     }
 
-    /// summary.json (what ran, the calibration and the task's report), then the live session's
-    /// raw EEG saved.
+    /// summary.json (what ran, the calibration, the bits delivered since the start and the
+    /// task's report), then the live session's raw EEG saved.
     fn finish<T: Serialize>(
         &self,
         prep: Prepared,
         task: &'static str,
         r: &T,
+        steps: &[Decision],
         out: &mut dyn Write,
     ) -> Result<Option<String>> {
         let summary = prep.task_summary(
@@ -208,8 +210,12 @@ impl TaskRun {
             self.settings.pipeline.name(),
             self.settings.seed,
             self.settings.paradigm(),
+            steps,
             r,
         );
+        if let Some(h) = headline_text(&summary.bits_since_start) {
+            writeln!(out, "{h}")?;
+        }
         report::write_json(&self.out.join("summary.json"), &summary)?;
         report::save_session(
             prep,

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use oddball_session::decision::Decision;
 use oddball_session::decision::ShownFlash;
-use oddball_session::report::{numbered, Row, Scores, SessionFacts};
+use oddball_session::report::{headline, numbered, BitsBy, Row, Scores, SessionFacts};
 use oddball_session::SessionError;
 use serde::Serialize;
 
@@ -46,6 +46,9 @@ pub struct OnlineSummary<'a> {
     pub facts: SessionFacts<'a>,
     pub source: String,
     pub result: Scores,
+    /// Bits delivered in the first minutes after the session started
+    /// ([`oddball_session::report::headline`]).
+    pub bits_since_start: Vec<BitsBy>,
     pub decisions: Vec<Row<'a>>,
     pub flash_on_time: Option<TimingRow>,
     pub flash_onset_error: Option<TimingRow>,
@@ -89,6 +92,7 @@ impl<'a> OnlineSummary<'a> {
             facts: run.facts,
             source: run.source,
             result: run.result,
+            bits_since_start: headline(steps),
             decisions: numbered(steps),
             flash_on_time: Summary::of(&timing.on_ms).map(Into::into),
             flash_onset_error: Summary::of(&timing.onset_error_ms).map(Into::into),

@@ -12,7 +12,7 @@ use oddball_session::engine::Session;
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::record::{save_session, save_session_easy};
 use oddball_session::replay::REPLAY_NOTE;
-use oddball_session::report::{CalibrationSummary, SessionFacts};
+use oddball_session::report::{headline, BitsBy, CalibrationSummary, SessionFacts};
 use oddball_session::roles::EegStream;
 use oddball_session::tasks::{Pilot, ReplayPilot};
 use oddball_session::SessionError;
@@ -135,18 +135,22 @@ pub struct TaskSummary<'a, T> {
     /// What a replayed recording's decisions mean ([`REPLAY_NOTE`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<&'static str>,
+    /// Bits delivered in the first minutes after the session started
+    /// ([`oddball_session::report::headline`]; empty for a replayed recording).
+    pub bits_since_start: Vec<BitsBy>,
     pub report: &'a T,
 }
 
 impl Prepared {
     /// The summary of the task `task` (`draw`, `track`) run by this pilot with `pipeline`,
-    /// `seed` and `paradigm`.
+    /// `seed` and `paradigm`, whose decisions were `steps`.
     pub fn task_summary<'a, T>(
         &'a self,
         task: &'static str,
         pipeline: &'a str,
         seed: u64,
         paradigm: FourBulbParams,
+        steps: &[Decision],
         report: &'a T,
     ) -> TaskSummary<'a, T> {
         TaskSummary {
@@ -164,6 +168,7 @@ impl Prepared {
                 AnyPilot::Replay(_) => None,
             },
             note: matches!(self.pilot, AnyPilot::Replay(_)).then_some(REPLAY_NOTE),
+            bits_since_start: headline(steps),
             report,
         }
     }

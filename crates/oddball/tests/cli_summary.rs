@@ -1,6 +1,7 @@
 //! One schema for `summary.json` (issue #30): `demo`, `task` and `online` start their summaries
 //! with the same facts (command, subject, pipeline, seed, paradigm, calibration), and `demo`
-//! and `online` write the same result and decision rows, and the same files.
+//! and `online` write the same result and decision rows, and the same files; all three the bits
+//! delivered in the first minutes.
 
 mod common;
 
@@ -46,6 +47,32 @@ fn demo_task_and_online_write_one_summary_schema() {
         }
     }
     assert_eq!(task["task"], "draw");
+    // Each says what it delivered in its first 5 and 10 minutes, its calibration's time
+    // counted: every decision here falls inside both (the sessions last about a minute).
+    for (what, s) in [("demo", &demo), ("task", &task), ("online", &online)] {
+        let n = match what {
+            "task" => task["report"]["steps"].as_array().unwrap().len(),
+            _ => 2,
+        };
+        let h = s["bits_since_start"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{what}: {s}"));
+        assert_eq!(h.len(), 2, "{what}: {s}");
+        for (b, minutes) in h.iter().zip([5.0, 10.0]) {
+            assert_eq!(b["minutes"], minutes, "{what}");
+            let made = b["made"].as_u64().unwrap() as usize;
+            assert_eq!(
+                made + b["abstained"].as_u64().unwrap() as usize,
+                n,
+                "{what}: {b}"
+            );
+            assert_eq!(b["session_shorter"], true, "{what}: {b}");
+            assert!(
+                b["bits"].as_f64().unwrap() <= 2.0 * made as f64 + 1e-9,
+                "{what}: {b}"
+            );
+        }
+    }
     // online writes the pictures demo writes.
     for file in ["decisions.csv", "pen_trace.png", "erp.png", "model.json"] {
         for what in ["demo", "online"] {
