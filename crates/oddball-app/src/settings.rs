@@ -382,10 +382,11 @@ impl SessionSettings {
                 writeln!(out, "{}", model_line(model, self.model.as_deref()))?
             }
             (Start::Uncalibrated { .. }, _) => {
+                let p = UncalibratedParams::for_sfreq(session.sfreq())?;
                 writeln!(
                     out,
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {})",
-                    UncalibratedParams::for_sfreq(session.sfreq())?.abstain_below
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {}; the first trials run {}× the rounds until it holds {} epochs per feature)",
+                    p.abstain_below, p.learning.factor, p.learning.epochs_per_feature
                 )?;
             }
             (Start::Calibrate { .. }, Some(calibration)) => {

@@ -723,7 +723,9 @@ impl<S: Subject> Session<S> {
         }
         let n_rounds = match phase {
             Phase::Calibration => p.n_rounds,
-            Phase::Online => self.params.decoder.rule.max_rounds(),
+            Phase::Online => self
+                .decoder
+                .online_rounds(self.params.decoder.rule.max_rounds()),
         };
         let schedule = p.trial(&mut self.rng, n_rounds);
         let start = self.subject.position();

@@ -5,7 +5,7 @@ use oddball_arm::{ArmConfig, ArmSim, Command};
 use oddball_decode::decision::DecisionRule;
 use oddball_decode::preset::Preset;
 use oddball_session::decision::TrialOutcome;
-use oddball_session::decoder::{Start, UncalibratedParams};
+use oddball_session::decoder::{LearningRounds, Start, UncalibratedParams};
 use oddball_session::engine::{Session, SessionParams};
 use oddball_session::paradigm::FourBulbParams;
 use oddball_session::prequential::HonestParams;
@@ -305,8 +305,13 @@ fn a_pause_holds_the_session_between_trials_without_flashing() {
 
 /// An uncalibrated session of the typical subject at the fast timing, 40 decisions (up, left,
 /// down, right, …), dynamic stopping at 0.95 within 5 rounds, with `honest` weighing the
-/// stopping rule's evidence. Returns each decision's (right, rounds, confidence).
-fn uncalibrated_fast(seed: u64, honest: HonestParams) -> Vec<(bool, usize, f64)> {
+/// stopping rule's evidence and `learning` the first trials' rounds. Returns each decision's
+/// (right, rounds, confidence).
+fn uncalibrated_fast(
+    seed: u64,
+    honest: HonestParams,
+    learning: LearningRounds,
+) -> Vec<(bool, usize, f64)> {
     let subject = SubjectParams::preset(SubjectPreset::Typical)
         .with_seed(seed)
         .build()
@@ -318,6 +323,7 @@ fn uncalibrated_fast(seed: u64, honest: HonestParams) -> Vec<(bool, usize, f64)>
     let mut s = Session::new(params, subject, None).unwrap();
     let mut p = UncalibratedParams::for_sfreq(s.sfreq()).unwrap();
     p.honest = honest;
+    p.learning = learning;
     s.start(
         Start::Uncalibrated {
             params: Some(p),
@@ -341,8 +347,10 @@ fn uncalibrated_fast(seed: u64, honest: HonestParams) -> Vec<(bool, usize, f64)>
 fn an_uncalibrated_session_stops_early_only_on_out_of_sample_evidence() {
     // Seed 13: the second decision's in-sample EM posterior is 1.0 and wrong (a fit on two
     // trials finds noise). Weighed in-sample, dynamic stopping would have stopped on it; the
-    // out-of-sample score model has no evidence yet, so the trial runs its five rounds.
-    let honest = uncalibrated_fast(13, HonestParams::default());
+    // out-of-sample score model has no evidence yet, so the trial runs its five rounds. (The
+    // rule alone: learning trials, which run longer, are off.)
+    let off = LearningRounds::off();
+    let honest = uncalibrated_fast(13, HonestParams::default(), off);
     let (right, rounds, confidence) = honest[1];
     assert!(
         !right && confidence > 0.999 && rounds == 5,
@@ -362,8 +370,34 @@ fn an_uncalibrated_session_stops_early_only_on_out_of_sample_evidence() {
         min_trials: 1000,
         ..HonestParams::default()
     };
-    let plain = uncalibrated_fast(13, never);
+    let plain = uncalibrated_fast(13, never, off);
     assert!(plain.iter().all(|d| d.1 == 5));
     let rounds = |v: &[(bool, usize, f64)]| v.iter().map(|d| d.1).sum::<usize>();
     assert!(rounds(&honest) + 4 <= rounds(&plain));
+}
+
+#[test]
+fn an_uncalibrated_session_learns_from_longer_first_trials() {
+    // Seed 14 (one of the seeds the default was tuned on): with five rounds from the start, a
+    // fit of the first few trials lands on a wrong labelling and the warm start follows it.
+    let off = uncalibrated_fast(14, HonestParams::default(), LearningRounds::off());
+    let on = uncalibrated_fast(14, HonestParams::default(), LearningRounds::default());
+    let right = |v: &[(bool, usize, f64)]| v.iter().filter(|d| d.0).count();
+    // Learning trials run 3 × 5 rounds while the decoder holds fewer than 2 epochs per feature
+    // (8 channels × 16 bins at 500 Hz: 256 epochs; a learning trial flashes 4 × 15, fewer when
+    // the amplitude rejection drops some): the first few trials, then at most the rule's 5.
+    let p = 8 * 16;
+    let k = on.iter().take_while(|d| d.1 == 15).count();
+    assert!(
+        k >= 1 && 4 * 15 * (k - 1) < 2 * p && 4 * 15 * k >= 2 * p - 4 * 15,
+        "{k} learning trials: {on:?}"
+    );
+    assert!(on[k..].iter().all(|d| d.1 <= 5), "{on:?}");
+    assert!(off.iter().all(|d| d.1 <= 5), "{off:?}");
+    assert!(
+        right(&on) >= right(&off) + 10,
+        "{} vs {} right of 40",
+        right(&on),
+        right(&off)
+    );
 }
