@@ -1,7 +1,9 @@
 //! One online update of the adaptive LDA (`oddball_decode::adaptive`) at 8 channels: the 20
 //! epochs of one four-bulb decision (5 rounds × 4 flashes) of the `lda` preset's features
 //! (8 channels × 20 bins = 160) taken into a model calibrated on 800 epochs; and, for scale, one
-//! unsupervised refit (EM) of 40 decisions.
+//! unsupervised refit (EM) of 40 decisions, and one at an uncalibrated session's cap on 64
+//! channels (its last 300 four-bulb trials of 20 epochs, 64 channels × 16 bins: the refit after
+//! every decision of a long 64-channel session without calibration).
 
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use ndarray::Array2;
@@ -58,9 +60,47 @@ fn bench(c: &mut Criterion) {
     );
 }
 
+fn bench_cap(c: &mut Criterion) {
+    let (n, p) = (300 * 20, 64 * 16);
+    let (x, _) = rows(n, p, 4);
+    let codes: Vec<u32> = (0..n).map(|i| 1 + (i % 4) as u32).collect();
+    let trials: Vec<usize> = (0..n).map(|i| i / 20).collect();
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::decimate(1).unwrap(),
+        ..UnsupervisedParams::for_sfreq(500.0).unwrap()
+    };
+    // The session's refit after a decision: warm-started from the fit before it.
+    let warm = params
+        .fit_features(x.view(), &codes, &trials, &constraint, None)
+        .unwrap();
+    let always = UnsupervisedParams {
+        random_until: None,
+        ..params
+    };
+    for (name, p) in [("default", params), ("random starts always", always)] {
+        c.bench_function(
+            &format!(
+                "unsupervised: warm refit at the session cap, 64 channels (6000 epochs x 1024 features), {name}"
+            ),
+            |b| {
+                b.iter(|| {
+                    p.fit_features(x.view(), &codes, &trials, &constraint, Some(&warm))
+                        .unwrap()
+                })
+            },
+        );
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(20).measurement_time(std::time::Duration::from_secs(3));
     targets = bench
 }
-criterion_main!(benches);
+criterion_group! {
+    name = cap;
+    config = Criterion::default().sample_size(10).measurement_time(std::time::Duration::from_secs(10));
+    targets = bench_cap
+}
+criterion_main!(benches, cap);

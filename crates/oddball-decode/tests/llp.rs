@@ -304,6 +304,7 @@ fn mix_combines_an_em_fit_with_llp() {
         tol: 1e-8,
         seed: 3,
         covariance: Covariance::LedoitWolf,
+        random_until: None,
     };
     let model = params
         .fit_features(x.view(), &codes, &trials, &constraint, None)

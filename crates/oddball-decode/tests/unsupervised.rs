@@ -6,7 +6,8 @@
 use ndarray::{Array2, Array3};
 use oddball_decode::features::amplitude::AmplitudeFeatures;
 use oddball_decode::unsupervised::{
-    replay, replay_from, Constraint, Covariance, Init, UnsupervisedError, UnsupervisedParams,
+    replay, replay_from, Constraint, Covariance, Init, Unsupervised, UnsupervisedError,
+    UnsupervisedParams,
 };
 use proptest::prelude::*;
 use serde::Deserialize;
@@ -39,6 +40,7 @@ fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
         tol,
         seed: 7,
         covariance: Covariance::LedoitWolf,
+        random_until: None,
     }
 }
 
@@ -351,6 +353,68 @@ fn a_prior_starts_em_alone_until_there_are_as_many_epochs_as_features() {
         matches!(err, UnsupervisedError::InitLength { n_scores: 10, .. }),
         "{err}"
     );
+}
+
+#[test]
+fn random_starts_stop_joining_a_warm_refit_at_random_until_epochs_per_feature() {
+    let (x, codes, trials, attended) = four_bulb(30, 5, 3.0, 5);
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    // 128 features, 20 epochs per trial: 4 epochs per feature at 512 epochs.
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::bin_mean(2).unwrap(),
+        ..UnsupervisedParams::for_sfreq(64.0).unwrap()
+    };
+    assert_eq!(params.random_until, Some(4.0));
+    let feats = params.features.transform(x.view()).unwrap();
+    let prior = bump_scores(&x);
+    let fit = |p: &UnsupervisedParams, n: usize, warm: Option<&Unsupervised>| {
+        p.fit_features_from(
+            feats.slice(ndarray::s![..n, ..]),
+            &codes[..n],
+            &trials[..n],
+            &constraint,
+            warm,
+            Some(&prior[..n]),
+        )
+        .unwrap()
+    };
+    let randoms = |m: &Unsupervised| {
+        m.init()
+            .1
+            .iter()
+            .filter(|(i, _)| matches!(i, Init::Random(_)))
+            .count()
+    };
+    let warm = fit(&params, 240, None);
+    // Below 512 epochs, or without a warm start, they join; from 512 with one, they do not.
+    assert_eq!(randoms(&fit(&params, 500, Some(&warm))), params.n_inits);
+    assert_eq!(randoms(&fit(&params, 600, None)), params.n_inits);
+    let settled = fit(&params, 600, Some(&warm));
+    assert_eq!(randoms(&settled), 0, "{:?}", settled.init());
+    assert_eq!(settled.init().1.len(), 2, "the prior and the warm start");
+    // Settings saved before the field existed (`None`): they always join.
+    let always = UnsupervisedParams {
+        random_until: None,
+        ..params
+    };
+    assert_eq!(randoms(&fit(&always, 600, Some(&warm))), params.n_inits);
+    // And the settled fit still decides the trials.
+    let right = settled
+        .choices()
+        .iter()
+        .zip(&attended)
+        .filter(|(c, &a)| c[0] == a)
+        .count();
+    assert!(right >= 28, "{right}/30");
+    // A bad value is named.
+    let bad = UnsupervisedParams {
+        random_until: Some(f64::NAN),
+        ..params
+    };
+    let err = bad
+        .fit_features(feats.view(), &codes, &trials, &constraint, None)
+        .unwrap_err();
+    assert!(err.to_string().contains("random_until"), "{err}");
 }
 
 #[test]
