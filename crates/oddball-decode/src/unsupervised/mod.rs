@@ -187,9 +187,9 @@ impl UnsupervisedParams {
     /// OpenViBE run were unchanged, the simulated subjects see `README.md`. Random starts stop
     /// joining a warm-started refit at 4 epochs per feature: eeg3 (8/8), IIb (17/18) and the
     /// OpenViBE run (5/5) online unchanged at 2, 4 and 8; the simulated typical subject at the
-    /// fast timing, seeds 11–20, 91.5 % right against 91.3 % with them always; a refit at a
-    /// long 64-channel session's cap (6000 epochs × 1024 features) took 25 s with them
-    /// (`benches/adaptive.rs`).
+    /// fast timing, seeds 11–20, 91.5 % right against 91.3 % with them always; a warm refit at
+    /// a long 64-channel session's cap (6000 epochs × 1024 features of noise, each EM to its
+    /// iteration cap) takes 7.0 s, against 31.3 s with them (`benches/adaptive.rs`).
     pub fn for_sfreq(sfreq: f64) -> std::result::Result<Self, DecodeError> {
         Ok(Self {
             features: AmplitudeFeatures::for_sfreq(sfreq)?,
