@@ -185,11 +185,12 @@ impl UnsupervisedParams {
     /// characters were 7, 8, 5, 8, 8, 8, 5, 5, 6, 5 of 8 with 8 starts and 8 of 8 with 32 on
     /// every seed (the first trials' likeliest optimum is found more often); IIb and the
     /// OpenViBE run were unchanged, the simulated subjects see `README.md`. Random starts stop
-    /// joining a warm-started refit at 4 epochs per feature: eeg3 (8/8), IIb (17/18) and the
-    /// OpenViBE run (5/5) online unchanged at 2, 4 and 8; the simulated typical subject at the
-    /// fast timing, seeds 11–20, 91.5 % right against 91.3 % with them always; a warm refit at
-    /// a long 64-channel session's cap (6000 epochs × 1024 features of noise, each EM to its
-    /// iteration cap) takes 7.0 s, against 31.3 s with them (`benches/adaptive.rs`).
+    /// joining a warm-started refit at 4 epochs per feature: eeg3 (8/8) and the OpenViBE run
+    /// (5/5) online unchanged at 2, 4 and 8, IIb (17/18) at 4 (it never holds 4 epochs per
+    /// feature); the simulated typical subject at the fast timing, seeds 11–20, 91.5 % right
+    /// against 91.3 % with them always; a warm refit at a long 64-channel session's cap (6000
+    /// epochs × 1024 features of noise, each EM to its iteration cap) takes 7.0 s, against
+    /// 31.3 s with them (`benches/adaptive.rs`).
     pub fn for_sfreq(sfreq: f64) -> std::result::Result<Self, DecodeError> {
         Ok(Self {
             features: AmplitudeFeatures::for_sfreq(sfreq)?,
