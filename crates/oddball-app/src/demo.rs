@@ -113,9 +113,11 @@ impl Demo {
                     opts.seed,
                     opts.pipeline,
                     rule_label,
-                    match &opts.model {
-                        Some(m) => format!("model {}", m.display()),
-                        None => format!(
+                    match (&opts.model, &opts.calibration) {
+                        (Some(m), _) => format!("model {}", m.display()),
+                        (None, crate::settings::CalibrationSpec::None) =>
+                            "no calibration".to_string(),
+                        (None, _) => format!(
                             "calibration: {} decisions per bulb",
                             opts.calibration_per_bulb
                         ),

@@ -381,12 +381,19 @@ impl SessionSettings {
             (Start::Model(model), _) => {
                 writeln!(out, "{}", model_line(model, self.model.as_deref()))?
             }
-            (Start::Uncalibrated { .. }, _) => {
+            (Start::Uncalibrated { transfer, .. }, _) => {
                 let p = UncalibratedParams::for_sfreq(session.sfreq())?;
+                let learning = match transfer {
+                    Some(_) => String::new(),
+                    None => format!(
+                        "; the first trials run {}× the rounds until it holds {} epochs per feature",
+                        p.learning.factor, p.learning.epochs_per_feature
+                    ),
+                };
                 writeln!(
                     out,
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {}; the first trials run {}× the rounds until it holds {} epochs per feature)",
-                    p.abstain_below, p.learning.factor, p.learning.epochs_per_feature
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {}{learning})",
+                    p.abstain_below
                 )?;
             }
             (Start::Calibrate { .. }, Some(calibration)) => {
