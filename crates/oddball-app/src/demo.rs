@@ -24,6 +24,7 @@ use crate::error::Result;
 use crate::pilot::{adaptation, posthoc, prepare, AnyPilot};
 use crate::replayed::ReplayFiles;
 use crate::report::{self, drawn};
+use crate::settings::CalibrationSpec;
 use crate::settings::{SessionSettings, SourceSettings};
 
 /// A demo to run.
@@ -115,8 +116,7 @@ impl Demo {
                     rule_label,
                     match (&opts.model, &opts.calibration) {
                         (Some(m), _) => format!("model {}", m.display()),
-                        (None, crate::settings::CalibrationSpec::None) =>
-                            "no calibration".to_string(),
+                        (None, CalibrationSpec::None) => "no calibration".to_string(),
                         (None, _) => format!(
                             "calibration: {} decisions per bulb",
                             opts.calibration_per_bulb

@@ -17,7 +17,7 @@ use oddball_live::live::LiveSubject;
 use oddball_live::plan::{recording_arm, SessionPlan};
 use oddball_live::source::{AnySource, OpenOptions, SourceSpec};
 use oddball_session::decision::{CalibrationProgress, CalibrationReport};
-use oddball_session::decoder::{AdaptParams, Start, UncalibratedParams};
+use oddball_session::decoder::{AdaptParams, Start};
 use oddball_session::engine::{Session, SessionParams};
 use oddball_session::paradigm::{FourBulbParams, ParadigmPreset, TimingOverrides};
 use oddball_session::subject::{SubjectParams, SubjectPreset, STARSTIM_SFREQ};
@@ -381,19 +381,20 @@ impl SessionSettings {
             (Start::Model(model), _) => {
                 writeln!(out, "{}", model_line(model, self.model.as_deref()))?
             }
-            (Start::Uncalibrated { transfer, .. }, _) => {
-                let p = UncalibratedParams::for_sfreq(session.sfreq())?;
-                let learning = match transfer {
-                    Some(_) => String::new(),
-                    None => format!(
+            (Start::Uncalibrated { .. }, _) => {
+                // What the started session runs with.
+                let abstain = session.uncalibrated_params().map_or(String::new(), |p| {
+                    format!("; abstains below posterior {}", p.abstain_below)
+                });
+                let learning = session.learning_rounds().map_or(String::new(), |l| {
+                    format!(
                         "; the first trials run {}× the rounds until it holds {} epochs per feature",
-                        p.learning.factor, p.learning.epochs_per_feature
-                    ),
-                };
+                        l.factor, l.epochs_per_feature
+                    )
+                });
                 writeln!(
                     out,
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels; abstains below posterior {}{learning})",
-                    p.abstain_below
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels{abstain}{learning})"
                 )?;
             }
             (Start::Calibrate { .. }, Some(calibration)) => {

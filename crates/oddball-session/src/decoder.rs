@@ -139,8 +139,9 @@ pub struct UncalibratedParams {
 
 /// The first trials of an uncalibrated session (without a transferred model) run `factor` times
 /// the decision rule's most rounds while the decoder holds fewer than `epochs_per_feature`
-/// epochs per feature of its EM. With few trials the EM can pick any of very many labellings (four bulbs: 4^T for T
-/// trials), and with about as many epochs as features some wrong one fits the noise best: a
+/// epochs per feature of its EM. With few trials the EM can pick any of very many labellings
+/// (four bulbs: 4^T for T trials), and with about as many epochs as features some wrong one
+/// fits the noise best: a
 /// confident, wrong decision the warm start then follows for several trials. Longer trials give
 /// each labelling more epochs, so fewer labellings reach the same data, and the session learns
 /// from fewer, surer trials. On the simulated typical subject at the fast timing (tuning seeds
@@ -353,6 +354,19 @@ impl Unlabelled {
         self.params.abstain_below
     }
 
+    /// Features per feature row (0 before the first epoch).
+    fn n_features(&self) -> usize {
+        self.rows.len() / self.codes.len().max(1)
+    }
+
+    /// Epochs held per EM feature (0 before the first epoch).
+    fn epochs_per_feature(&self) -> f64 {
+        match self.n_features() {
+            0 => 0.0,
+            p => self.codes.len() as f64 / p as f64,
+        }
+    }
+
     /// Drops the epochs of all but the last `max_trials` trials (trials arrive in order).
     fn keep_last_trials(&mut self) {
         let mut seen = 0;
@@ -430,26 +444,33 @@ impl OnlineDecoder {
         !matches!(self, Self::Unstarted)
     }
 
-    /// The most rounds of the next online trial when the rule allows `max_rounds`: more while
-    /// an uncalibrated decoder is still learning ([`LearningRounds`]). Not when a transferred
-    /// model starts it: its EM follows that model's scores, with no random starts to land on a
-    /// wrong labelling (the paper's G from seed 2's model on seeds 1, 3, 4, 5: 6/6 each either
-    /// way, 40 s longer with learning trials).
-    pub(crate) fn online_rounds(&self, max_rounds: usize) -> usize {
+    /// The settings of an uncalibrated decoder (`None` for any other).
+    pub(crate) fn uncalibrated_params(&self) -> Option<&UncalibratedParams> {
         match self {
-            Self::Unlabelled(u) if u.transfer.is_none() => {
-                let n = u.codes.len();
-                let per_feature = if n == 0 {
-                    0.0
-                } else {
-                    // Feature rows of `n` epochs, one after the other.
-                    n as f64 / (u.rows.len() / n).max(1) as f64
-                };
-                if per_feature < u.params.learning.epochs_per_feature {
-                    max_rounds * u.params.learning.factor
-                } else {
-                    max_rounds
-                }
+            Self::Unlabelled(u) => Some(&u.params),
+            _ => None,
+        }
+    }
+
+    /// The learning trials this decoder runs ([`LearningRounds`]): an uncalibrated one's, unless
+    /// a transferred model starts it (its EM follows that model's scores, with no random starts
+    /// to land on a wrong labelling: the paper's G from seed 2's model on seeds 1, 3, 4, 5 was
+    /// 6/6 each either way, and 40 s longer with learning trials).
+    pub(crate) fn learning(&self) -> Option<LearningRounds> {
+        match self {
+            Self::Unlabelled(u) if u.transfer.is_none() && u.params.learning.factor > 1 => {
+                Some(u.params.learning)
+            }
+            _ => None,
+        }
+    }
+
+    /// The most rounds of the next online trial when the rule allows `max_rounds`: more while
+    /// the decoder is still learning ([`Self::learning`]).
+    pub(crate) fn online_rounds(&self, max_rounds: usize) -> usize {
+        match (self, self.learning()) {
+            (Self::Unlabelled(u), Some(l)) if u.epochs_per_feature() < l.epochs_per_feature => {
+                max_rounds * l.factor
             }
             _ => max_rounds,
         }
@@ -605,7 +626,7 @@ impl OnlineDecoder {
         }
         u.keep_last_trials();
         let n = u.codes.len();
-        let x = ArrayView2::from_shape((n, u.rows.len() / n), &u.rows).map_err(|e| {
+        let x = ArrayView2::from_shape((n, u.n_features()), &u.rows).map_err(|e| {
             SessionError::InvalidParameter {
                 name: "feature rows",
                 value: u.rows.len().to_string(),

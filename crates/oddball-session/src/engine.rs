@@ -461,6 +461,17 @@ impl<S: Subject> Session<S> {
     }
 
     /// Sampling rate of the subject's EEG, Hz.
+    /// The settings of the uncalibrated decoder the session started (`None` for any other).
+    pub fn uncalibrated_params(&self) -> Option<&UncalibratedParams> {
+        self.decoder.uncalibrated_params()
+    }
+
+    /// The learning trials the session runs ([`crate::decoder::LearningRounds`]; `None` when it
+    /// runs none: calibrated, or started from a transferred model).
+    pub fn learning_rounds(&self) -> Option<crate::decoder::LearningRounds> {
+        self.decoder.learning()
+    }
+
     pub fn sfreq(&self) -> f64 {
         self.subject.sfreq()
     }
