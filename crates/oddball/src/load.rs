@@ -61,9 +61,9 @@ pub struct EventArgs {
     #[arg(long, value_name = "VARIABLE")]
     pub data_from: Option<String>,
     /// A data-set manifest (datasets/*.toml) whose [events] mapping (unless --target-events
-    /// is given), [read] options (unless given as flags) and [speller] geometry read and label these files, as `oddball benchmark` labels its
-    /// runs: e.g. a speller run whose file has row/column codes but no geometry (export: also
-    /// each test run's test_text).
+    /// is given), [read] options (unless given as flags) and [speller] geometry read and label
+    /// these files, as `oddball benchmark` labels its runs: e.g. a speller run whose file has
+    /// row/column codes but no geometry (export: also each test run's test_text).
     #[arg(long, value_name = "MANIFEST")]
     pub manifest: Option<PathBuf>,
 }
