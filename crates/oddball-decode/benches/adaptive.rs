@@ -26,6 +26,30 @@ fn rows(n: usize, p: usize, seed: u64) -> (Array2<f64>, Vec<bool>) {
     (x, y)
 }
 
+/// `n` epochs of `p` features in four-bulb trials of 20 epochs, and the EM's settings on
+/// features taken as given.
+fn four_bulb(
+    n: usize,
+    p: usize,
+    seed: u64,
+) -> (
+    Array2<f64>,
+    Vec<u32>,
+    Vec<usize>,
+    Constraint,
+    UnsupervisedParams,
+) {
+    let (x, _) = rows(n, p, seed);
+    let codes: Vec<u32> = (0..n).map(|i| 1 + (i % 4) as u32).collect();
+    let trials: Vec<usize> = (0..n).map(|i| i / 20).collect();
+    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    let params = UnsupervisedParams {
+        features: AmplitudeFeatures::decimate(1).unwrap(),
+        ..UnsupervisedParams::for_sfreq(500.0).unwrap()
+    };
+    (x, codes, trials, constraint, params)
+}
+
 fn bench(c: &mut Criterion) {
     let (cal, ycal) = rows(800, 160, 1);
     let model = AdaptiveLdaParams::default().fit(cal.view(), &ycal).unwrap();
@@ -40,14 +64,7 @@ fn bench(c: &mut Criterion) {
             )
         },
     );
-    let (x, _) = rows(800, 160, 3);
-    let codes: Vec<u32> = (0..800).map(|i| 1 + (i % 4) as u32).collect();
-    let trials: Vec<usize> = (0..800).map(|i| i / 20).collect();
-    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
-    let params = UnsupervisedParams {
-        features: AmplitudeFeatures::decimate(1).unwrap(),
-        ..UnsupervisedParams::for_sfreq(256.0).unwrap()
-    };
+    let (x, codes, trials, constraint, params) = four_bulb(800, 160, 3);
     c.bench_function(
         "unsupervised: EM refit on 40 decisions (800 epochs x 160 features)",
         |b| {
@@ -61,15 +78,7 @@ fn bench(c: &mut Criterion) {
 }
 
 fn bench_cap(c: &mut Criterion) {
-    let (n, p) = (300 * 20, 64 * 16);
-    let (x, _) = rows(n, p, 4);
-    let codes: Vec<u32> = (0..n).map(|i| 1 + (i % 4) as u32).collect();
-    let trials: Vec<usize> = (0..n).map(|i| i / 20).collect();
-    let constraint = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
-    let params = UnsupervisedParams {
-        features: AmplitudeFeatures::decimate(1).unwrap(),
-        ..UnsupervisedParams::for_sfreq(500.0).unwrap()
-    };
+    let (x, codes, trials, constraint, params) = four_bulb(300 * 20, 64 * 16, 4);
     // The session's refit after a decision: warm-started from the fit before it.
     let warm = params
         .fit_features(x.view(), &codes, &trials, &constraint, None)

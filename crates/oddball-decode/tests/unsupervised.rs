@@ -44,6 +44,24 @@ fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
     }
 }
 
+/// Trials whose first set's choice is the attended code.
+fn right_of(choices: &[Vec<u32>], attended: &[u32]) -> usize {
+    choices
+        .iter()
+        .zip(attended)
+        .filter(|(c, &a)| c[0] == a)
+        .count()
+}
+
+/// Trials a replay decided right online.
+fn online_right(r: &oddball_decode::unsupervised::Replay, attended: &[u32]) -> usize {
+    r.online
+        .iter()
+        .zip(attended)
+        .filter(|(c, &a)| c.codes[0] == a)
+        .count()
+}
+
 fn rows(x: &[Vec<f64>]) -> Array2<f64> {
     Array2::from_shape_fn((x.len(), x[0].len()), |(i, j)| x[i][j])
 }
@@ -241,12 +259,7 @@ fn synthetic_four_bulb_trials_are_recovered_without_labels() {
         ..UnsupervisedParams::for_sfreq(64.0).unwrap()
     };
     let m = params.fit(x.view(), &codes, &trials, &constraint).unwrap();
-    let right = m
-        .choices()
-        .iter()
-        .zip(&attended)
-        .filter(|(c, &a)| c[0] == a)
-        .count();
+    let right = right_of(&m.choices(), &attended);
     println!("post hoc {right}/30, objective {:?}", m.objective().last());
     assert!(right >= 28, "{right}/30");
     // Online: the late trials are decided as well as post hoc.
@@ -331,12 +344,7 @@ fn a_prior_starts_em_alone_until_there_are_as_many_epochs_as_features() {
         &mut |_, _| {},
     )
     .unwrap();
-    let right = r
-        .online
-        .iter()
-        .zip(&attended)
-        .filter(|(c, &a)| c.codes[0] == a)
-        .count();
+    let right = online_right(&r, &attended);
     assert!(right >= 11, "{right}/12 online from the prior");
     // A prior of the wrong length is named.
     let err = params
@@ -399,12 +407,7 @@ fn random_starts_stop_joining_a_warm_refit_at_random_until_epochs_per_feature() 
     };
     assert_eq!(randoms(&fit(&always, 600, Some(&warm))), params.n_inits);
     // And the settled fit still decides the trials.
-    let right = settled
-        .choices()
-        .iter()
-        .zip(&attended)
-        .filter(|(c, &a)| c[0] == a)
-        .count();
+    let right = right_of(&settled.choices(), &attended);
     assert!(right >= 28, "{right}/30");
     // A bad value is named.
     let bad = UnsupervisedParams {
@@ -553,19 +556,8 @@ fn a_pooled_start_helps_early_and_a_wrong_one_does_not_hurt_post_hoc() {
         .unwrap()
     };
     let right = |r: &oddball_decode::unsupervised::Replay| {
-        let online = r
-            .online
-            .iter()
-            .zip(&attended)
-            .filter(|(c, &a)| c.codes[0] == a)
-            .count();
-        let post = r
-            .model
-            .choices()
-            .iter()
-            .zip(&attended)
-            .filter(|(c, &a)| c[0] == a)
-            .count();
+        let online = online_right(r, &attended);
+        let post = right_of(&r.model.choices(), &attended);
         (online, post)
     };
     let pooled = run(&[Start::Pooled(&scorer)]);
