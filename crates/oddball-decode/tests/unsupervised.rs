@@ -502,6 +502,58 @@ fn bad_input_is_named() {
         ),
         "{err}"
     );
+    // Held-out scores: rows prepared under another covariance, lengths that are not the rows',
+    // and responsibilities that are not probabilities are named.
+    let rows = p.prepare(x.view()).unwrap();
+    assert_eq!(rows.n_epochs(), 8);
+    let trials = [0, 0, 0, 0, 1, 1, 1, 1];
+    let half = [0.5; 8];
+    let toeplitz = UnsupervisedParams {
+        covariance: oddball_decode::unsupervised::Covariance::BlockToeplitz { n_channels: 1 },
+        ..p
+    };
+    let err = toeplitz
+        .held_out_scores(&rows, &half, &trials, &[0])
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::InvalidParameter {
+                name: "covariance",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let err = p
+        .held_out_scores(&rows, &half[..5], &trials, &[0])
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::EpochCount {
+                n_epochs: 8,
+                got: 5,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let mut over = half;
+    over[2] = 1.5;
+    let err = p.held_out_scores(&rows, &over, &trials, &[0]).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UnsupervisedError::InvalidParameter {
+                name: "attended",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let scores = p.held_out_scores(&rows, &half, &trials, &[1]).unwrap();
+    assert!(scores[..4].iter().all(Option::is_none));
 }
 
 /// A pooled start of another "subject" (labelled, its own seed), on a session whose channels

@@ -127,7 +127,7 @@ pub struct UncalibratedParams {
     #[serde(default = "default_max_trials")]
     pub max_trials: usize,
     /// How dynamic stopping weighs the evidence of a trial: its scores by the model fitted
-    /// before it, through a score model of such out-of-sample scores
+    /// before it, through a score model of out-of-sample (leave-one-trial-out) scores
     /// ([`crate::prequential`]).
     #[serde(default)]
     pub honest: HonestParams,
@@ -296,10 +296,8 @@ pub(crate) struct Unlabelled {
     rows: Vec<f64>,
     codes: Vec<u32>,
     trials: Vec<usize>,
-    /// Each epoch's score by the EM model fitted before its trial (`None` before the first
-    /// fit, or when a transferred model scored it): out-of-sample scores.
-    prequential: Vec<Option<f64>>,
-    /// The score model of those scores ([`HonestParams::fit`]), after the latest refit.
+    /// The score model of the latest fit's out-of-sample scores of the last trials
+    /// ([`crate::prequential`]), after the latest refit.
     honest: Option<ScoreModel>,
     model: Option<Unsupervised>,
     /// A model from other recordings and its score of every epoch.
@@ -338,7 +336,6 @@ impl Unlabelled {
             rows: Vec::new(),
             codes: Vec::new(),
             trials: Vec::new(),
-            prequential: Vec::new(),
             honest: None,
             model: None,
             transfer,
@@ -387,7 +384,6 @@ impl Unlabelled {
             self.rows.drain(..cut * p);
             self.codes.drain(..cut);
             self.trials.drain(..cut);
-            self.prequential.drain(..cut);
             self.start_scores.drain(..cut);
         }
     }
@@ -524,13 +520,9 @@ impl OnlineDecoder {
                 } else {
                     u.start_scores.push(u.template.score(data)?);
                 }
-                let mut prequential = None;
                 if let Some(m) = &u.model {
-                    let s = m.decision_function_features(row.view())?[0];
-                    score = Some(s);
-                    prequential = Some(s);
+                    score = Some(m.decision_function_features(row.view())?[0]);
                 }
-                u.prequential.push(prequential);
                 u.rows.extend(row.iter());
                 u.codes.push(code);
                 u.trials.push(trial);
@@ -636,24 +628,28 @@ impl OnlineDecoder {
         // EM from a transferred model's scores of every epoch so far; or from the P300
         // template's, the last fit and (once there are as many epochs as features) random
         // starts, the likeliest kept.
-        let fit = match (&u.transfer, &u.model) {
-            (Some(_), _) => u.params.decoder.fit_from_scores(
-                x,
-                &u.codes,
-                &u.trials,
-                &u.constraint,
-                &u.start_scores,
-            ),
-            (None, warm) => u.params.decoder.fit_features_from(
-                x,
-                &u.codes,
-                &u.trials,
-                &u.constraint,
-                warm.as_ref(),
-                Some(&u.start_scores),
-            ),
-        };
-        let fitted = match fit {
+        let decoder = &u.params.decoder;
+        let fit = decoder.prepare(x).and_then(|rows| {
+            let fitted = match (&u.transfer, &u.model) {
+                (Some(_), _) => decoder.fit_prepared_from_scores(
+                    &rows,
+                    &u.codes,
+                    &u.trials,
+                    &u.constraint,
+                    &u.start_scores,
+                ),
+                (None, warm) => decoder.fit_prepared_starts(
+                    &rows,
+                    &u.codes,
+                    &u.trials,
+                    &u.constraint,
+                    warm.as_ref(),
+                    &[&u.start_scores],
+                ),
+            }?;
+            Ok((rows, fitted))
+        });
+        let (rows, fitted) = match fit {
             Ok(m) => m,
             // Too little data to separate anything yet: keep the arm still.
             Err(UnsupervisedError::Degenerate { .. })
@@ -666,7 +662,9 @@ impl OnlineDecoder {
             .find(|t| t.trial == trial)
             .map(|t| t.sets.clone());
         let attended = attended_weights(&fitted, &u.codes, &u.trials, &u.constraint);
-        u.honest = u.params.honest.fit(&u.prequential, &attended, &u.trials);
+        let held = u.params.honest.held(&u.trials);
+        let scores = decoder.held_out_scores(&rows, &attended, &u.trials, &held)?;
+        u.honest = u.params.honest.fit(&scores, &attended, &u.trials);
         u.model = Some(fitted);
         Ok(sets)
     }
@@ -724,15 +722,12 @@ mod tests {
                 u.codes.push(1 + k as u32 % 4);
                 u.trials.push(trial);
                 u.start_scores.push(trial as f64);
-                u.prequential.push(Some(trial as f64));
             }
             u.keep_last_trials();
             let first = trial.saturating_sub(2);
             let n: usize = (first..=trial).map(|t| 2 + t).sum();
             assert_eq!(u.trials.len(), n, "after trial {trial}");
             assert_eq!((u.codes.len(), u.start_scores.len()), (n, n));
-            assert_eq!(u.prequential.len(), n);
-            assert_eq!(u.prequential[0], Some(first as f64));
             assert_eq!(u.rows.len(), 3 * n);
             assert_eq!(u.trials[0], first);
             assert_eq!(u.rows[0], first as f64);

@@ -15,8 +15,9 @@
 //!   presenter, the observer (a [`roles::Subject`] is all three).
 //! * [`timing`]: the paradigm's timing meeting the bit rate: the stopping rule chosen from the
 //!   calibration for the most bits per minute, and where a decision's time went.
-//! * [`prequential`]: how sure an uncalibrated session can be: a score model of the scores each
-//!   epoch got from the model fitted before its trial.
+//! * [`prequential`]: how sure an uncalibrated session can be: a score model of the latest
+//!   fit's leave-one-trial-out scores, weighing the trial in progress as scored by the model
+//!   fitted before it.
 //! * `fit` (private): a session's model fitted on labelled epochs, its score model on
 //!   cross-validated scores.
 //! * [`decoder`]: how a session starts ([`decoder::Start`]) and the decoder it then decides

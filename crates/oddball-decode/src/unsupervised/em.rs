@@ -17,6 +17,10 @@
 //! so one iteration costs one triangular solve pair with the Cholesky factor of `B` (`p²`) and
 //! two passes over the rows (`N·p`).
 //!
+//! [`held_out`] scores a trial `k` by that M-step without its epochs: the sums over the other
+//! rows only (`a₋ₖ = a − Σ_{i∈k} rᵢx̃ᵢ`, `N₋ₖ`, `N_t,₋ₖ`, and `Σ_{i∉k} x̃ᵢ = −Σ_{i∈k} x̃ᵢ` for the
+//! non-target mean), `B` kept (label-free, from every row), so each trial costs one solve pair.
+//!
 //! With [`Covariance::BlockToeplitz`], `Σ = σ²·B_T`: `B_T = T(B)` is fixed (label-free), `T` the
 //! tapered block-Toeplitz map of `toeplitz-lda` (every channel pair and time lag averaged, lag `d`
 //! tapered by `(n_t − |d|)/n_t`), and the M-step maximises the same objective over the scale only:
@@ -359,4 +363,184 @@ pub(crate) fn run(
         linear: linear.expect("at least one M-step"),
         posterior: post,
     })
+}
+
+/// Leave-one-trial-out scores: each trial of `held` scored by the M-step of responsibilities
+/// `r` on every other epoch (module doc; `B` of all rows kept, it holds no label), its LLR
+/// `wᵀ(x̃ᵢ − (μ_t + μ_n)/2)` on the held trial's epochs; `None` for every other epoch, and for a
+/// held trial whose rest leaves a class empty or the covariance indefinite.
+pub(crate) fn held_out(
+    prep: &Prepared,
+    r: &[f64],
+    trials: &[usize],
+    held: &[usize],
+    kappa0: f64,
+) -> Vec<Option<f64>> {
+    let mut out = vec![None; prep.n];
+    let a_all = prep.xc.tr_mul(&DVector::from_column_slice(r));
+    let n_t_all: f64 = r.iter().sum();
+    for &k in held {
+        let rows: Vec<usize> = (0..prep.n).filter(|&i| trials[i] == k).collect();
+        let (mut a_k, mut sum_k, mut n_t_k) = (DVector::zeros(prep.p), DVector::zeros(prep.p), 0.0);
+        for &i in &rows {
+            let x = prep.xc.row(i).transpose();
+            a_k.axpy(r[i], &x, 1.0);
+            sum_k += &x;
+            n_t_k += r[i];
+        }
+        let nf = (prep.n - rows.len()) as f64;
+        let n_t = n_t_all - n_t_k;
+        let n_n = nf - n_t;
+        if rows.is_empty() || !(n_t > 0.0 && n_n > 0.0) {
+            continue;
+        }
+        let a = &a_all - &a_k;
+        let mu_t = &a / (n_t + kappa0);
+        let mu_n = -(&sum_k + &a) / (n_n + kappa0);
+        let dmu = &mu_t - &mu_n;
+        let mid = (&mu_t + &mu_n) * 0.5;
+        let h = 1.0 / (n_t + kappa0) + 1.0 / (n_n + kappa0);
+        let u = prep.chol.solve(&dmu);
+        let ua = dmu.dot(&u);
+        let w = match prep.tau {
+            Some(tau) => {
+                let nc = nf + prep.c;
+                let s2 = ((nc * tau - ua / h) / (nc * prep.p as f64)).max(f64::MIN_POSITIVE);
+                u / s2
+            }
+            None => {
+                let one_minus = 1.0 - ua / (h * (nf + prep.c));
+                if !(one_minus > 0.0 && one_minus.is_finite()) {
+                    continue;
+                }
+                u / one_minus
+            }
+        };
+        for &i in &rows {
+            out[i] = Some(w.dot(&(prep.xc.row(i).transpose() - &mid)));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ndarray::Array2;
+
+    /// 6 trials of 8 epochs, 6 features (2 channels × 3 times), a shifted mean on every fourth
+    /// epoch, and responsibilities that are not labels (soft, some wrong).
+    fn toy() -> (Array2<f64>, Vec<f64>, Vec<usize>) {
+        let mut state = 12345u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let (n, p) = (48, 6);
+        let x = Array2::from_shape_fn((n, p), |(i, j)| {
+            next() + if i % 4 == 0 { 0.3 * j as f64 } else { 0.0 }
+        });
+        let r: Vec<f64> = (0..n)
+            .map(|i| {
+                if i % 4 == 0 {
+                    0.8
+                } else {
+                    0.1 + 0.2 * next().abs()
+                }
+            })
+            .collect();
+        let trials = (0..n).map(|i| i / 8).collect();
+        (x, r, trials)
+    }
+
+    /// The documented model, formed densely: means of the rows outside the trial, `Σ = B −
+    /// g·ΔμΔμᵀ` (or `σ²·B_T`) inverted, the LLR at the midpoint.
+    fn naive(
+        prep: &Prepared,
+        x: &Array2<f64>,
+        r: &[f64],
+        trials: &[usize],
+        k: usize,
+        bt: Option<&DMatrix<f64>>,
+    ) -> Vec<f64> {
+        let (n, p) = x.dim();
+        let mean = DVector::from_fn(p, |j, _| x.column(j).sum() / n as f64);
+        let row = |i: usize| DVector::from_fn(p, |j, _| x[[i, j]]) - &mean;
+        let rest: Vec<usize> = (0..n).filter(|&i| trials[i] != k).collect();
+        let n_t: f64 = rest.iter().map(|&i| r[i]).sum();
+        let n_n = rest.len() as f64 - n_t;
+        let mut mu_t = DVector::zeros(p);
+        let mut mu_n = DVector::zeros(p);
+        for &i in &rest {
+            mu_t += row(i) * r[i];
+            mu_n += row(i) * (1.0 - r[i]);
+        }
+        mu_t /= n_t;
+        mu_n /= n_n;
+        let dmu = &mu_t - &mu_n;
+        let s = prep.xc.tr_mul(&prep.xc) / n as f64;
+        let lam = prep.shrinkage;
+        let b = &s * (1.0 - lam) + DMatrix::from_diagonal(&prep.d) * lam;
+        let h = 1.0 / n_t + 1.0 / n_n;
+        let nc = rest.len() as f64 + prep.c;
+        let sigma = match bt {
+            None => &b - &dmu * dmu.transpose() / (h * nc),
+            Some(bt) => {
+                let inv = bt.clone().try_inverse().unwrap();
+                let s2 = (&inv * (&b * nc - &dmu * dmu.transpose() / h)).trace() / (nc * p as f64);
+                bt * s2
+            }
+        };
+        let w = sigma.try_inverse().unwrap() * &dmu;
+        let mid = (&mu_t + &mu_n) * 0.5;
+        (0..n)
+            .filter(|&i| trials[i] == k)
+            .map(|i| w.dot(&(row(i) - &mid)))
+            .collect()
+    }
+
+    #[test]
+    fn held_out_scores_are_the_dense_model_without_the_trial() {
+        let (x, r, trials) = toy();
+        for covariance in [
+            Covariance::LedoitWolf,
+            Covariance::BlockToeplitz { n_channels: 2 },
+        ] {
+            let prep = Prepared::new(x.view(), covariance).unwrap();
+            let bt = matches!(covariance, Covariance::BlockToeplitz { .. }).then(|| {
+                let s = prep.xc.tr_mul(&prep.xc) / prep.n as f64;
+                let b =
+                    &s * (1.0 - prep.shrinkage) + DMatrix::from_diagonal(&prep.d) * prep.shrinkage;
+                block_toeplitz_tapered(b, 2, 3)
+            });
+            let got = held_out(&prep, &r, &trials, &[1, 4], 0.0);
+            for (i, g) in got.iter().enumerate() {
+                assert_eq!(g.is_some(), trials[i] == 1 || trials[i] == 4, "epoch {i}");
+            }
+            for k in [1, 4] {
+                let want = naive(&prep, &x, &r, &trials, k, bt.as_ref());
+                let have: Vec<f64> = (0..prep.n)
+                    .filter(|&i| trials[i] == k)
+                    .map(|i| got[i].unwrap())
+                    .collect();
+                for (h, w) in have.iter().zip(&want) {
+                    assert!(
+                        (h - w).abs() < 1e-9 * w.abs().max(1.0),
+                        "{covariance:?} trial {k}: {h} vs {w}"
+                    );
+                }
+            }
+            // The held trial's own responsibilities do not enter its scores.
+            let mut flipped = r.clone();
+            for i in (0..prep.n).filter(|&i| trials[i] == 1) {
+                flipped[i] = 1.0 - flipped[i];
+            }
+            let again = held_out(&prep, &flipped, &trials, &[1], 0.0);
+            for i in (0..prep.n).filter(|&i| trials[i] == 1) {
+                assert!((again[i].unwrap() - got[i].unwrap()).abs() < 1e-12);
+            }
+        }
+    }
 }

@@ -150,6 +150,22 @@ pub enum Covariance {
     },
 }
 
+/// Feature rows with their label-free statistics (centred rows, the shrunk total covariance
+/// and its factor), from [`UnsupervisedParams::prepare`]: a refit and its held-out scores share
+/// them instead of computing them twice.
+#[derive(Debug)]
+pub struct PreparedRows {
+    prep: em::Prepared,
+    covariance: Covariance,
+}
+
+impl PreparedRows {
+    /// Epochs (rows).
+    pub fn n_epochs(&self) -> usize {
+        self.prep.n
+    }
+}
+
 /// Settings of the unsupervised decoder.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct UnsupervisedParams {
@@ -298,13 +314,48 @@ impl UnsupervisedParams {
         warm: Option<&Unsupervised>,
         starts: &[&[f64]],
     ) -> Result<Unsupervised> {
+        let rows = self.prepare(x)?;
+        self.fit_prepared_starts(&rows, codes, trials, constraint, warm, starts)
+    }
+
+    /// The label-free statistics of feature rows `x` `(n_epochs, n_features)` under this
+    /// covariance: computed once, shared by a fit ([`Self::fit_prepared_starts`],
+    /// [`Self::fit_prepared_from_scores`]) and its held-out scores ([`Self::held_out_scores`]).
+    pub fn prepare(&self, x: ArrayView2<f64>) -> Result<PreparedRows> {
+        Ok(PreparedRows {
+            prep: em::Prepared::new(x, self.covariance)?,
+            covariance: self.covariance,
+        })
+    }
+
+    fn prepared<'a>(&self, rows: &'a PreparedRows) -> Result<&'a em::Prepared> {
         self.validate()?;
-        let prep = em::Prepared::new(x, self.covariance)?;
+        if rows.covariance != self.covariance {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "covariance",
+                value: format!("{:?}", self.covariance),
+                reason: format!("the rows were prepared for {:?}", rows.covariance),
+            });
+        }
+        Ok(&rows.prep)
+    }
+
+    /// [`Self::fit_features_starts`] on prepared rows.
+    pub fn fit_prepared_starts(
+        &self,
+        rows: &PreparedRows,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        warm: Option<&Unsupervised>,
+        starts: &[&[f64]],
+    ) -> Result<Unsupervised> {
+        let prep = self.prepared(rows)?;
         let mut inits: Vec<(Init, Vec<f64>)> = Vec::new();
         for (k, s) in starts.iter().enumerate() {
-            if s.len() != x.nrows() {
+            if s.len() != prep.n {
                 return Err(UnsupervisedError::InitLength {
-                    n_epochs: x.nrows(),
+                    n_epochs: prep.n,
                     n_scores: s.len(),
                 });
             }
@@ -312,8 +363,7 @@ impl UnsupervisedParams {
             inits.push((init, unit_spread(s)));
         }
         if let Some(w) = warm {
-            let s = w.decision_function_features(x)?;
-            inits.push((Init::Warm, s.to_vec()));
+            inits.push((Init::Warm, w.decision_function_prepared(prep)?));
         }
         let mut rng = rand_mt::Mt::new(self.seed);
         let settled = warm.is_some()
@@ -326,9 +376,48 @@ impl UnsupervisedParams {
             0
         };
         for k in 0..n_random {
-            inits.push((Init::Random(k), random_projection(&prep, &mut rng)));
+            inits.push((Init::Random(k), random_projection(prep, &mut rng)));
         }
-        self.fit_prepared(&prep, codes, trials, constraint, inits)
+        self.fit_prepared(prep, codes, trials, constraint, inits)
+    }
+
+    /// Leave-one-trial-out scores of prepared feature rows under `attended`, each epoch's
+    /// responsibility (P(attended), e.g. a fit's posterior of its code): every trial of `held`
+    /// scored by this model's M-step on all other epochs' responsibilities, as though that
+    /// trial had not been seen (the label-free covariance part `B` is of all rows; it holds no
+    /// label). `None` for epochs of other trials. Out-of-sample scores of the model family a fit
+    /// belongs to, for judging how far its own scores can be believed; unlike a fit's
+    /// posteriors, a trial's held-out score cannot have been pulled towards that trial's noise.
+    pub fn held_out_scores(
+        &self,
+        rows: &PreparedRows,
+        attended: &[f64],
+        trials: &[usize],
+        held: &[usize],
+    ) -> Result<Vec<Option<f64>>> {
+        let prep = self.prepared(rows)?;
+        for (what, got) in [
+            ("responsibilities", attended.len()),
+            ("trial numbers", trials.len()),
+        ] {
+            if got != prep.n {
+                return Err(UnsupervisedError::EpochCount {
+                    what,
+                    n_epochs: prep.n,
+                    got,
+                });
+            }
+        }
+        // Probabilities, up to the rounding of a sum of posteriors.
+        if let Some(&r) = attended.iter().find(|r| !(-1e-9..=1.0 + 1e-9).contains(*r)) {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "attended",
+                value: r.to_string(),
+                reason: "responsibilities are probabilities in [0, 1]".into(),
+            });
+        }
+        let r: Vec<f64> = attended.iter().map(|r| r.clamp(0.0, 1.0)).collect();
+        Ok(em::held_out(prep, &r, trials, held, self.mean_prior))
     }
 
     /// One EM run on feature rows `x` from `init`, a score per epoch taken as the first E-step's
@@ -341,16 +430,28 @@ impl UnsupervisedParams {
         constraint: &Constraint,
         init: &[f64],
     ) -> Result<Unsupervised> {
-        self.validate()?;
-        if init.len() != x.nrows() {
+        let rows = self.prepare(x)?;
+        self.fit_prepared_from_scores(&rows, codes, trials, constraint, init)
+    }
+
+    /// [`Self::fit_from_scores`] on prepared rows.
+    pub fn fit_prepared_from_scores(
+        &self,
+        rows: &PreparedRows,
+        codes: &[u32],
+        trials: &[usize],
+        constraint: &Constraint,
+        init: &[f64],
+    ) -> Result<Unsupervised> {
+        let prep = self.prepared(rows)?;
+        if init.len() != prep.n {
             return Err(UnsupervisedError::InitLength {
-                n_epochs: x.nrows(),
+                n_epochs: prep.n,
                 n_scores: init.len(),
             });
         }
-        let prep = em::Prepared::new(x, self.covariance)?;
         self.fit_prepared(
-            &prep,
+            prep,
             codes,
             trials,
             constraint,
@@ -543,6 +644,22 @@ impl Unsupervised {
             .into());
         }
         Ok(x.dot(&self.coef) + self.intercept)
+    }
+
+    /// The score of every prepared row (`coefᵀx + intercept`, with `x` the centred row plus the
+    /// rows' mean).
+    fn decision_function_prepared(&self, prep: &em::Prepared) -> Result<Vec<f64>> {
+        if prep.p != self.coef.len() {
+            return Err(DecodeError::ShapeMismatch {
+                what: "unsupervised decoder input".into(),
+                expected: format!("{} features", self.coef.len()),
+                got: prep.p.to_string(),
+            }
+            .into());
+        }
+        let coef = nalgebra::DVector::from_iterator(self.coef.len(), self.coef.iter().copied());
+        let offset = coef.dot(&prep.mean) + self.intercept;
+        Ok((&prep.xc * &coef).iter().map(|v| v + offset).collect())
     }
 
     /// LLR of one epoch `(n_channels, n_times)`.
