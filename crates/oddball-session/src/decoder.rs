@@ -75,7 +75,7 @@ pub enum Start {
     /// from `transfer`'s scores when a model of other recordings is given. `params: None`
     /// takes [`UncalibratedParams::for_sfreq`] at the session's rate.
     Uncalibrated {
-        params: Option<UncalibratedParams>,
+        params: Option<Box<UncalibratedParams>>,
         transfer: Option<Model>,
     },
 }
@@ -135,6 +135,13 @@ pub struct UncalibratedParams {
     /// (off in settings saved before this field existed).
     #[serde(default = "LearningRounds::off")]
     pub learning: LearningRounds,
+    /// A session's online pre-processing while it runs without calibration, unless a
+    /// transferred model starts it (that model's own pre-processing must then be the
+    /// session's): [`Preprocess::online_unsupervised`] by default; `None` keeps the session's
+    /// (as in settings saved before this field existed). `oddball decode`'s listener keeps its
+    /// own (the same band, causal, and the paradigm's window).
+    #[serde(default)]
+    pub preprocess: Option<Preprocess>,
 }
 
 /// The first trials of an uncalibrated session (without a transferred model) run `factor` times
@@ -210,6 +217,7 @@ impl UncalibratedParams {
             max_trials: DEFAULT_MAX_TRIALS,
             honest: HonestParams::default(),
             learning: LearningRounds::default(),
+            preprocess: Some(Preprocess::online_unsupervised()),
         })
     }
 

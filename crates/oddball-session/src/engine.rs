@@ -33,6 +33,7 @@ use ndarray::Axis;
 use oddball_arm::{ArmSim, Command};
 use oddball_decode::decision::Verdict;
 use oddball_decode::pipeline::Model;
+use oddball_decode::preprocess::Preprocess;
 use oddball_decode::preset::Preset;
 use oddball_decode::stopping::Expected;
 use oddball_decode::unsupervised::Unsupervised;
@@ -263,9 +264,17 @@ impl<S: Subject> Session<S> {
                     }
                 }
                 let params = match params {
-                    Some(p) => p,
+                    Some(p) => *p,
                     None => UncalibratedParams::for_sfreq(self.subject.sfreq())?,
                 };
+                if let (None, Some(pre)) = (&transfer, params.preprocess) {
+                    let n_channels = self.ch_names.len();
+                    self.use_preprocess(
+                        pre,
+                        n_channels,
+                        "an uncalibrated decoder's pre-processing",
+                    )?;
+                }
                 self.decoder = OnlineDecoder::Unlabelled(Box::new(Unlabelled::new(
                     params,
                     transfer,
@@ -372,19 +381,31 @@ impl<S: Subject> Session<S> {
             });
         }
         let order = crate::decoder::model_channels(&model, &self.ch_names, self.subject.sfreq())?;
-        let taken = self.n_times;
-        if taken > 0 {
-            return Err(SessionError::TooLate {
-                what: "a model",
-                n_times: taken,
-            });
-        }
-        self.epocher = OnlineEpocher::new(&model.preprocess, self.subject.sfreq(), order.len())?;
-        self.params.decoder.preprocess = model.preprocess;
+        self.use_preprocess(model.preprocess, order.len(), "a model")?;
         let identity =
             order.len() == self.ch_names.len() && order.iter().enumerate().all(|(i, &o)| i == o);
         self.pick = (!identity).then_some(order);
         self.decoder = OnlineDecoder::Fixed(model);
+        Ok(())
+    }
+
+    /// Epochs of `n_channels` channels from now on cut by `pre` (before any sample has been
+    /// taken: `what` names what needed it too late).
+    fn use_preprocess(
+        &mut self,
+        pre: Preprocess,
+        n_channels: usize,
+        what: &'static str,
+    ) -> Result<(), SessionError> {
+        let taken = self.n_times;
+        if taken > 0 {
+            return Err(SessionError::TooLate {
+                what,
+                n_times: taken,
+            });
+        }
+        self.epocher = OnlineEpocher::new(&pre, self.subject.sfreq(), n_channels)?;
+        self.params.decoder.preprocess = pre;
         Ok(())
     }
 

@@ -69,7 +69,9 @@ pub enum ListenerStart {
     /// decoder's preset is fitted on them, then every later trial is decided.
     Calibrate { trials: usize },
     /// No calibration: the unsupervised decoder under the paradigm's constraint.
-    Uncalibrated { params: Option<UncalibratedParams> },
+    Uncalibrated {
+        params: Option<Box<UncalibratedParams>>,
+    },
 }
 
 /// A listener's settings.
@@ -221,7 +223,7 @@ impl Listener {
             ListenerStart::Uncalibrated { params } => {
                 let c = constraint_of(&paradigm)?;
                 let params = match params {
-                    Some(p) => p,
+                    Some(p) => *p,
                     None => UncalibratedParams::for_sfreq(sfreq)?,
                 };
                 constraint = Some(c.clone());
