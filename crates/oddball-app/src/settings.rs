@@ -386,6 +386,12 @@ impl SessionSettings {
                 let abstain = session.uncalibrated_params().map_or(String::new(), |p| {
                     format!("; abstains below posterior {}", p.abstain_below)
                 });
+                let pre = &session.params().decoder.preprocess;
+                let band = format!(
+                    "; EEG band-passed {}{}",
+                    pre.band.band,
+                    if pre.causal { " causally" } else { "" }
+                );
                 let learning = session.learning_rounds().map_or(String::new(), |l| {
                     format!(
                         "; the first trials run {}× the rounds until it holds {} epochs per feature",
@@ -394,7 +400,7 @@ impl SessionSettings {
                 });
                 writeln!(
                     out,
-                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels{abstain}{learning})"
+                    "calibration: none: the decoder learns from the session itself (EM over one bulb per trial after every decision, no labels{abstain}{band}{learning})"
                 )?;
             }
             (Start::Calibrate { .. }, Some(calibration)) => {

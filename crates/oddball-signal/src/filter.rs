@@ -43,6 +43,18 @@ pub enum Band {
     Bandstop { l_freq: f64, h_freq: f64 },
 }
 
+impl std::fmt::Display for Band {
+    /// `0.5–20 Hz`, `below 40 Hz`, `above 1 Hz`, `without 48–52 Hz`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Band::Lowpass { h_freq } => write!(f, "below {h_freq} Hz"),
+            Band::Highpass { l_freq } => write!(f, "above {l_freq} Hz"),
+            Band::Bandpass { l_freq, h_freq } => write!(f, "{l_freq}–{h_freq} Hz"),
+            Band::Bandstop { l_freq, h_freq } => write!(f, "without {l_freq}–{h_freq} Hz"),
+        }
+    }
+}
+
 impl Band {
     /// MNE's convention: `l_freq = None` is a low-pass, `h_freq = None` a high-pass, both a band-pass.
     pub fn from_l_h(l_freq: Option<f64>, h_freq: Option<f64>) -> Result<Band, SignalError> {
@@ -659,6 +671,29 @@ impl StreamingFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bands_print_as_a_person_reads_them() {
+        let shown: Vec<String> = [
+            Band::Bandpass {
+                l_freq: 0.5,
+                h_freq: 20.0,
+            },
+            Band::Lowpass { h_freq: 40.0 },
+            Band::Highpass { l_freq: 1.0 },
+            Band::Bandstop {
+                l_freq: 48.0,
+                h_freq: 52.0,
+            },
+        ]
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+        assert_eq!(
+            shown,
+            ["0.5–20 Hz", "below 40 Hz", "above 1 Hz", "without 48–52 Hz"]
+        );
+    }
     use ndarray::Array2;
 
     /// 4th-order Butterworth band-pass, 1–15 Hz at 256 Hz.

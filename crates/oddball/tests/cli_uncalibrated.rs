@@ -22,6 +22,11 @@ fn an_uncalibrated_demo_learns_within_ten_decisions() {
     ]);
     assert!(ok, "{err}");
     assert!(text.contains("calibration: none"), "{text}");
+    // The session says which band its decoder learns from (not the paper's 1–15 Hz).
+    assert!(
+        text.contains("EEG band-passed 0.5–20 Hz causally"),
+        "{text}"
+    );
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["calibration"]["trials"], 0, "no calibration trial");
