@@ -481,7 +481,6 @@ impl<S: Subject> Session<S> {
         )?)
     }
 
-    /// Sampling rate of the subject's EEG, Hz.
     /// The settings of the uncalibrated decoder the session started (`None` for any other).
     pub fn uncalibrated_params(&self) -> Option<&UncalibratedParams> {
         self.decoder.uncalibrated_params()
@@ -493,6 +492,7 @@ impl<S: Subject> Session<S> {
         self.decoder.learning()
     }
 
+    /// Sampling rate of the subject's EEG, Hz.
     pub fn sfreq(&self) -> f64 {
         self.subject.sfreq()
     }

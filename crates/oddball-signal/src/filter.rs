@@ -671,6 +671,7 @@ impl StreamingFilter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ndarray::Array2;
 
     #[test]
     fn bands_print_as_a_person_reads_them() {
@@ -694,7 +695,6 @@ mod tests {
             ["0.5–20 Hz", "below 40 Hz", "above 1 Hz", "without 48–52 Hz"]
         );
     }
-    use ndarray::Array2;
 
     /// 4th-order Butterworth band-pass, 1–15 Hz at 256 Hz.
     fn bandpass_1_15() -> SosFilter {
