@@ -635,28 +635,27 @@ impl Unsupervised {
 
     /// LLR per feature row.
     pub fn decision_function_features(&self, x: ArrayView2<f64>) -> Result<Array1<f64>> {
-        if x.ncols() != self.coef.len() {
+        self.check_width(x.ncols())?;
+        Ok(x.dot(&self.coef) + self.intercept)
+    }
+
+    /// Rows of `n_features` features are this model's input.
+    fn check_width(&self, n_features: usize) -> Result<()> {
+        if n_features != self.coef.len() {
             return Err(DecodeError::ShapeMismatch {
                 what: "unsupervised decoder input".into(),
                 expected: format!("{} features", self.coef.len()),
-                got: x.ncols().to_string(),
+                got: n_features.to_string(),
             }
             .into());
         }
-        Ok(x.dot(&self.coef) + self.intercept)
+        Ok(())
     }
 
     /// The score of every prepared row (`coefᵀx + intercept`, with `x` the centred row plus the
     /// rows' mean).
     fn decision_function_prepared(&self, prep: &em::Prepared) -> Result<Vec<f64>> {
-        if prep.p != self.coef.len() {
-            return Err(DecodeError::ShapeMismatch {
-                what: "unsupervised decoder input".into(),
-                expected: format!("{} features", self.coef.len()),
-                got: prep.p.to_string(),
-            }
-            .into());
-        }
+        self.check_width(prep.p)?;
         let coef = nalgebra::DVector::from_iterator(self.coef.len(), self.coef.iter().copied());
         let offset = coef.dot(&prep.mean) + self.intercept;
         Ok((&prep.xc * &coef).iter().map(|v| v + offset).collect())
