@@ -136,9 +136,9 @@ pub struct UncalibratedParams {
     #[serde(default = "LearningRounds::off")]
     pub learning: LearningRounds,
     /// A session's online pre-processing while it runs without calibration, unless a
-    /// transferred model starts it (that model's own pre-processing must then be the
-    /// session's): [`Preprocess::online_unsupervised`] by default; `None` keeps the session's
-    /// (as in settings saved before this field existed). `oddball decode`'s listener keeps its
+    /// transferred model starts it (the session then epochs as that model was trained, a
+    /// zero-phase band run causally): [`Preprocess::online_unsupervised`] by default; `None`
+    /// keeps the session's (as in settings saved before this field existed). `oddball decode`'s listener keeps its
     /// own (the same band, causal, and the paradigm's window).
     #[serde(default)]
     pub preprocess: Option<Preprocess>,

@@ -253,27 +253,23 @@ impl<S: Subject> Session<S> {
                 Ok(None)
             }
             Start::Uncalibrated { params, transfer } => {
+                // A transferred model scores epochs cut as it was trained (a zero-phase one run
+                // causally, as `--model` runs it); without one, the uncalibrated decoder's own.
+                let transfer = transfer.map(Model::for_session);
                 if let Some(model) = &transfer {
                     model.check_layout(&self.ch_names, self.subject.sfreq())?;
-                    if model.preprocess != self.params.decoder.preprocess {
-                        return Err(SessionError::InvalidParameter {
-                            name: "transfer model preprocess",
-                            value: format!("{:?}", model.preprocess),
-                            reason: "differs from the session's pre-processing".into(),
-                        });
-                    }
                 }
                 let params = match params {
                     Some(p) => *p,
                     None => UncalibratedParams::for_sfreq(self.subject.sfreq())?,
                 };
-                if let (None, Some(pre)) = (&transfer, params.preprocess) {
+                let pre = match &transfer {
+                    Some(model) => Some(model.preprocess),
+                    None => params.preprocess,
+                };
+                if let Some(pre) = pre {
                     let n_channels = self.ch_names.len();
-                    self.use_preprocess(
-                        pre,
-                        n_channels,
-                        "an uncalibrated decoder's pre-processing",
-                    )?;
+                    self.use_preprocess(pre, n_channels, "an uncalibrated session's start")?;
                 }
                 self.decoder = OnlineDecoder::Unlabelled(Box::new(Unlabelled::new(
                     params,

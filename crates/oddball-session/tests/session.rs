@@ -428,7 +428,7 @@ fn an_uncalibrated_session_learns_from_longer_first_trials() {
 }
 
 #[test]
-fn an_uncalibrated_session_epochs_with_its_own_band_unless_a_model_is_transferred() {
+fn an_uncalibrated_session_epochs_with_its_own_band() {
     use oddball_decode::preprocess::Preprocess;
     let subject = || {
         SubjectParams::preset(SubjectPreset::Typical)

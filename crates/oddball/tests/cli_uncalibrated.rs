@@ -141,6 +141,38 @@ fn a_transferred_model_lets_an_uncalibrated_session_draw_the_g() {
     }
     let (ok, _, err) = oddball(&["demo", "--transfer", model.to_str().unwrap()]);
     assert!(!ok && err.contains("needs --calibration none"), "{err}");
+    // A model trained offline (`oddball train`: zero-phase 0.5–20 Hz, 0.8 s epochs) starts a
+    // session too: the session epochs as it was trained, the band run causally, as `--model`
+    // runs it (measured: the G 6/6 on seeds 1, 3, 4 and 5; refused before).
+    let trained = tmp.join("trained.json");
+    let session = other.join("session.dat");
+    let (ok, _, err) = oddball(&[
+        "train",
+        session.to_str().unwrap(),
+        "-o",
+        trained.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let out = tmp.join("from-trained");
+    let (ok, text, err) = oddball(&[
+        "demo",
+        "--calibration",
+        "none",
+        "--transfer",
+        trained.to_str().unwrap(),
+        "--commands",
+        "paper-g",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        text.contains("EEG band-passed 0.5–20 Hz causally"),
+        "{text}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(s["result"]["correct"].as_u64().unwrap() >= 5, "{text}");
 }
 
 #[test]
