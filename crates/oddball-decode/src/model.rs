@@ -109,10 +109,20 @@ impl Model {
         #[derive(Deserialize)]
         struct Version {
             format_version: Option<u32>,
+            /// Present in an unsupervised fit ([`crate::unsupervised::Unsupervised`]), which an
+            /// uncalibrated session saves as its `model.json`.
+            constraint: Option<serde::de::IgnoredAny>,
         }
         let v: Version = serde_json::from_str(text).map_err(|e| DecodeError::ModelFormat {
             reason: e.to_string(),
         })?;
+        if v.format_version.is_none() && v.constraint.is_some() {
+            return Err(DecodeError::ModelFormat {
+                reason: "this is an uncalibrated session's unsupervised fit, not a pipeline model \
+                         (a labelled session's model.json or a trained model is one)"
+                    .into(),
+            });
+        }
         match v.format_version {
             Some(found) if READABLE_MODEL_VERSIONS.contains(&found) => {}
             found => {

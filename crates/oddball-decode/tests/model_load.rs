@@ -104,6 +104,15 @@ fn damaged_models_are_errors() {
         Model::from_json(r#"{"format_version":7}"#),
         Err(DecodeError::ModelVersion { found: Some(7), .. })
     ));
+    // An uncalibrated session's model.json (an unsupervised fit) is named as what it is, not
+    // as a model of an unknown format version.
+    let err = Model::from_json(r#"{"coef":[1.0],"intercept":0.0,"constraint":{"sets":[[1,2]]}}"#)
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("uncalibrated session's unsupervised fit"),
+        "{err}"
+    );
     // Deep nesting hits serde_json's recursion limit, not the stack.
     let deep = format!(
         r#"{{"format_version":1,"x":{}{}}}"#,
