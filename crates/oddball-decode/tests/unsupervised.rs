@@ -29,6 +29,12 @@ struct Golden {
     /// The block-Toeplitz variant's channels (absent: Ledoit–Wolf).
     #[serde(default)]
     n_channels: Option<usize>,
+    /// Codes flashed but never attended (absent: none).
+    #[serde(default)]
+    decoys: Vec<u32>,
+    /// The numpy model's choices where they are not the truth (absent: the truth's).
+    #[serde(default)]
+    decoded: Option<Vec<Vec<u32>>>,
 }
 
 fn params(max_iter: usize, tol: f64) -> UnsupervisedParams {
@@ -76,11 +82,21 @@ fn block_toeplitz_em_matches_the_dense_numpy_reference() {
     check_golden(include_str!("fixtures/unsupervised_toeplitz_golden.json"));
 }
 
+/// Decoys (codes never attended) as known non-targets: the dense model enumerates the slots
+/// and adds the decoys' non-target likelihood.
+#[test]
+fn em_with_decoys_matches_the_dense_numpy_reference() {
+    check_golden(include_str!("fixtures/unsupervised_decoy_golden.json"));
+}
+
 fn check_golden(fixture: &str) {
     let g: Golden = serde_json::from_str(fixture).unwrap();
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
-    let constraint = Constraint::new(g.sets.clone()).unwrap();
+    let constraint = Constraint::new(g.sets.clone())
+        .unwrap()
+        .with_decoys(&g.decoys)
+        .unwrap();
     let covariance = g.n_channels.map_or(Covariance::LedoitWolf, |n_channels| {
         Covariance::BlockToeplitz { n_channels }
     });
@@ -115,7 +131,8 @@ fn check_golden(fixture: &str) {
     for (a, b) in llr.iter().zip(&g.llr) {
         assert!((a - b).abs() < 1e-9 * (1.0 + b.abs()), "{a} vs {b}");
     }
-    assert_eq!(m.choices(), g.truth);
+    let decoded = g.decoded.as_ref().unwrap_or(&g.truth);
+    assert_eq!(&m.choices(), decoded);
     // The E-step on epochs given afresh (a predict): the numpy model's posteriors and choices.
     let again = m
         .posteriors_features(x.view(), &g.codes, &g.trials)
@@ -127,19 +144,20 @@ fn check_golden(fixture: &str) {
             }
         }
     }
-    assert_eq!(m.choices_of(&again), g.truth);
+    assert_eq!(&m.choices_of(&again), decoded);
 }
 
-/// A random problem: `n_trials` trials flashing every code of `sets` `reps` times, features
-/// `p` wide drawn from `values`.
+/// A random problem: `n_trials` trials flashing every code of `sets` and every decoy `reps`
+/// times, features `p` wide drawn from `values`.
 fn problem(
     sets: &[Vec<u32>],
+    decoys: &[u32],
     n_trials: usize,
     reps: usize,
     p: usize,
     values: &[f64],
 ) -> (Array2<f64>, Vec<u32>, Vec<usize>) {
-    let all: Vec<u32> = sets.iter().flatten().copied().collect();
+    let all: Vec<u32> = sets.iter().flatten().chain(decoys).copied().collect();
     let mut codes = Vec::new();
     let mut trials = Vec::new();
     for t in 0..n_trials {
@@ -159,6 +177,7 @@ proptest! {
     #[test]
     fn posteriors_sum_to_one_and_the_likelihood_never_falls(
         speller in any::<bool>(),
+        decoy in any::<bool>(),
         n_trials in 1usize..5,
         reps in 1usize..4,
         p in 1usize..6,
@@ -166,8 +185,9 @@ proptest! {
         init in proptest::collection::vec(-3.0f64..3.0, 1..40),
     ) {
         let sets = if speller { vec![vec![1, 2, 3], vec![4, 5, 6]] } else { vec![vec![1, 2, 3, 4]] };
-        let (x, codes, trials) = problem(&sets, n_trials, reps, p, &values);
-        let constraint = Constraint::new(sets.clone()).unwrap();
+        let decoys: &[u32] = if decoy { &[9] } else { &[] };
+        let (x, codes, trials) = problem(&sets, decoys, n_trials, reps, p, &values);
+        let constraint = Constraint::new(sets.clone()).unwrap().with_decoys(decoys).unwrap();
         let init: Vec<f64> = (0..codes.len()).map(|i| init[i % init.len()]).collect();
         // The block-Toeplitz variant over 2 channels when the features split evenly, else 1.
         let toeplitz = UnsupervisedParams {
@@ -650,4 +670,108 @@ fn a_pooled_start_helps_early_and_a_wrong_one_does_not_hurt_post_hoc() {
         "the wrong start stops winning once the random starts join: {:?}",
         later.online.iter().map(|o| o.init).collect::<Vec<_>>()
     );
+}
+
+/// Four-bulb trials of feature rows with a decoy (code 5, never attended) flashed once a round:
+/// `p` features of correlated noise, a mean shift of `shift` on the attended bulb's flashes.
+/// Returns the rows, codes, trials and the attended code of each trial.
+fn four_bulb_rows_with_decoy(
+    n_trials: usize,
+    reps: usize,
+    shift: f64,
+    seed: u64,
+) -> (Array2<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
+    let mut state = seed;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    };
+    let p = 6;
+    let (mut codes, mut trials, mut attended) = (Vec::new(), Vec::new(), Vec::new());
+    for t in 0..n_trials {
+        attended.push(1 + ((uniform() + 0.5) * 4.0).floor().min(3.0) as u32);
+        for r in 0..reps {
+            for k in 0..5u32 {
+                codes.push(1 + (k + r as u32 + t as u32) % 5);
+                trials.push(t);
+            }
+        }
+    }
+    let n = codes.len();
+    let mut x = Array2::zeros((n, p));
+    for i in 0..n {
+        // Noise shared by neighbouring features (correlated, as EEG samples are).
+        let z: Vec<f64> = (0..=p).map(|_| 3.5 * uniform()).collect();
+        for j in 0..p {
+            let target = codes[i] == attended[trials[i]];
+            x[[i, j]] = z[j]
+                + z[j + 1]
+                + if target {
+                    shift * (j as f64 + 1.0) / p as f64
+                } else {
+                    0.0
+                };
+        }
+    }
+    (x, codes, trials, attended)
+}
+
+/// What the paradigm gives away by flashing decoys (their labels) helps the EM: on weak
+/// synthetic trials it recovers more of them with the decoys' epochs taken as non-targets than
+/// with those epochs left out, and (a control) than with them left in as a fifth choice.
+#[test]
+fn decoys_as_known_non_targets_help_the_em() {
+    let (mut with, mut without, mut as_choice, mut total) = (0, 0, 0, 0);
+    let params = params(200, 1e-9);
+    for seed in 0..30u64 {
+        let (x, codes, trials, attended) = four_bulb_rows_with_decoy(6, 5, 1.6, 100 + seed);
+        let decoyed = Constraint::one_of(&[1, 2, 3, 4])
+            .unwrap()
+            .with_decoys(&[5])
+            .unwrap();
+        let m = params
+            .fit_features(x.view(), &codes, &trials, &decoyed, None)
+            .unwrap();
+        with += right_of(&m.choices(), &attended);
+        let keep: Vec<usize> = (0..codes.len()).filter(|&i| codes[i] != 5).collect();
+        let xs = x.select(ndarray::Axis(0), &keep);
+        let cs: Vec<u32> = keep.iter().map(|&i| codes[i]).collect();
+        let ts: Vec<usize> = keep.iter().map(|&i| trials[i]).collect();
+        let plain = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+        let m = params
+            .fit_features(xs.view(), &cs, &ts, &plain, None)
+            .unwrap();
+        without += right_of(&m.choices(), &attended);
+        let five = Constraint::one_of(&[1, 2, 3, 4, 5]).unwrap();
+        let m = params
+            .fit_features(x.view(), &codes, &trials, &five, None)
+            .unwrap();
+        as_choice += right_of(&m.choices(), &attended);
+        total += attended.len();
+    }
+    println!("right: decoys known {with}, decoys dropped {without}, decoy a choice {as_choice} of {total}");
+    assert!(with > without, "{with} vs {without} of {total}");
+    assert!(with > as_choice, "{with} vs {as_choice} of {total}");
+}
+
+#[test]
+fn a_decoy_is_no_choice() {
+    let c = Constraint::one_of(&[1, 2, 3, 4]).unwrap();
+    assert_eq!(
+        c.clone().with_decoys(&[3]).unwrap_err(),
+        UnsupervisedError::SharedCode { code: 3 }
+    );
+    assert_eq!(
+        c.clone().with_decoys(&[5, 5]).unwrap_err(),
+        UnsupervisedError::SharedCode { code: 5 }
+    );
+    let d = c.with_decoys(&[5]).unwrap();
+    assert!(d.is_decoy(5) && !d.is_decoy(4));
+    // Saved and read back with its decoys; a constraint saved before decoys reads as none.
+    let back: Constraint = serde_json::from_str(&serde_json::to_string(&d).unwrap()).unwrap();
+    assert_eq!(back, d);
+    let old: Constraint = serde_json::from_str(r#"{"sets":[[1,2,3,4]]}"#).unwrap();
+    assert!(old.decoys().is_empty());
 }

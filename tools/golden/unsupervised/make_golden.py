@@ -26,6 +26,11 @@ formed here from B reshaped to (channel, time, channel, time) and its diagonals,
 s2 = tr(B_T^-1 (c D + W)) / ((N + c) p) with W formed directly, as above. Written to
 unsupervised_toeplitz_golden.json, on a problem of 2 channels x 3 time points (6 features), 6 trials.
 
+Decoys (oddball_decode::unsupervised::Constraint::with_decoys): codes flashed but never attended. Their
+epochs are in no slot; the likelihood takes them as non-targets (N(x_i; mu_n, Sigma), enumerated with
+the slots' epochs) and the M-step gives them r_i = 0. Written to unsupervised_decoy_golden.json: the 3 x 3
+problem below with code 7 flashed as often as the others, never attended.
+
 The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
 flashed twice per trial (48 epochs), 5 features; attended epochs carry a mean shift. The EM starts
 from given initial scores (a fixed random vector), runs 6 M-steps, and the fixture holds the
@@ -57,9 +62,11 @@ def block_toeplitz(b, n_channels):
     return out.reshape(p, p)
 
 
-def golden(seed, n_trials_, shift_, n_channels, out_name):
+def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
     rng = np.random.default_rng(seed)
     sets = [[1, 2, 3], [4, 5, 6]]
+    decoys = list(decoys)
+    n_codes = 6 + len(decoys)
     n_trials, reps, p = n_trials_, 2, len(shift_)
     codes, trials, attended = [], [], []
     truth = []
@@ -67,7 +74,7 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
         row, col = rng.integers(0, 3), rng.integers(0, 3)
         truth.append([sets[0][row], sets[1][col]])
         for _ in range(reps):
-            for c in rng.permutation(6) + 1:
+            for c in rng.permutation(n_codes) + 1:
                 codes.append(int(c))
                 trials.append(t)
                 attended.append(int(c) in truth[-1])
@@ -98,8 +105,9 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
         for s, cs in enumerate(sets):
             if code in cs:
                 return s, cs.index(code)
-    slot = np.array([trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
-    choice = np.array([locate(codes[i])[1] for i in range(n)])
+    # A decoy is in no slot (-1): a known non-target.
+    slot = np.array([-1 if codes[i] in decoys else trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
+    choice = np.array([0 if codes[i] in decoys else locate(codes[i])[1] for i in range(n)])
     n_slots = n_trials * 2
 
 
@@ -134,6 +142,7 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
             ]
             m = max(terms)
             total += m + np.log(np.exp(np.array(terms) - m).sum())
+        total += ln[slot == -1].sum()
         _, logdet = np.linalg.slogdet(sigma)
         inv = np.linalg.inv(sigma)
         pen = -0.5 * cst * logdet - 0.5 * np.trace(cst * D @ inv)
@@ -144,7 +153,7 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
     post, _ = e_step(init)
     objectives = []
     for it in range(6):
-        r = post[slot, choice]
+        r = np.where(slot >= 0, post[slot, choice], 0.0)
         mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
         mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
         dt, dn = X - mu_t, X - mu_n
@@ -176,6 +185,13 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
     }
     if n_channels is not None:
         fixture["n_channels"] = n_channels
+    if decoys:
+        fixture["decoys"] = decoys
+        # The numpy model's own choices (six M-steps from a random start need not find the truth).
+        fixture["decoded"] = [
+            [sets[0][int(np.argmax(post[2 * t]))], sets[1][int(np.argmax(post[2 * t + 1]))]]
+            for t in range(n_trials)
+        ]
     OUT = FIXTURES / out_name
     OUT.write_text(json.dumps(fixture, indent=1) + "\n")
     print(f"wrote {OUT} ({OUT.stat().st_size} B): shrinkage {lam:.6f}, objective {objectives}")
@@ -184,3 +200,4 @@ def golden(seed, n_trials_, shift_, n_channels, out_name):
 
 golden(20261125, 4, [1.5, 1.0, 0.5, 0.0, -0.5], None, "unsupervised_golden.json")
 golden(20261128, 6, [0.0, 2.0, 1.0, 0.0, 1.6, 0.8], 2, "unsupervised_toeplitz_golden.json")
+golden(20261129, 4, [2.0, 1.5, 1.0, 0.0, -1.0], None, "unsupervised_decoy_golden.json", decoys=[7])

@@ -47,7 +47,8 @@ use crate::classifiers::toeplitz_lda::block_toeplitz_tapered;
 /// which exactly one code is attended) and its choice within the slot.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Layout {
-    pub slot_of: Vec<usize>,
+    /// `None` for a decoy: in no slot, a known non-target (responsibility 0).
+    pub slot_of: Vec<Option<usize>>,
     pub choice_of: Vec<usize>,
     /// Choices per slot.
     pub n_choices: Vec<usize>,
@@ -224,7 +225,9 @@ pub(crate) struct Run {
 pub(crate) fn e_step(layout: &Layout, llr: &[f64]) -> (Vec<Vec<f64>>, f64) {
     let mut evidence: Vec<Vec<f64>> = layout.n_choices.iter().map(|&k| vec![0.0; k]).collect();
     for (i, &l) in llr.iter().enumerate() {
-        evidence[layout.slot_of[i]][layout.choice_of[i]] += l;
+        if let Some(slot) = layout.slot_of[i] {
+            evidence[slot][layout.choice_of[i]] += l;
+        }
     }
     let mut total = 0.0;
     for e in &mut evidence {
@@ -325,7 +328,7 @@ fn responsibilities(layout: &Layout, post: &[Vec<f64>]) -> Vec<f64> {
         .slot_of
         .iter()
         .zip(&layout.choice_of)
-        .map(|(&s, &c)| post[s][c])
+        .map(|(&s, &c)| s.map_or(0.0, |s| post[s][c]))
         .collect()
 }
 

@@ -152,7 +152,10 @@ impl ClassMeans {
             .iter()
             .zip(trials)
             .map(|(&code, trial)| {
-                let (set, choice) = constraint.locate(code).expect("checked by the E-step");
+                // A decoy (checked by the E-step) is never attended.
+                let Some((set, choice)) = constraint.locate(code) else {
+                    return 0.0;
+                };
                 let t = post
                     .iter()
                     .find(|t| t.trial == *trial)

@@ -71,10 +71,23 @@ pub use pooled::{
 pub use replay::{replay, replay_from, replay_starts, OnlineChoice, Replay, Start};
 pub use template::{unit_spread, MatchedTemplate, P300Template};
 
-/// Which codes compete: in every trial exactly one code of each set is attended.
+/// Which codes compete: in every trial exactly one code of each set is attended; and which
+/// codes are never attended (decoys).
+///
+/// **Decoys** are flashes the paradigm shows but nobody is asked to attend: an extra symbol that
+/// is never a target (Hübner et al. 2017's speller), a blank flash. Their target share is 0, so
+/// they are the one group whose labels the paradigm gives away: the EM takes their epochs as
+/// non-targets (responsibility 0, in no slot's evidence). The likelihood stays exact (the
+/// model's non-target term of those epochs, as every other epoch's baseline), so the objective
+/// still never decreases; and the non-target mean they anchor is what a labelling that turns a
+/// non-attended code into the target has to fit too. This is how learning from label
+/// proportions enters the EM here: its share-0 group as known labels (the [`Llp`] estimator fits
+/// groups of any shares on its own).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Constraint {
     sets: Vec<Vec<u32>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    decoys: Vec<u32>,
 }
 
 impl Constraint {
@@ -97,7 +110,23 @@ impl Constraint {
         if sets.is_empty() {
             return Err(UnsupervisedError::TooFewChoices { set: 0, n_codes: 0 });
         }
-        Ok(Self { sets })
+        Ok(Self {
+            sets,
+            decoys: Vec::new(),
+        })
+    }
+
+    /// These sets with `decoys`, codes flashed but never attended (type doc): none in a set,
+    /// none twice.
+    pub fn with_decoys(mut self, decoys: &[u32]) -> Result<Self> {
+        let mut seen = std::collections::BTreeSet::new();
+        for &code in decoys {
+            if self.locate(code).is_some() || !seen.insert(code) {
+                return Err(UnsupervisedError::SharedCode { code });
+            }
+        }
+        self.decoys = decoys.to_vec();
+        Ok(self)
     }
 
     /// One attended code among `codes` per trial (the four-bulb panel: codes 1–4).
@@ -120,6 +149,16 @@ impl Constraint {
     /// The sets of competing codes.
     pub fn sets(&self) -> &[Vec<u32>] {
         &self.sets
+    }
+
+    /// The codes flashed but never attended.
+    pub fn decoys(&self) -> &[u32] {
+        &self.decoys
+    }
+
+    /// Whether `code` is a decoy.
+    pub fn is_decoy(&self, code: u32) -> bool {
+        self.decoys.contains(&code)
     }
 
     /// (set, index within the set) of `code`.
@@ -558,20 +597,24 @@ fn layout(
     let mut slot_of = Vec::with_capacity(n_epochs);
     let mut choice_of = Vec::with_capacity(n_epochs);
     for (index, (&code, &trial)) in codes.iter().zip(trials).enumerate() {
-        let (set, choice) =
-            constraint
-                .locate(code)
-                .ok_or_else(|| UnsupervisedError::UnknownCode {
+        let located = match constraint.locate(code) {
+            Some(at) => Some(at),
+            None if constraint.is_decoy(code) => None,
+            None => {
+                return Err(UnsupervisedError::UnknownCode {
                     index,
                     code,
                     sets: constraint.sets.clone(),
-                })?;
+                })
+            }
+        };
         let t = *dense.entry(trial).or_insert_with(|| {
             ids.push(trial);
             ids.len() - 1
         });
-        slot_of.push(t * n_sets + set);
-        choice_of.push(choice);
+        // A decoy is in no slot: a known non-target.
+        slot_of.push(located.map(|(set, _)| t * n_sets + set));
+        choice_of.push(located.map_or(0, |(_, choice)| choice));
     }
     let n_choices = (0..ids.len())
         .flat_map(|_| constraint.sets.iter().map(Vec::len))
