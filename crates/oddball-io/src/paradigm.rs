@@ -4,6 +4,7 @@
 //!
 //! ```toml
 //! name = "four-bulb"
+//! decoys = [5]               # optional: codes flashed that show no choice (never attended)
 //! [choices]                  # one choice per code (a speller takes its symbols from [speller])
 //! labels = ["up", "down", "left", "right"]
 //! codes = [1, 2, 3, 4]       # or [groups]: "1" = ["up", "left"]  (code → the choices it flashes)
@@ -20,6 +21,12 @@
 //! tmin = 0.0
 //! tmax = 0.8
 //! ```
+//!
+//! **Decoys** are flashes of something nobody is asked to attend (a blank, an extra symbol that
+//! is never a target, as in Hübner et al. 2017's label-proportion speller). They count as
+//! flashes but add evidence to no choice; a calibration takes them as non-targets, and so does
+//! the unsupervised decoder, which is where they pay: their epochs are the one group whose labels
+//! the paradigm gives away (`oddball_decode::unsupervised::Constraint::with_decoys`).
 //!
 //! The `[events]` and `[speller]` tables are the data-set manifest's ([`crate::manifest`]): one
 //! vocabulary for a recording's events and a live program's markers. [`Paradigm::parse`] checks
@@ -45,6 +52,7 @@ pub const MAX_MARKER_CHARS: usize = 256;
 #[serde(deny_unknown_fields)]
 struct ParadigmFile {
     name: String,
+    decoys: Option<Vec<u32>>,
     choices: Option<ChoicesTable>,
     groups: Option<BTreeMap<String, Vec<String>>>,
     speller: Option<SpellerSpec>,
@@ -195,6 +203,8 @@ pub struct Paradigm {
     pub labels: Vec<String>,
     /// Each stimulus code and the choices (indices into `labels`) it flashes.
     pub groups: BTreeMap<u32, Vec<usize>>,
+    /// Codes flashed that show no choice (never attended), ascending.
+    pub decoys: Vec<u32>,
     /// The speller, when the choices are a row/column matrix.
     pub speller: Option<Speller>,
     /// Epoch window (s after the flash), when the file gives one.
@@ -433,6 +443,23 @@ impl Paradigm {
                 ))
             }
         };
+        let mut decoys = f.decoys.unwrap_or_default();
+        if decoys.len() > MAX_CHOICES {
+            return Err(bad(
+                "decoys",
+                format!("{} codes; at most {MAX_CHOICES}", decoys.len()),
+            ));
+        }
+        decoys.sort_unstable();
+        if let Some(w) = decoys.windows(2).find(|w| w[0] == w[1]) {
+            return Err(bad("decoys", format!("code {} is listed twice", w[0])));
+        }
+        if let Some(c) = decoys.iter().find(|c| groups.contains_key(c)) {
+            return Err(bad(
+                "decoys",
+                format!("code {c} flashes a choice; a decoy flashes none"),
+            ));
+        }
         if let Some(e) = &f.events {
             e.validate().map_err(|e| bad("[events]", e.to_string()))?;
         }
@@ -457,6 +484,7 @@ impl Paradigm {
             name: f.name,
             labels,
             groups,
+            decoys,
             speller,
             epoch,
             trial_end,
@@ -472,6 +500,17 @@ impl Paradigm {
     /// The stimulus codes, ascending.
     pub fn codes(&self) -> Vec<u32> {
         self.groups.keys().copied().collect()
+    }
+
+    /// The choices (indices into `labels`) code `code` flashes: none for a decoy or an unknown
+    /// code.
+    pub fn choices_of(&self, code: u32) -> &[usize] {
+        self.groups.get(&code).map_or(&[], Vec::as_slice)
+    }
+
+    /// Whether `code` is one of the paradigm's flashes: a choice's or a decoy's.
+    pub fn is_flash(&self, code: u32) -> bool {
+        self.groups.contains_key(&code) || self.decoys.binary_search(&code).is_ok()
     }
 
     /// Whether each code flashes exactly one choice and each choice has one code.
@@ -494,7 +533,7 @@ impl Paradigm {
         }
         for p in &self.flash {
             if let Some(code) = p.capture(t).and_then(parse_code) {
-                return if self.groups.contains_key(&code) {
+                return if self.is_flash(code) {
                     MarkerKind::Flash { code }
                 } else {
                     MarkerKind::Unknown
@@ -640,6 +679,14 @@ flashes_per_trial = 50
                 format!("{FOUR}\n[epoch]\ntmin = 0.5\ntmax = 0.1\n"),
                 "[epoch]",
             ),
+            (
+                FOUR.replace("name = \"four\"", "name = \"four\"\ndecoys = [4]"),
+                "decoys: code 4 flashes a choice",
+            ),
+            (
+                FOUR.replace("name = \"four\"", "name = \"four\"\ndecoys = [7, 7]"),
+                "decoys: code 7 is listed twice",
+            ),
         ];
         for (text, field) in cases {
             let e = parse(&text).unwrap_err().to_string();
@@ -647,6 +694,21 @@ flashes_per_trial = 50
         }
         let e = parse(&FOUR.replace("[markers]", "[markers]\nflsh = 1")).unwrap_err();
         assert!(e.to_string().contains("unknown field"), "{e}");
+    }
+
+    #[test]
+    fn decoys_are_flashes_of_no_choice() {
+        let p =
+            parse(&FOUR.replace("name = \"four\"", "name = \"four\"\ndecoys = [9, 5]")).unwrap();
+        assert_eq!(p.decoys, vec![5, 9]);
+        assert_eq!(p.read("Stim/9"), MarkerKind::Flash { code: 9 });
+        assert_eq!(p.read("5"), MarkerKind::Flash { code: 5 });
+        assert_eq!(p.read("Stim/6"), MarkerKind::Unknown);
+        assert!(p.choices_of(9).is_empty());
+        assert_eq!(p.choices_of(3), &[2]);
+        // Still one choice per (choice's) flash: the decoys are not choices.
+        assert!(p.one_choice_per_flash());
+        assert_eq!(p.codes(), vec![1, 2, 3, 4]);
     }
 
     #[test]

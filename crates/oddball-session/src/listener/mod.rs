@@ -511,7 +511,7 @@ impl Listener {
     }
 
     fn flash(&mut self, code: u32, time: f64) {
-        if !self.paradigm.groups.contains_key(&code) {
+        if !self.paradigm.is_flash(code) {
             self.counts.unknown += 1;
             return;
         }
@@ -609,23 +609,25 @@ impl Listener {
             self.counts.after_decision += 1;
             return Ok(());
         };
-        let groups = &self.paradigm.groups;
+        let paradigm = &self.paradigm;
+        // What the flash showed: no choice for a decoy.
+        let shown = paradigm.choices_of(flash.code);
         let t = &mut self.trials[ti];
         t.completed += 1;
         if t.decided {
             self.counts.after_decision += 1;
             return Ok(());
         }
-        *t.per_code.entry(flash.code).or_insert(0) += 1;
+        if !shown.is_empty() {
+            *t.per_code.entry(flash.code).or_insert(0) += 1;
+        }
         if !e.accepted {
             self.counts.rejected += 1;
             return Ok(());
         }
         t.last_sample = completed_at;
         if t.calibration {
-            let label = flash
-                .target
-                .or_else(|| t.cue.map(|c| groups[&flash.code].contains(&c)));
+            let label = flash.target.or_else(|| t.cue.map(|c| shown.contains(&c)));
             match label {
                 Some(y) => {
                     self.calibration.epochs.push(e.data);
@@ -644,14 +646,19 @@ impl Listener {
             t.scored += 1;
         }
         let Some(score) = score else { return Ok(()) };
+        // A decoy's epoch is evidence for no choice (an unsupervised decoder keeps it above).
+        let shown = self.paradigm.choices_of(flash.code);
+        if shown.is_empty() {
+            return Ok(());
+        }
         if let Ok(d) = self.decoder.decision() {
             let llr = d.scores.llr(score);
-            for &c in &groups[&flash.code] {
+            for &c in shown {
                 t.evidence[c] += llr;
             }
             if let Some(rule) = self.rule {
                 if !t.ended || t.completed < t.announced {
-                    let rounds = rounds_done(&t.per_code, groups.len());
+                    let rounds = rounds_done(&t.per_code, self.paradigm.groups.len());
                     if let v @ (Verdict::Choose { .. } | Verdict::Abstain { .. }) =
                         rule.check(rounds, &t.evidence)
                     {
@@ -829,13 +836,13 @@ fn decision_of(t: &Trial, v: Verdict, early: bool) -> ListenerDecision {
 }
 
 /// The unsupervised decoder's constraint for `paradigm`: one code per trial (one choice per
-/// flash), or one row and one column (a speller).
+/// flash), or one row and one column (a speller); its decoys are known non-targets.
 fn constraint_of(paradigm: &Paradigm) -> Result<Constraint, SessionError> {
     if let Some(sp) = &paradigm.speller {
-        return Ok(Constraint::speller(sp)?);
+        return Ok(Constraint::speller(sp)?.with_decoys(&paradigm.decoys)?);
     }
     if paradigm.one_choice_per_flash() {
-        return Ok(Constraint::one_of(&paradigm.codes())?);
+        return Ok(Constraint::one_of(&paradigm.codes())?.with_decoys(&paradigm.decoys)?);
     }
     Err(SessionError::InvalidParameter {
         name: "calibration none",
@@ -896,15 +903,22 @@ nontarget = ["NonTarget"]
     /// half-sine 300–500 ms later on every channel over 10 µV peak-to-peak noise. Returns the
     /// EEG `(4, n)` and the markers `(text, time s)` in time order.
     fn session(n_trials: usize, seed: u64) -> (Array2<f64>, Vec<(String, f64)>) {
+        session_with(n_trials, seed, false)
+    }
+
+    /// [`session`], with a decoy (code 5, never attended, flagged a non-target) flashed once a
+    /// round when `decoy`.
+    fn session_with(n_trials: usize, seed: u64, decoy: bool) -> (Array2<f64>, Vec<(String, f64)>) {
+        let n_codes = if decoy { 5 } else { 4 };
         let mut markers = Vec::new();
         let mut bumps = Vec::new();
         let mut t = 1.0;
         for k in 0..n_trials {
             markers.push(("TrialStart".to_string(), t - 0.001));
             for r in 0..5 {
-                for j in 0..4u32 {
+                for j in 0..n_codes {
                     // A different order each round.
-                    let code = 1 + (j + r as u32 + k as u32) % 4;
+                    let code = 1 + (j + r as u32 + k as u32) % n_codes;
                     let target = (code - 1) as usize == k % 4;
                     markers.push((format!("Stim/{code}"), t));
                     let flag = if target { "Target" } else { "NonTarget" };
@@ -1140,6 +1154,54 @@ nontarget = ["NonTarget"]
             l.trials
         );
         assert!(l.calibration.epochs.is_empty());
+    }
+
+    /// A decoy is a flash of no choice: calibrated, its epochs are non-targets and add no
+    /// evidence; uncalibrated, the EM takes them as known non-targets. Both decide every trial.
+    #[test]
+    fn decoys_are_flashed_and_chosen_by_nobody() {
+        let (x, markers) = session_with(12, 5, true);
+        let decoyed = || {
+            let text = PARADIGM.replace("name = \"four\"", "name = \"four\"\ndecoys = [5]");
+            Paradigm::parse(&text, Path::new("four.toml")).unwrap()
+        };
+        let mut p = params(ListenerStart::Calibrate { trials: 6 }, None);
+        p.paradigm = decoyed();
+        let mut l = Listener::new(p, SFREQ, &names()).unwrap();
+        let out = feed(&mut l, &x, &markers, &mut |_| 25, &|_| 0.0);
+        // 6 trials × 5 rounds × 5 flashes, one target a round.
+        assert!(
+            matches!(
+                out[0],
+                Output::Calibrated {
+                    trials: 6,
+                    epochs: 150,
+                    targets: 30,
+                    ..
+                }
+            ),
+            "{:?}",
+            out[0]
+        );
+        let ds = decisions(&out);
+        assert_eq!(ds.len(), 6);
+        for d in &ds {
+            assert_eq!(d.choice, Some((d.trial - 1) % 4), "{d:?}");
+        }
+        assert_eq!(l.counts().unknown, 0);
+        let mut p = params(ListenerStart::Uncalibrated { params: None }, None);
+        p.paradigm = decoyed();
+        let mut l = Listener::new(p, SFREQ, &names()).unwrap();
+        let out = feed(&mut l, &x, &markers, &mut |_| 25, &|_| 0.0);
+        let ds = decisions(&out);
+        assert_eq!(ds.len(), 12);
+        let right = ds
+            .iter()
+            .filter(|d| d.choice == Some((d.trial - 1) % 4))
+            .count();
+        println!("uncalibrated with decoys: {right}/12 right");
+        assert!(right >= 10, "{right}/12");
+        assert_eq!(l.counts().unknown, 0);
     }
 
     #[test]
