@@ -197,9 +197,10 @@ impl UnsupervisedDecoder {
 methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
     /// `sets`: the codes that compete (one attended per set and trial: a speller's rows and
     /// columns, or the bulbs); epochs at `sfreq` Hz cut by `preprocess` (`"peer"`,
-    /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts.
+    /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts;
+    /// `decoys`: codes flashed that nobody attends (known non-targets, `Constraint::with_decoys`).
     #[new]
-    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=None, max_iter=200, tol=1e-6, seed=0))]
+    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=None, max_iter=200, tol=1e-6, seed=0, decoys=Vec::new()))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         sets: Vec<Vec<u32>>,
@@ -210,8 +211,11 @@ methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
         max_iter: usize,
         tol: f64,
         seed: u32,
+        decoys: Vec<u32>,
     ) -> PyResult<Self> {
-        let constraint = Constraint::new(sets).map_err(unsup_err)?;
+        let constraint = Constraint::new(sets)
+            .and_then(|c| c.with_decoys(&decoys))
+            .map_err(unsup_err)?;
         let defaults = UnsupervisedParams::for_sfreq(sfreq).map_err(value_err)?;
         let params = UnsupervisedParams {
             mean_prior,

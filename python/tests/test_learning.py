@@ -231,3 +231,32 @@ def test_unsupervised_estimator_takes_no_labels_pickles_and_clones(eeg3_epochs):
         a.predict(X, codes[:-1], trials)
     with pytest.raises(ValueError):
         a.predict(X, codes + 100, trials)  # codes outside the sets
+
+
+def test_unsupervised_estimator_takes_decoys_as_known_non_targets():
+    """Decoys (codes flashed that nobody attends) reach the EM: on weak synthetic four-bulb trials
+    with a decoy each round, the decoder with ``decoys=[5]`` finds more trials than one that never
+    sees the decoys' epochs; a decoy inside a set, or listed twice, is refused."""
+    right = {"decoys": 0, "dropped": 0}
+    total = 0
+    for seed in range(12):
+        rng = np.random.default_rng(100 + seed)
+        n_trials, reps = 6, 5
+        stim = np.concatenate([rng.permutation([1, 2, 3, 4, 5]) for _ in range(n_trials * reps)])
+        trials = np.repeat(np.arange(n_trials), reps * 5)
+        attended = rng.integers(1, 5, size=n_trials)
+        X = rng.normal(size=(len(stim), 2, 20))
+        X[stim == attended[trials], :, 8:12] += 0.35
+        kw = dict(sets=[[1, 2, 3, 4]], sfreq=50.0, preprocess=None, n_inits=4)
+        a = UnsupervisedDecoder(decoys=[5], **kw).fit(X, stim, trials)
+        keep = stim != 5
+        b = UnsupervisedDecoder(**kw).fit(X[keep], stim[keep], trials[keep])
+        right["decoys"] += int((a.choices_[:, 0] == attended).sum())
+        right["dropped"] += int((b.choices_[:, 0] == attended).sum())
+        total += n_trials
+    print(f"\nright of {total}: {right}")
+    assert right["decoys"] > right["dropped"], right
+    assert clone(UnsupervisedDecoder(decoys=[5])).get_params()["decoys"] == [5]
+    for bad, why in (([4], "in a choice set"), ([5, 5], "listed twice")):
+        with pytest.raises(ValueError, match=why):
+            UnsupervisedDecoder(sets=[[1, 2, 3, 4]], sfreq=50.0, decoys=bad).fit(X, stim, trials)

@@ -24,6 +24,8 @@ pub enum UnsupervisedError {
     TooFewChoices { set: usize, n_codes: usize },
     #[error("stimulus code {code} is in more than one choice set")]
     SharedCode { code: u32 },
+    #[error("decoy code {code} {what}: a decoy is a flash nobody attends, in no choice set, listed once")]
+    Decoy { code: u32, what: &'static str },
     #[error("an unsupervised fit needs at least two epochs, got {n_epochs}")]
     TooFewEpochs { n_epochs: usize },
     #[error("non-finite feature {feature} in epoch {epoch}")]

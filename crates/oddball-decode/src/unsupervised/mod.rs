@@ -121,8 +121,13 @@ impl Constraint {
     pub fn with_decoys(mut self, decoys: &[u32]) -> Result<Self> {
         let mut seen = std::collections::BTreeSet::new();
         for &code in decoys {
-            if self.locate(code).is_some() || !seen.insert(code) {
-                return Err(UnsupervisedError::SharedCode { code });
+            if self.locate(code).is_some() {
+                let what = "is in a choice set";
+                return Err(UnsupervisedError::Decoy { code, what });
+            }
+            if !seen.insert(code) {
+                let what = "is listed twice";
+                return Err(UnsupervisedError::Decoy { code, what });
             }
         }
         self.decoys = decoys.to_vec();
