@@ -32,6 +32,9 @@ struct Golden {
     /// Codes flashed but never attended (absent: none).
     #[serde(default)]
     decoys: Vec<u32>,
+    /// Group flashes: code → the choices (of `sets[0]`) it shows (absent: a code per choice).
+    #[serde(default)]
+    groups: Option<std::collections::BTreeMap<u32, Vec<usize>>>,
     /// The numpy model's choices where they are not the truth (absent: the truth's).
     #[serde(default)]
     decoded: Option<Vec<Vec<u32>>>,
@@ -89,14 +92,25 @@ fn em_with_decoys_matches_the_dense_numpy_reference() {
     check_golden(include_str!("fixtures/unsupervised_decoy_golden.json"));
 }
 
+/// Group flashes (each code shows 1–3 of six choices) and a decoy: the dense model enumerates
+/// the six choices per trial.
+#[test]
+fn em_over_group_flashes_matches_the_dense_numpy_reference() {
+    check_golden(include_str!("fixtures/unsupervised_groups_golden.json"));
+}
+
 fn check_golden(fixture: &str) {
     let g: Golden = serde_json::from_str(fixture).unwrap();
     println!("reference: {:?}", g.versions);
     let x = rows(&g.x);
-    let constraint = Constraint::new(g.sets.clone())
-        .unwrap()
-        .with_decoys(&g.decoys)
-        .unwrap();
+    let constraint = match &g.groups {
+        Some(groups) => Constraint::groups(g.sets[0].len(), groups.clone()),
+        None => Constraint::new(g.sets.clone()),
+    }
+    .unwrap()
+    .with_decoys(&g.decoys)
+    .unwrap();
+    let n_sets = g.sets.len();
     let covariance = g.n_channels.map_or(Covariance::LedoitWolf, |n_channels| {
         Covariance::BlockToeplitz { n_channels }
     });
@@ -121,7 +135,7 @@ fn check_golden(fixture: &str) {
     for (t, tp) in m.trials().iter().enumerate() {
         assert_eq!(tp.trial, t);
         for (s, p) in tp.sets.iter().enumerate() {
-            for (a, b) in p.iter().zip(&g.posterior[2 * t + s]) {
+            for (a, b) in p.iter().zip(&g.posterior[n_sets * t + s]) {
                 assert!((a - b).abs() < 1e-9, "trial {t} set {s}: {p:?}");
             }
         }
@@ -139,7 +153,7 @@ fn check_golden(fixture: &str) {
         .unwrap();
     for (t, tp) in again.iter().enumerate() {
         for (s, p) in tp.sets.iter().enumerate() {
-            for (a, b) in p.iter().zip(&g.posterior[2 * t + s]) {
+            for (a, b) in p.iter().zip(&g.posterior[n_sets * t + s]) {
                 assert!((a - b).abs() < 1e-9, "afresh: trial {t} set {s}: {p:?}");
             }
         }
@@ -177,6 +191,7 @@ proptest! {
     #[test]
     fn posteriors_sum_to_one_and_the_likelihood_never_falls(
         speller in any::<bool>(),
+        grouped in any::<bool>(),
         decoy in any::<bool>(),
         n_trials in 1usize..5,
         reps in 1usize..4,
@@ -187,7 +202,18 @@ proptest! {
         let sets = if speller { vec![vec![1, 2, 3], vec![4, 5, 6]] } else { vec![vec![1, 2, 3, 4]] };
         let decoys: &[u32] = if decoy { &[9] } else { &[] };
         let (x, codes, trials) = problem(&sets, decoys, n_trials, reps, p, &values);
-        let constraint = Constraint::new(sets.clone()).unwrap().with_decoys(decoys).unwrap();
+        // Group flashes: codes 1–4 showing 1 to 3 of four choices.
+        let groups = std::collections::BTreeMap::from([
+            (1, vec![0, 1]), (2, vec![2]), (3, vec![1, 2, 3]), (4, vec![0, 3]),
+        ]);
+        let constraint = if grouped && !speller {
+            Constraint::groups(4, groups)
+        } else {
+            Constraint::new(sets.clone())
+        }
+        .unwrap()
+        .with_decoys(decoys)
+        .unwrap();
         let init: Vec<f64> = (0..codes.len()).map(|i| init[i % init.len()]).collect();
         // The block-Toeplitz variant over 2 channels when the features split evenly, else 1.
         let toeplitz = UnsupervisedParams {
@@ -754,6 +780,40 @@ fn decoys_as_known_non_targets_help_the_em() {
     println!("right: decoys known {with}, decoys dropped {without}, decoy a choice {as_choice} of {total}");
     assert!(with > without, "{with} vs {without} of {total}");
     assert!(with > as_choice, "{with} vs {as_choice} of {total}");
+}
+
+#[test]
+fn groups_are_checked() {
+    use std::collections::BTreeMap;
+    let ok = BTreeMap::from([(1, vec![0, 1]), (2, vec![2])]);
+    let c = Constraint::groups(3, ok.clone()).unwrap();
+    assert_eq!(c.sets(), &[vec![0, 1, 2]]);
+    assert_eq!(c.targets_of(1), Some((0, vec![0, 1])));
+    assert_eq!(c.targets_of(0), None);
+    assert_eq!(c.locate(1), None);
+    assert!((c.attended_weight(1, &[vec![0.5, 0.2, 0.3]]) - 0.7).abs() < 1e-15);
+    let back: Constraint = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
+    assert_eq!(back, c);
+    for (n, groups, what) in [
+        (4, ok.clone(), "choice 3"),
+        (
+            3,
+            BTreeMap::from([(1, vec![0, 1, 3]), (2, vec![2])]),
+            "code 1",
+        ),
+        (
+            3,
+            BTreeMap::from([(1, vec![0, 0, 1]), (2, vec![2])]),
+            "code 1",
+        ),
+        (3, BTreeMap::from([(1, vec![0, 1]), (2, vec![])]), "code 2"),
+    ] {
+        let e = Constraint::groups(n, groups).unwrap_err().to_string();
+        assert!(e.contains(what), "{e}");
+    }
+    assert!(Constraint::groups(1, BTreeMap::from([(1, vec![0])])).is_err());
+    let e = c.with_decoys(&[2]).unwrap_err().to_string();
+    assert!(e.contains("decoy code 2 is in a choice set"), "{e}");
 }
 
 #[test]

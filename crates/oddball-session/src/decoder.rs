@@ -704,11 +704,10 @@ fn attended_weights(
         .iter()
         .zip(trials)
         .map(|(&code, &trial)| {
-            let at = posteriors.iter().position(|t| t.trial == trial);
-            match (at, constraint.locate(code)) {
-                (Some(i), Some((set, k))) => posteriors[i].sets[set][k],
-                _ => 0.0,
-            }
+            posteriors
+                .iter()
+                .find(|t| t.trial == trial)
+                .map_or(0.0, |t| constraint.attended_weight(code, &t.sets))
         })
         .collect()
 }

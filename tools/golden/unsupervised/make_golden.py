@@ -31,6 +31,11 @@ epochs are in no slot; the likelihood takes them as non-targets (N(x_i; mu_n, Si
 the slots' epochs) and the M-step gives them r_i = 0. Written to unsupervised_decoy_golden.json: the 3 x 3
 problem below with code 7 flashed as often as the others, never attended.
 
+Group flashes (oddball_decode::unsupervised::Constraint::groups): one of six choices attended per trial,
+each code's flash showing a group of them (target when the group holds the attended choice); the slot's
+choices' evidence sums the LLRs of the flashes showing each, an epoch's responsibility is its group's
+posterior. Written to unsupervised_groups_golden.json (with a decoy too).
+
 The problem: 4 trials, two choice sets (a 3 x 3 "speller": codes 1-3 rows, 4-6 columns), every code
 flashed twice per trial (48 epochs), 5 features; attended epochs carry a mean shift. The EM starts
 from given initial scores (a fixed random vector), runs 6 M-steps, and the fixture holds the
@@ -62,22 +67,35 @@ def block_toeplitz(b, n_channels):
     return out.reshape(p, p)
 
 
-def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
+def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=(), groups=None):
     rng = np.random.default_rng(seed)
-    sets = [[1, 2, 3], [4, 5, 6]]
     decoys = list(decoys)
-    n_codes = 6 + len(decoys)
+    if groups is None:
+        sets = [[1, 2, 3], [4, 5, 6]]
+        n_codes = 6 + len(decoys)
+    else:
+        # Group flashes: one set of choices 0..K-1; code c shows the choices groups[c].
+        n_choice = 1 + max(max(g) for g in groups.values())
+        sets = [list(range(n_choice))]
+        n_codes = len(groups) + len(decoys)
+    n_sets, k_choices = len(sets), len(sets[0])
     n_trials, reps, p = n_trials_, 2, len(shift_)
     codes, trials, attended = [], [], []
     truth = []
     for t in range(n_trials):
-        row, col = rng.integers(0, 3), rng.integers(0, 3)
-        truth.append([sets[0][row], sets[1][col]])
+        if groups is None:
+            row, col = rng.integers(0, 3), rng.integers(0, 3)
+            truth.append([sets[0][row], sets[1][col]])
+        else:
+            truth.append([int(rng.integers(0, n_choice))])
         for _ in range(reps):
             for c in rng.permutation(n_codes) + 1:
                 codes.append(int(c))
                 trials.append(t)
-                attended.append(int(c) in truth[-1])
+                if groups is None:
+                    attended.append(int(c) in truth[-1])
+                else:
+                    attended.append(truth[-1][0] in groups.get(int(c), []))
     codes = np.array(codes)
     trials = np.array(trials)
     attended = np.array(attended)
@@ -100,25 +118,30 @@ def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
     k0 = 3.0
     m0 = X.mean(axis=0)
 
-    # Slots: (trial, set) and each epoch's choice.
+    # Slots: (trial, set); each epoch's member[i][c]: whether choice c of its slot makes it a target.
     def locate(code):
+        if groups is not None:
+            return 0, groups[code]
         for s, cs in enumerate(sets):
             if code in cs:
-                return s, cs.index(code)
+                return s, [cs.index(code)]
     # A decoy is in no slot (-1): a known non-target.
-    slot = np.array([-1 if codes[i] in decoys else trials[i] * 2 + locate(codes[i])[0] for i in range(n)])
-    choice = np.array([0 if codes[i] in decoys else locate(codes[i])[1] for i in range(n)])
-    n_slots = n_trials * 2
+    slot = np.array([-1 if codes[i] in decoys else trials[i] * n_sets + locate(codes[i])[0] for i in range(n)])
+    member = np.zeros((n, k_choices), dtype=bool)
+    for i in range(n):
+        if codes[i] not in decoys:
+            member[i, locate(codes[i])[1]] = True
+    n_slots = n_trials * n_sets
 
 
     def e_step(llr):
-        post = np.zeros((n_slots, 3))
+        post = np.zeros((n_slots, k_choices))
         lse = 0.0
         for s in range(n_slots):
-            e = np.array([llr[(slot == s) & (choice == c)].sum() for c in range(3)])
+            e = np.array([llr[(slot == s) & member[:, c]].sum() for c in range(k_choices)])
             m = e.max()
             z = np.exp(e - m).sum()
-            lse += m + np.log(z) - np.log(3)
+            lse += m + np.log(z) - np.log(k_choices)
             post[s] = np.exp(e - m) / z
         return post, lse
 
@@ -138,7 +161,8 @@ def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
         for s in range(n_slots):
             idx = slot == s
             terms = [
-                np.where(choice[idx] == c, lt[idx], ln[idx]).sum() - np.log(3) for c in range(3)
+                np.where(member[idx, c], lt[idx], ln[idx]).sum() - np.log(k_choices)
+                for c in range(k_choices)
             ]
             m = max(terms)
             total += m + np.log(np.exp(np.array(terms) - m).sum())
@@ -153,7 +177,7 @@ def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
     post, _ = e_step(init)
     objectives = []
     for it in range(6):
-        r = np.where(slot >= 0, post[slot, choice], 0.0)
+        r = np.where(slot >= 0, (post[slot] * member).sum(axis=1), 0.0)
         mu_t = ((r[:, None] * X).sum(0) + k0 * m0) / (r.sum() + k0)
         mu_n = (((1 - r)[:, None] * X).sum(0) + k0 * m0) / ((1 - r).sum() + k0)
         dt, dn = X - mu_t, X - mu_n
@@ -185,19 +209,24 @@ def golden(seed, n_trials_, shift_, n_channels, out_name, decoys=()):
     }
     if n_channels is not None:
         fixture["n_channels"] = n_channels
+    decoded = [[sets[s][int(np.argmax(post[n_sets * t + s]))] for s in range(n_sets)]
+               for t in range(n_trials)]
     if decoys:
         fixture["decoys"] = decoys
+    if groups is not None:
+        fixture["groups"] = {str(c): g for c, g in groups.items()}
+    if decoys or groups is not None:
         # The numpy model's own choices (six M-steps from a random start need not find the truth).
-        fixture["decoded"] = [
-            [sets[0][int(np.argmax(post[2 * t]))], sets[1][int(np.argmax(post[2 * t + 1]))]]
-            for t in range(n_trials)
-        ]
+        fixture["decoded"] = decoded
     OUT = FIXTURES / out_name
     OUT.write_text(json.dumps(fixture, indent=1) + "\n")
     print(f"wrote {OUT} ({OUT.stat().st_size} B): shrinkage {lam:.6f}, objective {objectives}")
-    print("truth", truth, "decoded", [[sets[0][int(np.argmax(post[2*t]))], sets[1][int(np.argmax(post[2*t+1]))]] for t in range(n_trials)])
+    print("truth", truth, "decoded", decoded)
 
 
 golden(20261125, 4, [1.5, 1.0, 0.5, 0.0, -0.5], None, "unsupervised_golden.json")
 golden(20261128, 6, [0.0, 2.0, 1.0, 0.0, 1.6, 0.8], 2, "unsupervised_toeplitz_golden.json")
 golden(20261129, 4, [2.0, 1.5, 1.0, 0.0, -1.0], None, "unsupervised_decoy_golden.json", decoys=[7])
+# Group flashes of 1 to 3 of six choices (target shares 1/6 to 1/2) and a decoy (code 7).
+golden(20261130, 6, [2.0, 1.5, 1.0, 0.0, -1.0], None, "unsupervised_groups_golden.json", decoys=[7],
+       groups={1: [0, 1], 2: [2, 3, 4], 3: [5], 4: [0, 2, 5], 5: [1, 3], 6: [4]})

@@ -44,14 +44,24 @@ use super::Covariance;
 use crate::classifiers::toeplitz_lda::block_toeplitz_tapered;
 
 /// Where each epoch sits in the paradigm's constraint: its slot (one trial's choice set, in
-/// which exactly one code is attended) and its choice within the slot.
+/// which exactly one choice is attended) and the choices of the slot that make it a target
+/// (one where a code is a choice; its group under group flashes).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Layout {
     /// `None` for a decoy: in no slot, a known non-target (responsibility 0).
     pub slot_of: Vec<Option<usize>>,
-    pub choice_of: Vec<usize>,
+    /// Epoch i's choices are `choice_idx[choice_start[i]..choice_start[i + 1]]`.
+    pub choice_start: Vec<usize>,
+    pub choice_idx: Vec<usize>,
     /// Choices per slot.
     pub n_choices: Vec<usize>,
+}
+
+impl Layout {
+    /// The choices of its slot that make epoch `i` a target.
+    pub fn choices(&self, i: usize) -> &[usize] {
+        &self.choice_idx[self.choice_start[i]..self.choice_start[i + 1]]
+    }
 }
 
 /// Label-free statistics of the feature rows an EM runs on.
@@ -226,7 +236,9 @@ pub(crate) fn e_step(layout: &Layout, llr: &[f64]) -> (Vec<Vec<f64>>, f64) {
     let mut evidence: Vec<Vec<f64>> = layout.n_choices.iter().map(|&k| vec![0.0; k]).collect();
     for (i, &l) in llr.iter().enumerate() {
         if let Some(slot) = layout.slot_of[i] {
-            evidence[slot][layout.choice_of[i]] += l;
+            for &c in layout.choices(i) {
+                evidence[slot][c] += l;
+            }
         }
     }
     let mut total = 0.0;
@@ -324,11 +336,10 @@ pub(crate) fn scores(prep: &Prepared, lin: &Linear) -> Vec<f64> {
 
 /// Responsibilities of each epoch from the slot posteriors.
 fn responsibilities(layout: &Layout, post: &[Vec<f64>]) -> Vec<f64> {
-    layout
-        .slot_of
-        .iter()
-        .zip(&layout.choice_of)
-        .map(|(&s, &c)| s.map_or(0.0, |s| post[s][c]))
+    (0..layout.slot_of.len())
+        .map(|i| {
+            layout.slot_of[i].map_or(0.0, |s| layout.choices(i).iter().map(|&c| post[s][c]).sum())
+        })
         .collect()
 }
 

@@ -18,7 +18,11 @@
 //! flashes on a 6 × 6 matrix) and the means are not identified — [`LlpParams::fit`] refuses
 //! groups of one proportion ([`UnsupervisedError::NotIdentified`]). Neither does the four-bulb
 //! panel as run here (one attended bulb among four in every trial). Use the EM
-//! ([`super::UnsupervisedParams`]) there.
+//! ([`super::UnsupervisedParams`]) there. Where a paradigm does have such groups, its file says
+//! so (`[groups]`, `decoys`) and the EM's constraint holds every flash's membership
+//! ([`super::Constraint::groups`], [`super::Constraint::with_decoys`]), which is more than the
+//! proportions: a live session decodes with that; this estimator and [`Mix`] stay for replays
+//! that know only the proportions.
 //!
 //! **The classifier** is the EM's shrinkage LDA with its labels at the known proportions: `B` the
 //! Ledoit–Wolf shrunk total covariance of the rows (the EM's own `Prepared` statistics,
@@ -152,15 +156,12 @@ impl ClassMeans {
             .iter()
             .zip(trials)
             .map(|(&code, trial)| {
-                // A decoy (checked by the E-step) is never attended.
-                let Some((set, choice)) = constraint.locate(code) else {
-                    return 0.0;
-                };
                 let t = post
                     .iter()
                     .find(|t| t.trial == *trial)
                     .expect("every trial has a posterior");
-                t.sets[set][choice]
+                // 0 for a decoy (never attended; checked by the E-step).
+                constraint.attended_weight(code, &t.sets)
             })
             .collect();
         Self::from_responsibilities(x, &r, mean_prior)

@@ -4,7 +4,8 @@
 //!
 //! The paradigm says which labels are possible: in every trial exactly one code of each
 //! [`Constraint`] set is attended — one of the four bulbs; one row and one column of a speller
-//! character. Which one is the latent variable. The model is the LDA's own generative model:
+//! character; or one choice, whose flashes are those of the groups showing it
+//! ([`Constraint::groups`]); decoys are never attended. Which one is the latent variable. The model is the LDA's own generative model:
 //! feature rows `xᵢ ~ N(μ_t, Σ)` for attended flashes and `N(μ_n, Σ)` for the others, with one
 //! covariance, and a uniform prior over each slot's choices. Then
 //!
@@ -84,10 +85,22 @@ pub use template::{unit_spread, MatchedTemplate, P300Template};
 /// proportions enters the EM here: its share-0 group as known labels (the [`Llp`] estimator fits
 /// groups of any shares on its own).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+///
+/// **Group flashes** ([`Constraint::groups`]): a flash may show any group of the choices (a
+/// checkerboard or region speller, Hübner et al.'s label-proportion speller). Then one choice
+/// of `n_choices` is attended per trial, and a flash is a target exactly when its group holds
+/// it: the choice's evidence is the sum of the LLRs of the flashes showing it, and an epoch's
+/// responsibility the posterior of its group. Groups of different sizes have different target
+/// shares; the EM uses that (and every flash's membership) exactly, so learning from label
+/// proportions needs no separate estimator there.
 pub struct Constraint {
     sets: Vec<Vec<u32>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     decoys: Vec<u32>,
+    /// Code → the choices (indices into the one set, `0..n_choices`) its flash shows; empty
+    /// for the code-per-choice forms.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    groups: BTreeMap<u32, Vec<usize>>,
 }
 
 impl Constraint {
@@ -113,7 +126,47 @@ impl Constraint {
         Ok(Self {
             sets,
             decoys: Vec::new(),
+            groups: BTreeMap::new(),
         })
+    }
+
+    /// One of `n_choices` choices attended per trial, each code's flash showing the choices
+    /// of its group (type doc). The one set's "codes" are then the choice indices `0..n_choices`
+    /// ([`Self::sets`], [`Unsupervised::choices`]). Every group non-empty, within range and
+    /// without repeats; every choice in some group.
+    pub fn groups(n_choices: usize, groups: BTreeMap<u32, Vec<usize>>) -> Result<Self> {
+        if n_choices < 2 {
+            return Err(UnsupervisedError::TooFewChoices {
+                set: 0,
+                n_codes: n_choices,
+            });
+        }
+        let mut shown = vec![false; n_choices];
+        for (&code, members) in &groups {
+            let mut seen = std::collections::BTreeSet::new();
+            if members.is_empty() || members.iter().any(|&c| c >= n_choices || !seen.insert(c)) {
+                return Err(UnsupervisedError::InvalidParameter {
+                    name: "groups",
+                    value: format!("code {code}: {members:?}"),
+                    reason: format!(
+                        "a group lists choices below {n_choices}, at least one, each once"
+                    ),
+                });
+            }
+            for &c in members {
+                shown[c] = true;
+            }
+        }
+        if let Some(c) = shown.iter().position(|s| !s) {
+            return Err(UnsupervisedError::InvalidParameter {
+                name: "groups",
+                value: format!("choice {c}"),
+                reason: "no code flashes it".into(),
+            });
+        }
+        let mut c = Self::new(vec![(0..n_choices as u32).collect()])?;
+        c.groups = groups;
+        Ok(c)
     }
 
     /// These sets with `decoys`, codes flashed but never attended (type doc): none in a set,
@@ -121,7 +174,7 @@ impl Constraint {
     pub fn with_decoys(mut self, decoys: &[u32]) -> Result<Self> {
         let mut seen = std::collections::BTreeSet::new();
         for &code in decoys {
-            if self.locate(code).is_some() {
+            if self.targets_of(code).is_some() {
                 let what = "is in a choice set";
                 return Err(UnsupervisedError::Decoy { code, what });
             }
@@ -156,6 +209,11 @@ impl Constraint {
         &self.sets
     }
 
+    /// Whether flashes show groups of choices ([`Self::groups`]): the one set is the choices.
+    pub fn is_grouped(&self) -> bool {
+        !self.groups.is_empty()
+    }
+
     /// The codes flashed but never attended.
     pub fn decoys(&self) -> &[u32] {
         &self.decoys
@@ -166,12 +224,35 @@ impl Constraint {
         self.decoys.contains(&code)
     }
 
-    /// (set, index within the set) of `code`.
+    /// (set, index within the set) of `code`, where a code is one choice (not under
+    /// [`Self::groups`]: see [`Self::targets_of`]).
     pub fn locate(&self, code: u32) -> Option<(usize, usize)> {
+        if !self.groups.is_empty() {
+            return None;
+        }
         self.sets
             .iter()
             .enumerate()
             .find_map(|(s, codes)| codes.iter().position(|&c| c == code).map(|i| (s, i)))
+    }
+
+    /// The set of `code` and the choices (indices within the set) whose being attended makes
+    /// its flash a target: one for a code per choice, its group under [`Self::groups`]; `None`
+    /// for a decoy or an unknown code.
+    pub fn targets_of(&self, code: u32) -> Option<(usize, Vec<usize>)> {
+        if self.groups.is_empty() {
+            return self.locate(code).map(|(s, i)| (s, vec![i]));
+        }
+        self.groups.get(&code).map(|g| (0, g.clone()))
+    }
+
+    /// The responsibility of an epoch of `code`: the summed posterior of the choices that make
+    /// it a target, from its trial's posterior per set (0 for a decoy or an unknown code).
+    pub fn attended_weight(&self, code: u32, sets: &[Vec<f64>]) -> f64 {
+        match self.targets_of(code) {
+            Some((s, choices)) => choices.iter().map(|&c| sets[s][c]).sum(),
+            None => 0.0,
+        }
     }
 }
 
@@ -600,9 +681,11 @@ fn layout(
     let mut dense: BTreeMap<usize, usize> = BTreeMap::new();
     let mut ids = Vec::new();
     let mut slot_of = Vec::with_capacity(n_epochs);
-    let mut choice_of = Vec::with_capacity(n_epochs);
+    let mut choice_start = Vec::with_capacity(n_epochs + 1);
+    let mut choice_idx = Vec::with_capacity(n_epochs);
+    choice_start.push(0);
     for (index, (&code, &trial)) in codes.iter().zip(trials).enumerate() {
-        let located = match constraint.locate(code) {
+        let located = match constraint.targets_of(code) {
             Some(at) => Some(at),
             None if constraint.is_decoy(code) => None,
             None => {
@@ -618,8 +701,11 @@ fn layout(
             ids.len() - 1
         });
         // A decoy is in no slot: a known non-target.
-        slot_of.push(located.map(|(set, _)| t * n_sets + set));
-        choice_of.push(located.map_or(0, |(_, choice)| choice));
+        slot_of.push(located.as_ref().map(|(set, _)| t * n_sets + set));
+        if let Some((_, choices)) = located {
+            choice_idx.extend(choices);
+        }
+        choice_start.push(choice_idx.len());
     }
     let n_choices = (0..ids.len())
         .flat_map(|_| constraint.sets.iter().map(Vec::len))
@@ -627,7 +713,8 @@ fn layout(
     Ok((
         em::Layout {
             slot_of,
-            choice_of,
+            choice_start,
+            choice_idx,
             n_choices,
         },
         ids,

@@ -836,26 +836,26 @@ fn decision_of(t: &Trial, v: Verdict, early: bool) -> ListenerDecision {
 }
 
 /// The unsupervised decoder's constraint for `paradigm`: one code per trial (one choice per
-/// flash), or one row and one column (a speller); its decoys are known non-targets.
+/// flash), one row and one column (a speller), or one choice whose flashes are those of the
+/// groups showing it (`[groups]`); its decoys are known non-targets.
 fn constraint_of(paradigm: &Paradigm) -> Result<Constraint, SessionError> {
-    if let Some(sp) = &paradigm.speller {
-        return Ok(Constraint::speller(sp)?.with_decoys(&paradigm.decoys)?);
-    }
-    if paradigm.one_choice_per_flash() {
-        return Ok(Constraint::one_of(&paradigm.codes())?.with_decoys(&paradigm.decoys)?);
-    }
-    Err(SessionError::InvalidParameter {
-        name: "calibration none",
-        value: paradigm.path.display().to_string(),
-        reason: "the unsupervised decoder needs one choice per flash or a row/column speller; \
-                 this paradigm's flashes show other groups"
-            .into(),
-    })
+    let c = if let Some(sp) = &paradigm.speller {
+        Constraint::speller(sp)?
+    } else if paradigm.one_choice_per_flash() {
+        Constraint::one_of(&paradigm.codes())?
+    } else {
+        Constraint::groups(paradigm.labels.len(), paradigm.groups.clone())?
+    };
+    Ok(c.with_decoys(&paradigm.decoys)?)
 }
 
 /// Each choice's posterior from the constraint sets' posteriors: a code's choice takes its
-/// code's; a speller's symbol, its row's times its column's.
+/// code's; a speller's symbol, its row's times its column's; under group flashes the one set
+/// is the choices'.
 fn choice_posterior(paradigm: &Paradigm, constraint: &Constraint, sets: &[Vec<f64>]) -> Vec<f64> {
+    if constraint.is_grouped() {
+        return sets[0].clone();
+    }
     let mut p = vec![1.0; paradigm.labels.len()];
     for (set, probs) in constraint.sets().iter().zip(sets) {
         for (code, &q) in set.iter().zip(probs) {
@@ -910,6 +910,19 @@ nontarget = ["NonTarget"]
     /// round when `decoy`.
     fn session_with(n_trials: usize, seed: u64, decoy: bool) -> (Array2<f64>, Vec<(String, f64)>) {
         let n_codes = if decoy { 5 } else { 4 };
+        session_of(n_trials, seed, n_codes, &|code, k| {
+            (code - 1) as usize == k % 4
+        })
+    }
+
+    /// [`session`]'s EEG and markers for rounds of codes `1..=n_codes`, code `code` a target
+    /// in trial `k` when `target(code, k)`.
+    fn session_of(
+        n_trials: usize,
+        seed: u64,
+        n_codes: u32,
+        target: &dyn Fn(u32, usize) -> bool,
+    ) -> (Array2<f64>, Vec<(String, f64)>) {
         let mut markers = Vec::new();
         let mut bumps = Vec::new();
         let mut t = 1.0;
@@ -919,7 +932,7 @@ nontarget = ["NonTarget"]
                 for j in 0..n_codes {
                     // A different order each round.
                     let code = 1 + (j + r as u32 + k as u32) % n_codes;
-                    let target = (code - 1) as usize == k % 4;
+                    let target = target(code, k);
                     markers.push((format!("Stim/{code}"), t));
                     let flag = if target { "Target" } else { "NonTarget" };
                     markers.push((flag.to_string(), t));
@@ -1214,20 +1227,48 @@ nontarget = ["NonTarget"]
         p.paradigm = Paradigm::parse(&no_flags, Path::new("x.toml")).unwrap();
         let e = Listener::new(p, SFREQ, &names()).unwrap_err();
         assert!(e.to_string().contains("nothing labels"), "{e}");
-        let groups = r#"
+    }
+
+    /// Flashes of groups of choices decode without calibration: each choice's evidence is the
+    /// flashes showing it (`Constraint::groups`).
+    #[test]
+    fn group_flashes_decode_without_calibration() {
+        let text = r#"
 name = "g"
 [choices]
-labels = ["a", "b", "c"]
+labels = ["up", "right", "down", "left"]
 [groups]
-"1" = ["a", "b"]
-"2" = ["c"]
+"1" = ["up", "right"]
+"2" = ["down", "left"]
+"3" = ["up", "down"]
+"4" = ["right", "left"]
+"5" = ["up"]
+"6" = ["left"]
 [markers]
-flash = "{code}"
-trial_end = "end"
+flash = "Stim/{code}"
+trial_start = "TrialStart"
+trial_end = "TrialEnd"
 "#;
+        let paradigm = Paradigm::parse(text, Path::new("g.toml")).unwrap();
+        let shows = paradigm.groups.clone();
+        let (x, markers) = session_of(12, 3, 6, &|code, k| shows[&code].contains(&(k % 4)));
         let mut p = params(ListenerStart::Uncalibrated { params: None }, None);
-        p.paradigm = Paradigm::parse(groups, Path::new("g.toml")).unwrap();
-        let e = Listener::new(p, SFREQ, &names()).unwrap_err();
-        assert!(e.to_string().contains("one choice per flash"), "{e}");
+        p.paradigm = paradigm;
+        let mut l = Listener::new(p, SFREQ, &names()).unwrap();
+        let out = feed(&mut l, &x, &markers, &mut |_| 25, &|_| 0.0);
+        let ds = decisions(&out);
+        assert_eq!(ds.len(), 12);
+        let right = ds
+            .iter()
+            .filter(|d| d.choice == Some((d.trial - 1) % 4))
+            .count();
+        println!("group flashes, uncalibrated: {right}/12 right");
+        assert!(right >= 10, "{right}/12");
+        for d in &ds {
+            assert!(
+                (d.posterior.iter().sum::<f64>() - 1.0).abs() < 1e-9,
+                "{d:?}"
+            );
+        }
     }
 }
