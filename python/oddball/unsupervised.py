@@ -52,7 +52,9 @@ class UnsupervisedDecoder(BaseEstimator):
     ``n_inits=None``: the library's number of random starts, as ``oddball evaluate --unsupervised``).
     ``decoys``: codes the paradigm flashes but nobody attends (a blank, a symbol never spelled):
     the EM takes their epochs as known non-targets, the one group whose labels a paradigm gives
-    away; they are in no set and never predicted.
+    away; they are in no set and never predicted. ``groups``: for flashes that show groups of
+    choices (a checkerboard or region speller), ``{code: [choice, …]}`` with choices numbered from
+    0, in place of ``sets``: one choice is attended per trial, and ``predict`` gives its number.
 
     Fitted: ``coef_`` is not exposed (features are the ``lda`` preset's bin means inside Rust);
     ``trial_posteriors_`` (per fitted trial, each set's posterior), ``choices_`` (per fitted
@@ -60,7 +62,7 @@ class UnsupervisedDecoder(BaseEstimator):
     """
 
     def __init__(self, sets=((1, 2, 3, 4),), sfreq=None, preprocess="peer", mean_prior=0.0, n_inits=None,
-                 max_iter=200, tol=1e-6, seed=0, decoys=()):
+                 max_iter=200, tol=1e-6, seed=0, decoys=(), groups=None):
         self.sets = sets
         self.sfreq = sfreq
         self.preprocess = preprocess
@@ -70,6 +72,7 @@ class UnsupervisedDecoder(BaseEstimator):
         self.tol = tol
         self.seed = seed
         self.decoys = decoys
+        self.groups = groups
 
     def _new_model(self):
         if self.sfreq is None or not isinstance(self.sfreq, numbers.Real) or not float(self.sfreq) > 0:
@@ -78,7 +81,9 @@ class UnsupervisedDecoder(BaseEstimator):
         return _oddball.UnsupervisedDecoder(
             sets, float(self.sfreq), self.preprocess, float(self.mean_prior),
             None if self.n_inits is None else int(self.n_inits),
-            int(self.max_iter), float(self.tol), int(self.seed), [int(c) for c in self.decoys])
+            int(self.max_iter), float(self.tol), int(self.seed), [int(c) for c in self.decoys],
+            None if self.groups is None
+            else {int(c): [int(m) for m in g] for c, g in dict(self.groups).items()})
 
     def _args(self, X, stimuli, trials):
         X = as_epochs(as_array(X))

@@ -198,9 +198,11 @@ methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
     /// `sets`: the codes that compete (one attended per set and trial: a speller's rows and
     /// columns, or the bulbs); epochs at `sfreq` Hz cut by `preprocess` (`"peer"`,
     /// `"peer-causal"`), whose P300 template starts every refit, or `None` for random starts;
-    /// `decoys`: codes flashed that nobody attends (known non-targets, `Constraint::with_decoys`).
+    /// `decoys`: codes flashed that nobody attends (known non-targets, `Constraint::with_decoys`);
+    /// `groups` (code → the choices `0..K` its flash shows) instead of `sets` for flashes of
+    /// groups of choices (`Constraint::groups`; `sets` is then ignored).
     #[new]
-    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=None, max_iter=200, tol=1e-6, seed=0, decoys=Vec::new()))]
+    #[pyo3(signature = (sets, sfreq, preprocess=Some("peer"), mean_prior=0.0, n_inits=None, max_iter=200, tol=1e-6, seed=0, decoys=Vec::new(), groups=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         sets: Vec<Vec<u32>>,
@@ -212,10 +214,17 @@ methods_with_json!(UnsupervisedDecoder, UnsupervisedState, {
         tol: f64,
         seed: u32,
         decoys: Vec<u32>,
+        groups: Option<std::collections::BTreeMap<u32, Vec<usize>>>,
     ) -> PyResult<Self> {
-        let constraint = Constraint::new(sets)
-            .and_then(|c| c.with_decoys(&decoys))
-            .map_err(unsup_err)?;
+        let constraint = match groups {
+            Some(g) => {
+                let n_choices = g.values().flatten().max().map_or(0, |m| m + 1);
+                Constraint::groups(n_choices, g)
+            }
+            None => Constraint::new(sets),
+        }
+        .and_then(|c| c.with_decoys(&decoys))
+        .map_err(unsup_err)?;
         let defaults = UnsupervisedParams::for_sfreq(sfreq).map_err(value_err)?;
         let params = UnsupervisedParams {
             mean_prior,

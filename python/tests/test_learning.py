@@ -260,3 +260,24 @@ def test_unsupervised_estimator_takes_decoys_as_known_non_targets():
     for bad, why in (([4], "in a choice set"), ([5, 5], "listed twice")):
         with pytest.raises(ValueError, match=why):
             UnsupervisedDecoder(sets=[[1, 2, 3, 4]], sfreq=50.0, decoys=bad).fit(X, stim, trials)
+
+
+def test_unsupervised_estimator_decodes_group_flashes():
+    """Flashes of groups of choices (``groups``): the decoder finds the attended choice, as a number
+    from 0, on synthetic trials where no code is a single choice."""
+    groups = {1: [0, 1], 2: [2, 3], 3: [0, 2], 4: [1, 3], 5: [0]}
+    rng = np.random.default_rng(7)
+    n_trials, reps = 10, 5
+    stim = np.concatenate([rng.permutation([1, 2, 3, 4, 5]) for _ in range(n_trials * reps)])
+    trials = np.repeat(np.arange(n_trials), reps * 5)
+    attended = rng.integers(0, 4, size=n_trials)
+    target = np.array([attended[t] in groups[c] for c, t in zip(stim, trials)])
+    X = rng.normal(size=(len(stim), 2, 20))
+    X[target, :, 8:12] += 1.0
+    dec = UnsupervisedDecoder(groups=groups, sfreq=50.0, preprocess=None, n_inits=4).fit(X, stim, trials)
+    right = int((dec.choices_[:, 0] == attended).sum())
+    print(f"\ngroup flashes: {right}/{n_trials}")
+    assert right >= 9
+    assert clone(dec).get_params()["groups"] == groups
+    with pytest.raises(ValueError, match="no code flashes"):
+        UnsupervisedDecoder(groups={1: [0], 2: [2]}, sfreq=50.0).fit(X, stim, trials)
