@@ -252,6 +252,17 @@ proptest! {
     }
 }
 
+/// Uniform draws in [−0.5, 0.5) from a linear congruential generator seeded by `seed`.
+fn uniform_from(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    }
+}
+
 /// Four-bulb trials (codes 1–4, `reps` rounds each) of 4 channels × 64 samples at 64 Hz: noise
 /// and a 10 Hz sine, and on the attended bulb's flashes a bump at 300 ms. Returns the epochs, the
 /// codes, the trials and the attended code of each trial.
@@ -261,13 +272,7 @@ fn four_bulb(
     bump: f64,
     seed: u64,
 ) -> (Array3<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
-    let mut state = seed;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut uniform = uniform_from(seed);
     let mut codes = Vec::new();
     let mut trials = Vec::new();
     let mut attended = Vec::new();
@@ -707,13 +712,7 @@ fn four_bulb_rows_with_decoy(
     shift: f64,
     seed: u64,
 ) -> (Array2<f64>, Vec<u32>, Vec<usize>, Vec<u32>) {
-    let mut state = seed;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-    };
+    let mut uniform = uniform_from(seed);
     let p = 6;
     let (mut codes, mut trials, mut attended) = (Vec::new(), Vec::new(), Vec::new());
     for t in 0..n_trials {

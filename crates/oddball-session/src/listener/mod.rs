@@ -1202,19 +1202,31 @@ nontarget = ["NonTarget"]
             assert_eq!(d.choice, Some((d.trial - 1) % 4), "{d:?}");
         }
         assert_eq!(l.counts().unknown, 0);
+        let (l, _) = uncalibrated_twelve(decoyed(), &x, &markers, "with decoys");
+        assert_eq!(l.counts().unknown, 0);
+    }
+
+    /// Feeds a 12-trial session to an uncalibrated listener of `paradigm` (trial k attends
+    /// choice `k % 4`): every trial decided, at least 10 right.
+    fn uncalibrated_twelve(
+        paradigm: Paradigm,
+        x: &Array2<f64>,
+        markers: &[(String, f64)],
+        what: &str,
+    ) -> (Listener, Vec<ListenerDecision>) {
         let mut p = params(ListenerStart::Uncalibrated { params: None }, None);
-        p.paradigm = decoyed();
+        p.paradigm = paradigm;
         let mut l = Listener::new(p, SFREQ, &names()).unwrap();
-        let out = feed(&mut l, &x, &markers, &mut |_| 25, &|_| 0.0);
-        let ds = decisions(&out);
+        let out = feed(&mut l, x, markers, &mut |_| 25, &|_| 0.0);
+        let ds: Vec<ListenerDecision> = decisions(&out).into_iter().cloned().collect();
         assert_eq!(ds.len(), 12);
         let right = ds
             .iter()
             .filter(|d| d.choice == Some((d.trial - 1) % 4))
             .count();
-        println!("uncalibrated with decoys: {right}/12 right");
-        assert!(right >= 10, "{right}/12");
-        assert_eq!(l.counts().unknown, 0);
+        println!("uncalibrated, {what}: {right}/12 right");
+        assert!(right >= 10, "{what}: {right}/12");
+        (l, ds)
     }
 
     #[test]
@@ -1252,18 +1264,7 @@ trial_end = "TrialEnd"
         let paradigm = Paradigm::parse(text, Path::new("g.toml")).unwrap();
         let shows = paradigm.groups.clone();
         let (x, markers) = session_of(12, 3, 6, &|code, k| shows[&code].contains(&(k % 4)));
-        let mut p = params(ListenerStart::Uncalibrated { params: None }, None);
-        p.paradigm = paradigm;
-        let mut l = Listener::new(p, SFREQ, &names()).unwrap();
-        let out = feed(&mut l, &x, &markers, &mut |_| 25, &|_| 0.0);
-        let ds = decisions(&out);
-        assert_eq!(ds.len(), 12);
-        let right = ds
-            .iter()
-            .filter(|d| d.choice == Some((d.trial - 1) % 4))
-            .count();
-        println!("group flashes, uncalibrated: {right}/12 right");
-        assert!(right >= 10, "{right}/12");
+        let (_, ds) = uncalibrated_twelve(paradigm, &x, &markers, "group flashes");
         for d in &ds {
             assert!(
                 (d.posterior.iter().sum::<f64>() - 1.0).abs() < 1e-9,
