@@ -793,6 +793,16 @@ fn groups_are_checked() {
     assert!((c.attended_weight(1, &[vec![0.5, 0.2, 0.3]]) - 0.7).abs() < 1e-15);
     let back: Constraint = serde_json::from_str(&serde_json::to_string(&c).unwrap()).unwrap();
     assert_eq!(back, c);
+    // Read back through the same checks: a saved group out of range, or sets that are not the
+    // choices, are refused, not indexed.
+    for bad in [
+        r#"{"sets":[[0,1,2]],"groups":{"1":[0,7]}}"#,
+        r#"{"sets":[[0,1,5]],"groups":{"1":[0,1],"2":[2]}}"#,
+        r#"{"sets":[[1,2],[2,3]]}"#,
+        r#"{"sets":[[1,2,3]],"decoys":[2]}"#,
+    ] {
+        assert!(serde_json::from_str::<Constraint>(bad).is_err(), "{bad}");
+    }
     for (n, groups, what) in [
         (4, ok.clone(), "choice 3"),
         (

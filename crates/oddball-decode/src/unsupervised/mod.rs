@@ -5,8 +5,8 @@
 //! The paradigm says which labels are possible: in every trial exactly one code of each
 //! [`Constraint`] set is attended — one of the four bulbs; one row and one column of a speller
 //! character; or one choice, whose flashes are those of the groups showing it
-//! ([`Constraint::groups`]); decoys are never attended. Which one is the latent variable. The model is the LDA's own generative model:
-//! feature rows `xᵢ ~ N(μ_t, Σ)` for attended flashes and `N(μ_n, Σ)` for the others, with one
+//! ([`Constraint::groups`]); decoys are never attended. Which one is the latent variable. The
+//! model is the LDA's own generative model: feature rows `xᵢ ~ N(μ_t, Σ)` for attended flashes and `N(μ_n, Σ)` for the others, with one
 //! covariance, and a uniform prior over each slot's choices. Then
 //!
 //! * **E-step**: each slot's posterior over its codes is the softmax of the summed
@@ -84,7 +84,6 @@ pub use template::{unit_spread, MatchedTemplate, P300Template};
 /// non-attended code into the target has to fit too. This is how learning from label
 /// proportions enters the EM here: its share-0 group as known labels (the [`Llp`] estimator fits
 /// groups of any shares on its own).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 ///
 /// **Group flashes** ([`Constraint::groups`]): a flash may show any group of the choices (a
 /// checkerboard or region speller, Hübner et al.'s label-proportion speller). Then one choice
@@ -93,6 +92,10 @@ pub use template::{unit_spread, MatchedTemplate, P300Template};
 /// responsibility the posterior of its group. Groups of different sizes have different target
 /// shares; the EM uses that (and every flash's membership) exactly, so learning from label
 /// proportions needs no separate estimator there.
+///
+/// Read back (a saved model, a pickled decoder) through the same checks as the constructors.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "ConstraintFields")]
 pub struct Constraint {
     sets: Vec<Vec<u32>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -101,6 +104,37 @@ pub struct Constraint {
     /// for the code-per-choice forms.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     groups: BTreeMap<u32, Vec<usize>>,
+}
+
+/// A [`Constraint`] as saved, before its checks.
+#[derive(Deserialize)]
+struct ConstraintFields {
+    sets: Vec<Vec<u32>>,
+    #[serde(default)]
+    decoys: Vec<u32>,
+    #[serde(default)]
+    groups: BTreeMap<u32, Vec<usize>>,
+}
+
+impl TryFrom<ConstraintFields> for Constraint {
+    type Error = UnsupervisedError;
+
+    fn try_from(f: ConstraintFields) -> Result<Self> {
+        let c = if f.groups.is_empty() {
+            Self::new(f.sets)?
+        } else {
+            let n = f.sets.first().map_or(0, Vec::len);
+            if f.sets.len() != 1 || f.sets[0] != (0..n as u32).collect::<Vec<_>>() {
+                return Err(UnsupervisedError::InvalidParameter {
+                    name: "sets",
+                    value: format!("{:?}", f.sets),
+                    reason: "with groups, one set of the choices 0, 1, …".into(),
+                });
+            }
+            Self::groups(n, f.groups)?
+        };
+        c.with_decoys(&f.decoys)
+    }
 }
 
 impl Constraint {
